@@ -1,0 +1,40 @@
+"""meshlap: the Belkin–Sun–Wang heat-kernel mesh Laplacian as a scipy.sparse operator.
+
+Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
+
+>>> import meshlap
+>>> V, F = meshlap.shapes.sphere(500, seed=0)
+>>> op = meshlap.laplacian(V, F, h=0.01)
+>>> op.L.shape
+(500, 500)
+"""
+
+from . import shapes
+from .mass import face_areas, vertex_mass
+from .operator import (
+    DEFAULT_TOL,
+    MeshLaplacian,
+    OperatorTooLargeError,
+    default_h,
+    laplacian,
+    mesh_laplacian,
+    truncation_bound,
+)
+from .validation import MeshError, Polygons
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "DEFAULT_TOL",
+    "MeshError",
+    "MeshLaplacian",
+    "OperatorTooLargeError",
+    "Polygons",
+    "default_h",
+    "face_areas",
+    "laplacian",
+    "mesh_laplacian",
+    "shapes",
+    "truncation_bound",
+    "vertex_mass",
+]

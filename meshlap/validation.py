@@ -1,0 +1,219 @@
+"""Input checks shared by every public entry point.
+
+Each check either returns a clean, canonical array or raises an error that names the
+argument and the problem, so that bad input never reaches numpy, scipy, libigl or the
+compiled kernels.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "MeshError",
+    "Polygons",
+    "check_vertices",
+    "check_faces",
+    "check_h",
+    "check_tol",
+    "check_function",
+]
+
+
+class MeshError(ValueError):
+    """A mesh, parameter or function that meshlap cannot use, with the reason."""
+
+
+@dataclass(frozen=True)
+class Polygons:
+    """Faces of any size, stored flat: face ``i`` is ``indices[offsets[i]:offsets[i+1]]``.
+
+    Triangle and quad arrays, and lists of mixed polygons, all become this one form.
+    """
+
+    indices: np.ndarray  # int64, all corners of all faces
+    offsets: np.ndarray  # int64, len = n_faces + 1
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.offsets) - 1
+
+    @property
+    def sizes(self) -> np.ndarray:
+        """Number of corners #t of each face."""
+        return np.diff(self.offsets)
+
+    @property
+    def uniform_size(self) -> int | None:
+        """The common face size, or None for a mix of sizes."""
+        s = self.sizes
+        if len(s) and np.all(s == s[0]):
+            return int(s[0])
+        return None
+
+    def as_array(self) -> np.ndarray:
+        """The faces as an (m, k) array; only for meshes whose faces share one size."""
+        k = self.uniform_size
+        if k is None:
+            raise MeshError("faces have mixed sizes; they cannot form one (m, k) array")
+        return self.indices.reshape(-1, k)
+
+    def triangles(self) -> np.ndarray:
+        """A fan triangulation, (m_tri, 3) int64, e.g. for libigl routines and plots."""
+        sizes = self.sizes
+        if self.uniform_size == 3:
+            return self.indices.reshape(-1, 3)
+        n_tri = sizes - 2
+        face_of_tri = np.repeat(np.arange(self.n_faces), n_tri)
+        # corner k of the fan within its face: 1, 2, ..., size-2
+        k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri) + 1
+        first = self.offsets[:-1][face_of_tri]
+        return np.stack(
+            [self.indices[first], self.indices[first + k], self.indices[first + k + 1]], axis=1
+        )
+
+    def edges(self) -> np.ndarray:
+        """Directed face edges (corner i to corner i+1), (sum #t, 2) int64."""
+        nxt = np.arange(1, len(self.indices) + 1)
+        last = self.offsets[1:] - 1
+        nxt[last] = self.offsets[:-1]
+        return np.stack([self.indices, self.indices[nxt]], axis=1)
+
+
+def _as_real_array(x: Any, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(x)
+    except Exception as exc:  # ragged lists and foreign objects
+        raise MeshError(f"{name} could not be read as an array: {exc}") from exc
+    if a.dtype == object:
+        raise MeshError(f"{name} must be a numeric array; got a ragged or object array")
+    if a.dtype.kind == "c":
+        raise MeshError(f"{name} must be real; got complex dtype {a.dtype}")
+    if a.dtype.kind not in "fiub":
+        raise MeshError(f"{name} must be numeric; got dtype {a.dtype}")
+    return a
+
+
+def _first_nonfinite(a: np.ndarray) -> tuple[int, tuple[int, ...]]:
+    bad = ~np.isfinite(a)
+    return int(bad.sum()), tuple(int(i) for i in np.argwhere(bad)[0])
+
+
+def check_vertices(V: Any, name: str = "V") -> np.ndarray:
+    """Return vertex positions as a C-contiguous float64 (n, 3) array.
+
+    Planar (n, 2) input gets z = 0. Raises :class:`MeshError` for other shapes, an empty
+    array, non-numeric dtypes and NaN or infinite coordinates.
+    """
+    a = _as_real_array(V, name)
+    if a.dtype.kind == "b":
+        raise MeshError(f"{name} must hold coordinates; got a boolean array")
+    if a.ndim != 2 or a.shape[1] not in (2, 3):
+        raise MeshError(f"{name} must have shape (n, 3) or (n, 2); got {a.shape}")
+    if a.shape[0] == 0:
+        raise MeshError(f"{name} is empty: the mesh has no vertices")
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if not np.isfinite(a).all():
+        count, where = _first_nonfinite(a)
+        raise MeshError(f"{name} has {count} NaN or infinite coordinate(s), first at {name}{list(where)}")
+    if a.shape[1] == 2:
+        a = np.ascontiguousarray(np.column_stack([a, np.zeros(len(a))]))
+    return a
+
+
+def _integral(a: np.ndarray, name: str) -> np.ndarray:
+    if a.dtype.kind in "iu":
+        return a.astype(np.int64, copy=False)
+    if a.dtype.kind == "b":
+        raise MeshError(f"{name} must hold vertex indices; got a boolean array")
+    if not np.isfinite(a).all():
+        raise MeshError(f"{name} holds NaN or infinite values; face entries must be vertex indices")
+    if np.any(a != np.round(a)):
+        raise MeshError(f"{name} must hold integer vertex indices; got non-integral {a.dtype} values")
+    return a.astype(np.int64)
+
+
+def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
+    """Return faces as :class:`Polygons` after checking them against ``n_vertices``.
+
+    Accepts an (m, k) integer array (k >= 3: triangles, quads, ...), a list of index
+    sequences of mixed sizes, or a :class:`Polygons`. Integral float arrays are converted;
+    anything else, faces with fewer than 3 corners and indices outside [0, n_vertices)
+    raise :class:`MeshError`.
+    """
+    if isinstance(F, Polygons):
+        indices, offsets = F.indices, F.offsets
+    elif isinstance(F, np.ndarray) or (
+        isinstance(F, Sequence) and len(F) and not isinstance(F[0], (Sequence, np.ndarray))
+    ):
+        a = _as_real_array(F, name)
+        if a.ndim != 2:
+            raise MeshError(f"{name} must have shape (m, k) with k >= 3 corners per face; got {a.shape}")
+        if a.shape[0] == 0:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        if a.shape[1] < 3:
+            raise MeshError(f"faces need at least 3 corners; {name} has shape {a.shape}")
+        a = _integral(a, name)
+        indices = np.ascontiguousarray(a.reshape(-1))
+        offsets = np.arange(0, a.size + 1, a.shape[1], dtype=np.int64)
+    elif isinstance(F, Sequence):
+        if len(F) == 0:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        sizes = np.fromiter((len(f) for f in F), dtype=np.int64, count=len(F))
+        if sizes.min() < 3:
+            i = int(np.argmin(sizes))
+            raise MeshError(f"face {i} of {name} has {sizes[i]} corner(s); faces need at least 3")
+        flat = _as_real_array(np.concatenate([np.asarray(f).reshape(-1) for f in F]), name)
+        indices = _integral(flat, name)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    else:
+        raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got {type(F).__name__}")
+    if len(indices):
+        lo, hi = int(indices.min()), int(indices.max())
+        if lo < 0 or hi >= n_vertices:
+            bad = np.flatnonzero((indices < 0) | (indices >= n_vertices))[0]
+            face = int(np.searchsorted(offsets, bad, side="right") - 1)
+            raise MeshError(
+                f"{name} refers to vertex {int(indices[bad])} in face {face}, but vertex indices must "
+                f"lie in [0, {n_vertices - 1}] for {n_vertices} vertices"
+            )
+    return Polygons(indices=indices, offsets=offsets)
+
+
+def check_h(h: Any, name: str = "h") -> float:
+    """Return the kernel width ``h`` as a float; it must be finite and positive."""
+    try:
+        value = float(h)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name} must be a positive number; got {h!r}") from exc
+    if not math.isfinite(value) or value <= 0:
+        raise MeshError(f"{name} must be finite and > 0; got {value}")
+    return value
+
+
+def check_tol(tol: Any) -> float:
+    """Return the kernel tolerance; 0 means untruncated, otherwise it must lie in (0, 1)."""
+    try:
+        value = float(tol)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"tol must be a number in (0, 1), or 0 for the exact operator; got {tol!r}") from exc
+    if not (value == 0 or 0 < value < 1):
+        raise MeshError(f"tol must lie in (0, 1), or be 0 for the exact operator; got {value}")
+    return value
+
+
+def check_function(f: Any, n: int, name: str = "f") -> np.ndarray:
+    """Return a per-vertex function as float64 of shape (n,) or (n, k)."""
+    a = _as_real_array(f, name)
+    if a.ndim not in (1, 2) or a.shape[0] != n:
+        raise MeshError(f"{name} must have shape ({n},) or ({n}, k), one value per vertex; got {a.shape}")
+    a = np.asarray(a, dtype=np.float64)
+    if not np.isfinite(a).all():
+        count, where = _first_nonfinite(a)
+        raise MeshError(f"{name} has {count} NaN or infinite value(s), first at {name}{list(where)}")
+    return a
