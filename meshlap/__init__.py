@@ -9,7 +9,7 @@ Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 (500, 500)
 """
 
-from . import shapes
+from . import shapes, topology
 from .mass import face_areas, vertex_mass
 from .operator import (
     DEFAULT_TOL,
@@ -20,7 +20,7 @@ from .operator import (
     mesh_laplacian,
     truncation_bound,
 )
-from .validation import MeshError, Polygons
+from .validation import MeshError, MeshWarning, Polygons
 
 __version__ = "0.1.0"
 
@@ -28,6 +28,7 @@ __all__ = [
     "DEFAULT_TOL",
     "MeshError",
     "MeshLaplacian",
+    "MeshWarning",
     "OperatorTooLargeError",
     "Polygons",
     "default_h",
@@ -35,6 +36,7 @@ __all__ = [
     "laplacian",
     "mesh_laplacian",
     "shapes",
+    "topology",
     "truncation_bound",
     "vertex_mass",
 ]

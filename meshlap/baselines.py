@@ -1,7 +1,12 @@
 """Other Laplacians in the same shape as :class:`~meshlap.MeshLaplacian`, so that one line
 swaps the operator in a comparison: the cotangent scheme ("COT" in Belkin–Sun–Wang's
-tables) and a straightforward scipy implementation of the same heat-kernel operator that
-serves as the reference point of the benchmarks.
+tables), the uniform graph Laplacian, the intrinsic Delaunay Laplacian of
+robust-laplacian (optional extra ``meshlap[robust]``), and a straightforward scipy
+implementation of the same heat-kernel operator that serves as the reference point of the
+benchmarks.
+
+Every operator here follows meshlap's sign convention: ``L`` approximates +Δ and is
+negative semidefinite, ``S = M L`` is symmetric.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from .mass import _vertex_mass
 from .operator import DEFAULT_TOL, default_h
 from .validation import MeshError, check_faces, check_function, check_h, check_tol, check_vertices
 
-__all__ = ["SparseLaplacian", "cotangent", "bsw_scipy"]
+__all__ = ["SparseLaplacian", "bsw_scipy", "cotangent", "intrinsic_delaunay", "uniform_graph"]
 
 
 class SparseLaplacian:
@@ -101,15 +106,78 @@ def cotangent(V: Any, F: Any) -> SparseLaplacian:
     >>> bool(abs((cot @ V[:, 0]) / V[:, 0] + 2).mean() < 0.2)
     True
     """
-    V = check_vertices(V)
-    faces = check_faces(F, len(V))
-    if faces.uniform_size != 3:
-        raise MeshError("the cotangent Laplacian needs triangles; got polygons with other sizes")
-    T = faces.as_array()
+    V, T = _triangles(V, F, "cotangent Laplacian")
     C = igl.cotmatrix(V, T)
     mass = igl.massmatrix(V, T, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
     inv = np.divide(1.0, mass, out=np.zeros_like(mass), where=mass > 0)
     return SparseLaplacian(sp.diags(inv) @ C, mass, name="COT", S=C)
+
+
+def _triangles(V: Any, F: Any, what: str) -> tuple[np.ndarray, np.ndarray]:
+    V = check_vertices(V)
+    faces = check_faces(F, len(V))
+    if faces.uniform_size != 3:
+        raise MeshError(f"the {what} needs triangles; got polygons with other sizes")
+    return V, faces.as_array()
+
+
+def uniform_graph(V: Any, F: Any, weight: float = 1.0 / math.sqrt(3.0)) -> SparseLaplacian:
+    """The uniform graph Laplacian: every mesh edge gets the same weight.
+
+    ``S = weight · (A − D)`` with A the edge adjacency matrix and D its degree matrix (rows
+    of S sum to zero), the barycentric mass m_p = Σ_{t∋p} Area(t)/3, and L = M⁻¹ S. The
+    default weight 1/√3 is the cotangent weight (cot 60° + cot 60°)/2 of an equilateral
+    mesh, so on a regular mesh L matches the cotangent Laplacian; on any other mesh it
+    ignores the geometry and does not converge to Δ. It is the floor of the comparisons.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> op = uniform_graph(V, F)
+    >>> bool(abs(op.S.sum(axis=1)).max() < 1e-12)
+    True
+    """
+    V, T = _triangles(V, F, "uniform graph Laplacian")
+    n = len(V)
+    e = np.vstack([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    A = sp.csr_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
+                      shape=(n, n))
+    S = float(weight) * (A - sp.diags(np.asarray(A.sum(axis=1)).ravel()))
+    mass = _vertex_mass(V, check_faces(T, n))
+    inv = np.divide(1.0, mass, out=np.zeros_like(mass), where=mass > 0)
+    return SparseLaplacian(sp.diags(inv) @ S, mass, name="uniform graph", S=S)
+
+
+def intrinsic_delaunay(V: Any, F: Any, mollify_factor: float = 1e-5) -> SparseLaplacian:
+    """The intrinsic Delaunay (tufted cover) Laplacian of robust-laplacian, in meshlap's sign.
+
+    robust-laplacian (Sharp and Crane, "A Laplacian for Nonmanifold Triangle Meshes", 2020)
+    returns a positive semidefinite weak form ``L_r`` and a lumped mass ``M_r``; here
+    ``S = −L_r`` and ``L = −M_r⁻¹ L_r``, so that ``L`` approximates +Δ like every other
+    operator of meshlap. Needs the optional extra: ``pip install meshlap[robust]``.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> op = intrinsic_delaunay(V, F)
+    >>> bool((op @ V[:, 0] * V[:, 0]).sum() < 0)
+    True
+    """
+    try:
+        import robust_laplacian
+    except ImportError as exc:
+        raise ImportError(
+            "intrinsic_delaunay needs the robust-laplacian package: pip install meshlap[robust]"
+        ) from exc
+    V, T = _triangles(V, F, "intrinsic Delaunay Laplacian")
+    Lr, Mr = robust_laplacian.mesh_laplacian(V, T, mollify_factor=mollify_factor)
+    mass = np.asarray(Mr.diagonal(), dtype=np.float64)
+    inv = np.divide(1.0, mass, out=np.zeros_like(mass), where=mass > 0)
+    S = -sp.csr_matrix(Lr)
+    return SparseLaplacian(sp.diags(inv) @ S, mass, name="intrinsic Delaunay", S=S)
 
 
 def bsw_scipy(V: Any, F: Any, h: float | None = None, tol: float = DEFAULT_TOL) -> SparseLaplacian:

@@ -1,27 +1,67 @@
 """Test surfaces with known Laplace–Beltrami operators, and the exact Laplacians of test
 functions on them. Every generator takes a seed, so every mesh is reproducible.
+
+The surfaces are the ones of Belkin, Sun and Wang's experiments (SoCG 2008, Section 5):
+the square [-1, 1]², the unit sphere in several samplings (uniform, random, non-uniform,
+noisy), and in addition a torus, whose two principal curvatures differ.
+
+For a smooth f on R³ restricted to a surface with unit normal n and mean-curvature sum
+κ = κ₁ + κ₂ (positive on the sphere with the outward normal) the Laplace–Beltrami operator is
+
+    Δ_S f = tr(∇²f) − nᵀ(∇²f)n − κ ∂f/∂n,
+
+which is how the exact values of the sphere and torus functions below are computed.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
+from .validation import MeshError
+
 __all__ = [
-    "plane",
-    "sphere",
+    "NOISE_FRACTION",
+    "NONUNIFORM_RATIO",
+    "SPHERE_KINDS",
     "fibonacci_sphere",
+    "mean_edge_estimate",
+    "plane",
     "plane_functions",
+    "sphere",
     "sphere_functions",
+    "torus",
+    "torus_angles",
+    "torus_functions",
+    "triangle_angles",
 ]
+
+#: Sphere samplings understood by :func:`sphere`.
+SPHERE_KINDS = ("uniform", "random", "nonuniform", "noisy")
+
+#: Standard deviation of the noisy sphere's shift, as a fraction of the mean edge length.
+NOISE_FRACTION = 0.05
+
+#: Density ratio between the densest and the sparsest point of the non-uniform sphere.
+NONUNIFORM_RATIO = 50.0
+
+
+def _check_count(n: int, least: int, what: str) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise MeshError(f"{what}: n must be an integer; got {n!r}")
+    if n < least:
+        raise MeshError(f"{what} needs n >= {least} vertices; got {n}")
+    return int(n)
 
 
 def plane(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Delaunay triangulation of the square [-1, 1]² from n uniform random samples.
 
-    The four corners are among the samples, so the mesh covers the whole square.
+    The four corners are among the samples, so the mesh covers the whole square. Faces are
+    counter-clockwise seen from +z.
 
     Examples
     --------
@@ -29,8 +69,7 @@ def plane(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     >>> V.shape, float(V[:, 2].max())
     ((100, 3), 0.0)
     """
-    if n < 4:
-        raise ValueError(f"plane needs n >= 4 samples; got {n}")
+    n = _check_count(n, 4, "plane")
     rng = np.random.default_rng(seed)
     xy = np.vstack([[[-1, -1], [1, -1], [1, 1], [-1, 1]], rng.uniform(-1, 1, size=(n - 4, 2))])
     F = Delaunay(xy).simplices.astype(np.int64)
@@ -42,12 +81,32 @@ def plane(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fibonacci_sphere(n: int) -> np.ndarray:
-    """n evenly spread points on the unit sphere (the golden-angle spiral)."""
+    """n evenly spread points on the unit sphere (the golden-angle spiral).
+
+    Examples
+    --------
+    >>> P = fibonacci_sphere(10)
+    >>> bool(np.allclose(np.linalg.norm(P, axis=1), 1))
+    True
+    """
     i = np.arange(n) + 0.5
     z = 1 - 2 * i / n
     r = np.sqrt(1 - z * z)
     phi = np.pi * (3 - np.sqrt(5)) * i
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def mean_edge_estimate(area: float, n: int) -> float:
+    """Edge length of a regular triangulation of a surface of this area with n vertices.
+
+    Each vertex of a regular triangulation owns (√3/2)·a² of area, so a = sqrt(2A/(√3 n)).
+
+    Examples
+    --------
+    >>> round(mean_edge_estimate(4 * math.pi, 2000), 4)
+    0.0852
+    """
+    return math.sqrt(2.0 * area / (math.sqrt(3.0) * n))
 
 
 def _hull_mesh(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,6 +118,18 @@ def _hull_mesh(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(P), F
 
 
+def _nonuniform_points(n: int, rng: np.random.Generator) -> np.ndarray:
+    # Density ∝ exp(β z) on the sphere: since area is uniform in z, z itself has density
+    # ∝ exp(β z) on [-1, 1] and is drawn by inverting its CDF.
+    beta = 0.5 * math.log(NONUNIFORM_RATIO)
+    u = rng.uniform(size=n)
+    z = np.log(math.exp(-beta) + u * (math.exp(beta) - math.exp(-beta))) / beta
+    z = np.clip(z, -1.0, 1.0)
+    phi = rng.uniform(0, 2 * math.pi, size=n)
+    r = np.sqrt(1 - z * z)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
 def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """A triangulated unit sphere with n vertices, faces oriented outward.
 
@@ -66,11 +137,26 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
     ----------
     n : int
         Number of vertices.
-    kind : {"uniform", "random"}
-        "uniform": evenly spread (Fibonacci) points, slightly jittered by ``seed``;
-        "random": independent uniform samples.
+    kind : {"uniform", "random", "nonuniform", "noisy"}
+        "uniform": evenly spread (Fibonacci) points under a random rotation (near-regular
+        triangles); "random": independent uniform samples (the triangles of a random
+        Delaunay triangulation, many of them skinny); "nonuniform": independent samples
+        with density ∝ exp(β z), 50 times denser at the north pole than at the south pole,
+        so triangle sizes vary by that factor and skinny triangles abound; "noisy": the
+        "uniform" mesh with each vertex then moved by an isotropic Gaussian shift of
+        standard deviation ``NOISE_FRACTION`` (0.05) times the mean edge length a of a
+        regular mesh with n vertices (see :func:`mean_edge_estimate`). The shift scales with
+        a, so the roughness of the normals (≈ 4°) does not vanish under refinement, as for
+        scanned data, while every face keeps its orientation (the shift is far below the
+        edge length). The vertices of the noisy sphere are not on the unit sphere: evaluate
+        test functions at ``V / |V|``.
     seed : int
-        Random seed.
+        Random seed; the same (n, kind, seed) gives the same mesh.
+
+    Returns
+    -------
+    V : (n, 3) ndarray
+    F : (2n - 4, 3) ndarray of int64
 
     Examples
     --------
@@ -78,27 +164,117 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
     >>> V.shape, F.shape
     ((500, 3), (996, 3))
     """
-    if n < 4:
-        raise ValueError(f"sphere needs n >= 4 points; got {n}")
+    n = _check_count(n, 4, "sphere")
     rng = np.random.default_rng(seed)
-    if kind == "uniform":
+    if kind in ("uniform", "noisy"):
         P = fibonacci_sphere(n)
-        # a tiny random rotation keeps the spiral's poles from being special
+        # a random rotation keeps the spiral's poles from being special
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         P = P @ q.T
     elif kind == "random":
         P = rng.normal(size=(n, 3))
+    elif kind == "nonuniform":
+        P = _nonuniform_points(n, rng)
     else:
-        raise ValueError(f"unknown sphere kind {kind!r}; use 'uniform' or 'random'")
+        raise MeshError(f"unknown sphere kind {kind!r}; use one of {', '.join(SPHERE_KINDS)}")
     P /= np.linalg.norm(P, axis=1, keepdims=True)
-    return _hull_mesh(P)
+    V, F = _hull_mesh(P)
+    if kind == "noisy":
+        # Triangulate the clean samples, then move them: the connectivity stays a spherical
+        # Delaunay triangulation while the geometry becomes rough at the scale of the edges.
+        sigma = NOISE_FRACTION * mean_edge_estimate(4 * math.pi, n)
+        V = V + rng.normal(scale=sigma, size=V.shape)
+    return V, F
+
+
+def torus(n: int, R: float = 1.0, r: float = 0.4, seed: int = 0,
+          jitter: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """A triangulated torus of radii (R, r) with about n vertices, faces oriented outward.
+
+    The torus is ((R + r cos θ) cos φ, (R + r cos θ) sin φ, r sin θ). Vertices sit on a
+    periodic grid in (θ, φ) with nθ·nφ ≈ n and nφ/nθ ≈ R/r (so that grid cells are roughly
+    square near the outer equator), each moved inside its cell by up to ``jitter`` cells;
+    every cell is split into two triangles. All vertices lie on the torus.
+
+    Examples
+    --------
+    >>> V, F = torus(400, seed=0)        # a 13 × 31 grid
+    >>> V.shape, F.shape
+    ((403, 3), (806, 3))
+    """
+    n = _check_count(n, 9, "torus")
+    if not (0 < r < R):
+        raise MeshError(f"torus needs 0 < r < R; got R={R}, r={r}")
+    if not (0 <= jitter < 0.5):
+        raise MeshError(f"torus jitter must be in [0, 0.5); got {jitter}")
+    n_theta = max(3, round(math.sqrt(n * r / R)))
+    n_phi = max(3, round(n / n_theta))
+    rng = np.random.default_rng(seed)
+    i, j = np.meshgrid(np.arange(n_theta), np.arange(n_phi), indexing="ij")
+    t = (i + rng.uniform(-jitter, jitter, size=i.shape)) * (2 * math.pi / n_theta)
+    p = (j + rng.uniform(-jitter, jitter, size=j.shape)) * (2 * math.pi / n_phi)
+    V = _torus_point(t.ravel(), p.ravel(), R, r)
+    idx = np.arange(n_theta * n_phi).reshape(n_theta, n_phi)
+    a = idx
+    b = np.roll(idx, -1, axis=0)          # θ + 1
+    c = np.roll(np.roll(idx, -1, axis=0), -1, axis=1)
+    d = np.roll(idx, -1, axis=1)          # φ + 1
+    # (∂/∂φ × ∂/∂θ) points outward, so the order a → d → c is counter-clockwise from outside
+    F = np.vstack([np.column_stack([a.ravel(), d.ravel(), c.ravel()]),
+                   np.column_stack([a.ravel(), c.ravel(), b.ravel()])]).astype(np.int64)
+    return V, F
+
+
+def _torus_point(theta: np.ndarray, phi: np.ndarray, R: float, r: float) -> np.ndarray:
+    rho = R + r * np.cos(theta)
+    return np.column_stack([rho * np.cos(phi), rho * np.sin(phi), r * np.sin(theta)])
+
+
+def torus_angles(V: np.ndarray, R: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The angles (θ, φ) of points on the torus of major radius R.
+
+    Examples
+    --------
+    >>> th, ph = torus_angles(np.array([[1.4, 0.0, 0.0]]))
+    >>> float(th[0]), float(ph[0])
+    (0.0, 0.0)
+    """
+    V = np.asarray(V, dtype=np.float64)
+    rho = np.hypot(V[:, 0], V[:, 1])
+    return np.arctan2(V[:, 2], rho - R), np.arctan2(V[:, 1], V[:, 0])
+
+
+def triangle_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """The three corner angles (radians) of every triangle, shape (m, 3).
+
+    Examples
+    --------
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    >>> np.degrees(triangle_angles(V, np.array([[0, 1, 2]]))).round(6)
+    array([[90., 45., 45.]])
+    """
+    P = np.asarray(V)[np.asarray(F)]
+    out = np.empty(P.shape[:2])
+    for k in range(3):
+        u = P[:, (k + 1) % 3] - P[:, k]
+        w = P[:, (k + 2) % 3] - P[:, k]
+        cos = np.einsum("ij,ij->i", u, w) / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
+        out[:, k] = np.arccos(np.clip(cos, -1.0, 1.0))
+    return out
 
 
 Func = tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]
 
 
 def plane_functions() -> dict[str, Func]:
-    """Test functions on the plane z = 0 and their exact Laplacians, as (f, Δf) of V."""
+    """Test functions on the plane z = 0 and their exact Laplacians, as (f, Δf) of V.
+
+    Examples
+    --------
+    >>> f, lap = plane_functions()["x^2"]
+    >>> lap(np.zeros((2, 3)))
+    array([2., 2.])
+    """
     return {
         "x^2": (lambda V: V[:, 0] ** 2, lambda V: np.full(len(V), 2.0)),
         "exp(x+y)": (
@@ -111,8 +287,14 @@ def plane_functions() -> dict[str, Func]:
 def sphere_functions() -> dict[str, Func]:
     """Test functions on the unit sphere and their exact Laplace–Beltrami values.
 
-    For a smooth f on R³ restricted to the unit sphere, Δ_S f = Δf - ∂²f/∂r² - 2 ∂f/∂r:
-    Δ_S x = -2x, Δ_S x² = 2 - 6x², Δ_S eˣ = eˣ (1 - 2x - x²).
+    With n = x/|x| and κ = 2, Δ_S f = Δf − ∂²f/∂r² − 2 ∂f/∂r:
+    Δ_S x = −2x, Δ_S x² = 2 − 6x², Δ_S eˣ = eˣ (1 − 2x − x²).
+
+    Examples
+    --------
+    >>> f, lap = sphere_functions()["x"]
+    >>> lap(np.array([[1.0, 0, 0]]))
+    array([-2.])
     """
     return {
         "x": (lambda V: V[:, 0].copy(), lambda V: -2.0 * V[:, 0]),
@@ -121,4 +303,47 @@ def sphere_functions() -> dict[str, Func]:
             lambda V: np.exp(V[:, 0]),
             lambda V: np.exp(V[:, 0]) * (1.0 - 2.0 * V[:, 0] - V[:, 0] ** 2),
         ),
+    }
+
+
+def torus_functions(R: float = 1.0, r: float = 0.4) -> dict[str, Func]:
+    """Test functions on the torus (R, r) and their exact Laplace–Beltrami values.
+
+    Uses Δ_S f = tr(∇²f) − nᵀ(∇²f)n − κ ∂f/∂n with the outward normal
+    n = (cos θ cos φ, cos θ sin φ, sin θ) and κ = 1/r + cos θ/(R + r cos θ).
+    Points are taken as on the torus (their angles decide n and κ).
+
+    Examples
+    --------
+    >>> V, F = torus(400, seed=0)
+    >>> f, lap = torus_functions()["z"]
+    >>> bool(np.isfinite(lap(V)).all())
+    True
+    """
+
+    def frame(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        th, ph = torus_angles(V, R)
+        nrm = np.column_stack([np.cos(th) * np.cos(ph), np.cos(th) * np.sin(ph), np.sin(th)])
+        kappa = 1.0 / r + np.cos(th) / (R + r * np.cos(th))
+        return nrm, kappa
+
+    def lap_z(V: np.ndarray) -> np.ndarray:
+        # ∇z = e_z, ∇²z = 0
+        nrm, kappa = frame(V)
+        return -kappa * nrm[:, 2]
+
+    def lap_x2(V: np.ndarray) -> np.ndarray:
+        # ∇x² = 2x e_x, ∇²x² = 2 e_x e_xᵀ
+        nrm, kappa = frame(V)
+        return 2.0 - 2.0 * nrm[:, 0] ** 2 - kappa * 2.0 * V[:, 0] * nrm[:, 0]
+
+    def lap_exp(V: np.ndarray) -> np.ndarray:
+        # ∇eˣ = eˣ e_x, ∇²eˣ = eˣ e_x e_xᵀ
+        nrm, kappa = frame(V)
+        return np.exp(V[:, 0]) * (1.0 - nrm[:, 0] ** 2 - kappa * nrm[:, 0])
+
+    return {
+        "z": (lambda V: V[:, 2].copy(), lap_z),
+        "x^2": (lambda V: V[:, 0] ** 2, lap_x2),
+        "exp(x)": (lambda V: np.exp(V[:, 0]), lap_exp),
     }

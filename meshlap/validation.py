@@ -8,6 +8,7 @@ compiled kernels.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -16,17 +17,30 @@ import numpy as np
 
 __all__ = [
     "MeshError",
+    "MeshWarning",
     "Polygons",
     "check_vertices",
     "check_faces",
     "check_h",
+    "check_k",
+    "check_positive",
     "check_tol",
     "check_function",
 ]
 
+# Beyond these magnitudes squared distances and 1/(4πh²) leave the float64 range.
+_MAX_COORD = 1e150
+_H_RANGE = (1e-150, 1e150)
+# libigl's doublearea squares 2D double areas: below this extent they underflow to zero.
+_MIN_SPAN = 1e-60
+
 
 class MeshError(ValueError):
     """A mesh, parameter or function that meshlap cannot use, with the reason."""
+
+
+class MeshWarning(UserWarning):
+    """A mesh that meshlap can use, but whose result the caller should know more about."""
 
 
 @dataclass(frozen=True)
@@ -91,7 +105,10 @@ def _as_real_array(x: Any, name: str) -> np.ndarray:
     except Exception as exc:  # ragged lists and foreign objects
         raise MeshError(f"{name} could not be read as an array: {exc}") from exc
     if a.dtype == object:
-        raise MeshError(f"{name} must be a numeric array; got a ragged or object array")
+        raise MeshError(
+            f"{name} must be a numeric array; got an object array (rows of different lengths, "
+            "None, or integers beyond the int64 range)"
+        )
     if a.dtype.kind == "c":
         raise MeshError(f"{name} must be real; got complex dtype {a.dtype}")
     if a.dtype.kind not in "fiub":
@@ -114,19 +131,34 @@ def check_vertices(V: Any, name: str = "V") -> np.ndarray:
     if a.dtype.kind == "b":
         raise MeshError(f"{name} must hold coordinates; got a boolean array")
     if a.ndim != 2 or a.shape[1] not in (2, 3):
-        raise MeshError(f"{name} must have shape (n, 3) or (n, 2); got {a.shape}")
+        hint = " (the transpose of what is expected?)" if a.ndim == 2 and a.shape[0] in (2, 3) else ""
+        raise MeshError(f"{name} must have shape (n, 3) or (n, 2); got {a.shape}{hint}")
     if a.shape[0] == 0:
         raise MeshError(f"{name} is empty: the mesh has no vertices")
     a = np.ascontiguousarray(a, dtype=np.float64)
     if not np.isfinite(a).all():
         count, where = _first_nonfinite(a)
         raise MeshError(f"{name} has {count} NaN or infinite coordinate(s), first at {name}{list(where)}")
+    big = float(np.abs(a).max())
+    if big > _MAX_COORD:
+        raise MeshError(
+            f"{name} has coordinates up to {big:.3g}: squared distances would overflow float64; "
+            f"rescale the mesh (the operator scales as L(sV, s²h) = L(V, h)/s²)"
+        )
+    span = float(np.max(a.max(axis=0) - a.min(axis=0)))
+    if 0 < span < _MIN_SPAN:
+        raise MeshError(
+            f"{name} spans only {span:.3g}: face areas would underflow float64; rescale the mesh "
+            f"(the operator scales as L(sV, s²h) = L(V, h)/s²)"
+        )
     if a.shape[1] == 2:
         a = np.ascontiguousarray(np.column_stack([a, np.zeros(len(a))]))
     return a
 
 
 def _integral(a: np.ndarray, name: str) -> np.ndarray:
+    if a.dtype.kind == "u" and a.size and a.max() > np.iinfo(np.int64).max:
+        raise MeshError(f"{name} holds index {a.max()}, beyond the int64 range of vertex indices")
     if a.dtype.kind in "iu":
         return a.astype(np.int64, copy=False)
     if a.dtype.kind == "b":
@@ -145,9 +177,26 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
     sequences of mixed sizes, or a :class:`Polygons`. Integral float arrays are converted;
     anything else, faces with fewer than 3 corners and indices outside [0, n_vertices)
     raise :class:`MeshError`.
+
+    A corner repeated at the next position of its face (a triangle stored as the quad
+    ``[a, b, c, c]``) is dropped: the operator's #t counts the face's distinct vertices.
+    Faces left with fewer than 3 corners have zero area and are kept as given.
+
+    Examples
+    --------
+    >>> check_faces([[0, 1, 2, 2], [0, 2, 3, 4]], 5).sizes
+    array([3, 4])
     """
+    if isinstance(F, (str, bytes)):
+        raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got a string")
     if isinstance(F, Polygons):
-        indices, offsets = F.indices, F.offsets
+        indices = np.asarray(F.indices, dtype=np.int64)
+        offsets = np.asarray(F.offsets, dtype=np.int64)
+        if offsets.ndim != 1 or len(offsets) < 2:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        if offsets[0] != 0 or offsets[-1] != len(indices) or np.any(np.diff(offsets) < 3):
+            raise MeshError(f"{name} has inconsistent offsets: they must start at 0, end at "
+                            f"len(indices) and step by at least 3 corners per face")
     elif isinstance(F, np.ndarray) or (
         isinstance(F, Sequence) and len(F) and not isinstance(F[0], (Sequence, np.ndarray))
     ):
@@ -182,26 +231,91 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
                 f"{name} refers to vertex {int(indices[bad])} in face {face}, but vertex indices must "
                 f"lie in [0, {n_vertices - 1}] for {n_vertices} vertices"
             )
-    return Polygons(indices=indices, offsets=offsets)
+    return _drop_repeated_corners(indices, offsets)
+
+
+def _drop_repeated_corners(indices: np.ndarray, offsets: np.ndarray) -> Polygons:
+    sizes = np.diff(offsets)
+    nxt = np.arange(1, len(indices) + 1)
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    keep = indices != indices[nxt]
+    if keep.all():
+        return Polygons(indices=indices, offsets=offsets)
+    new_sizes = np.add.reduceat(keep.astype(np.int64), offsets[:-1])
+    short = new_sizes < 3  # degenerate faces: zero area whatever their corners
+    keep[np.repeat(short, sizes)] = True
+    new_sizes = np.where(short, sizes, new_sizes)
+    offsets = np.concatenate([[0], np.cumsum(new_sizes)]).astype(np.int64)
+    return Polygons(indices=np.ascontiguousarray(indices[keep]), offsets=offsets)
+
+
+def _real_scalar(value: Any, name: str, what: str) -> float:
+    if isinstance(value, (bool, np.bool_)):
+        raise MeshError(f"{name} must be {what}; got the boolean {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name} must be {what}; got {value!r}") from exc
+
+
+def check_positive(value: Any, name: str) -> float:
+    """Return ``value`` as a float after checking that it is finite and > 0.
+
+    Examples
+    --------
+    >>> check_positive(2, "t")
+    2.0
+    """
+    x = _real_scalar(value, name, "a positive number")
+    if not math.isfinite(x) or x <= 0:
+        raise MeshError(f"{name} must be finite and > 0; got {x}")
+    return x
 
 
 def check_h(h: Any, name: str = "h") -> float:
-    """Return the kernel width ``h`` as a float; it must be finite and positive."""
-    try:
-        value = float(h)
-    except (TypeError, ValueError) as exc:
-        raise MeshError(f"{name} must be a positive number; got {h!r}") from exc
-    if not math.isfinite(value) or value <= 0:
-        raise MeshError(f"{name} must be finite and > 0; got {value}")
+    """Return the kernel width ``h`` as a float.
+
+    It must be finite, positive and within [1e-150, 1e150], where the kernel's factor
+    1/(4πh²) is a finite, non-zero float64 (rescale meshes outside that range).
+
+    Examples
+    --------
+    >>> check_h(0.01)
+    0.01
+    """
+    value = check_positive(h, name)
+    if not _H_RANGE[0] <= value <= _H_RANGE[1]:
+        raise MeshError(
+            f"{name} = {value:.3g} is outside [{_H_RANGE[0]:g}, {_H_RANGE[1]:g}], where 1/(4πh²) "
+            "stays a finite, non-zero float64; rescale the mesh"
+        )
     return value
+
+
+def check_k(k: Any, n: int, name: str = "k") -> int:
+    """Return the number of eigenpairs ``k`` as an int in [1, n - 1].
+
+    ``n`` is the size of the eigenproblem (vertices with positive mass, for a generalized
+    problem with a singular M): ARPACK's ``eigsh`` needs k < n.
+
+    Examples
+    --------
+    >>> check_k(10, 500)
+    10
+    """
+    if isinstance(k, (bool, np.bool_)) or not isinstance(k, numbers.Integral):
+        raise MeshError(f"{name} must be an integer number of eigenpairs; got {k!r}")
+    k = int(k)
+    if n < 2:
+        raise MeshError(f"the eigenproblem has size {n}: eigenpairs need at least 2 vertices with mass")
+    if not 1 <= k <= n - 1:
+        raise MeshError(f"{name} must lie in [1, {n - 1}] for an eigenproblem of size {n}; got {k}")
+    return k
 
 
 def check_tol(tol: Any) -> float:
     """Return the kernel tolerance; 0 means untruncated, otherwise it must lie in (0, 1)."""
-    try:
-        value = float(tol)
-    except (TypeError, ValueError) as exc:
-        raise MeshError(f"tol must be a number in (0, 1), or 0 for the exact operator; got {tol!r}") from exc
+    value = _real_scalar(tol, "tol", "a number in (0, 1), or 0 for the exact operator")
     if not (value == 0 or 0 < value < 1):
         raise MeshError(f"tol must lie in (0, 1), or be 0 for the exact operator; got {value}")
     return value

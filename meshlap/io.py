@@ -1,0 +1,441 @@
+"""Reading meshes and saving built operators.
+
+* :func:`read_mesh` reads OBJ, OFF, PLY and STL. OBJ and OFF go through small parsers of
+  our own so that polygon faces stay polygons (the operator gives each face Area(t)/#t per
+  corner, so splitting quads into triangles would change it); PLY and STL are read with
+  libigl as triangles.
+* :func:`as_mesh` turns whatever the user holds (a path, a ``(V, F)`` pair, a
+  ``trimesh.Trimesh`` or anything else with ``vertices`` and ``faces``) into ``(V, F)``.
+* :func:`save_operator` / :func:`load_operator` store ``L`` in scipy's own ``.npz`` layout
+  (so :func:`scipy.sparse.load_npz` reads it too) together with the mass, the kernel
+  parameters and, by default, the mesh.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .baselines import SparseLaplacian
+from .validation import MeshError, Polygons, check_faces, check_vertices
+
+__all__ = [
+    "MESH_FORMATS",
+    "SavedLaplacian",
+    "as_mesh",
+    "load_operator",
+    "parse_obj",
+    "read_mesh",
+    "save_operator",
+    "write_mesh",
+]
+
+#: File suffixes :func:`read_mesh` understands.
+MESH_FORMATS = (".obj", ".off", ".ply", ".stl")
+
+PathLike = str | os.PathLike
+
+
+def _faces_out(faces: Polygons) -> np.ndarray | Polygons:
+    # One face size: a plain (m, k) array, which every library understands.
+    return faces.as_array() if faces.uniform_size is not None else faces
+
+
+def _polygons_from(lists: list[list[int]]) -> Polygons:
+    sizes = np.fromiter((len(f) for f in lists), dtype=np.int64, count=len(lists))
+    offsets = np.zeros(len(lists) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    indices = np.fromiter((i for f in lists for i in f), dtype=np.int64, count=int(offsets[-1]))
+    return Polygons(indices=indices, offsets=offsets)
+
+
+def parse_obj(text: str, name: str = "<obj>") -> tuple[np.ndarray, np.ndarray | Polygons]:
+    """Parse the vertices and faces of Wavefront OBJ text, keeping polygons as polygons.
+
+    Face tokens may be ``i``, ``i/t``, ``i//n`` or ``i/t/n``; only the vertex index ``i``
+    is used. Negative indices count back from the last vertex read so far, as the format
+    specifies. Texture coordinates, normals, groups, materials, lines and points are
+    ignored; a trailing backslash continues a line.
+
+    Parameters
+    ----------
+    text : str
+        The file's contents.
+    name : str
+        Used in error messages (usually the file name).
+
+    Returns
+    -------
+    V : (n, 3) float64 ndarray
+    F : (m, k) int64 ndarray, or Polygons
+        An array when every face has the same number of corners, else :class:`Polygons`.
+
+    Raises
+    ------
+    MeshError
+        For malformed numbers, faces with fewer than 3 corners, index 0 or indices that
+        refer to no vertex; the message names the line.
+
+    Examples
+    --------
+    >>> V, F = parse_obj("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nv 2 0 0\\n"
+    ...                  "f 1/1 2/2 3/3 4/4\\nf -4 -1 -3\\n")
+    >>> F.sizes.tolist(), F.indices.tolist()
+    ([4, 3], [0, 1, 2, 3, 1, 4, 2])
+    """
+    verts: list[list[float]] = []
+    faces: list[list[int]] = []
+    lines = text.replace("\\\r\n", " ").replace("\\\n", " ").splitlines()
+    for lineno, line in enumerate(lines, start=1):
+        parts = line.split()
+        if not parts:
+            continue
+        key = parts[0]
+        if key == "v":
+            try:
+                xyz = [float(s) for s in parts[1:4]]
+            except ValueError as exc:
+                raise MeshError(f"{name}, line {lineno}: bad vertex coordinate ({exc})") from exc
+            if len(xyz) != 3:
+                raise MeshError(f"{name}, line {lineno}: a vertex needs 3 coordinates; got {len(xyz)}")
+            verts.append(xyz)
+        elif key == "f":
+            n = len(verts)
+            face = []
+            for tok in parts[1:]:
+                head = tok.split("/", 1)[0]
+                try:
+                    i = int(head)
+                except ValueError as exc:
+                    raise MeshError(f"{name}, line {lineno}: bad face index {tok!r}") from exc
+                j = i - 1 if i > 0 else n + i
+                if i == 0 or not 0 <= j < n:
+                    raise MeshError(
+                        f"{name}, line {lineno}: face index {i} refers to no vertex "
+                        f"({n} vertices read so far)"
+                    )
+                face.append(j)
+            if len(face) < 3:
+                raise MeshError(f"{name}, line {lineno}: a face needs at least 3 corners; got {len(face)}")
+            faces.append(face)
+    if not verts:
+        raise MeshError(f"{name}: no vertices ('v' lines) found")
+    if not faces:
+        raise MeshError(f"{name}: no faces ('f' lines) found")
+    return np.asarray(verts, dtype=np.float64), _faces_out(_polygons_from(faces))
+
+
+def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]:
+    # Line based, so that per-face colours after the indices are simply ignored.
+    lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    if not lines or lines[0][0] != "OFF":
+        found = lines[0][0] if lines else "nothing"
+        raise MeshError(f"{name}: not a plain OFF file (it must start with OFF; found {found!r})")
+    head = lines[0][1:] or (lines[1] if len(lines) > 1 else [])
+    body = lines[1:] if lines[0][1:] else lines[2:]
+    try:
+        nv, nf = int(head[0]), int(head[1])
+        V = np.array([[float(t) for t in ln[:3]] for ln in body[:nv]], dtype=np.float64)
+        faces = [[int(t) for t in ln[1 : 1 + int(ln[0])]] for ln in body[nv : nv + nf]]
+        short = next((i for i, ln in enumerate(body[nv : nv + nf]) if len(ln) <= int(ln[0])), None)
+    except (IndexError, ValueError) as exc:
+        raise MeshError(f"{name}: malformed OFF file ({exc})") from exc
+    if nv == 0 or nf == 0:
+        raise MeshError(f"{name}: the OFF file declares {nv} vertices and {nf} faces")
+    if V.shape != (nv, 3) or len(faces) != nf:
+        raise MeshError(f"{name}: truncated OFF file: expected {nv} vertices and {nf} faces")
+    if short is not None:
+        raise MeshError(f"{name}: face {short} lists fewer corners than its count says")
+    return V, _faces_out(check_faces(faces, nv, name=f"faces of {name}"))
+
+
+def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray, np.ndarray | Polygons]:
+    """Read a surface mesh from an OBJ, OFF, PLY or STL file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file; its suffix picks the reader.
+    triangulate : bool, default False
+        Split polygons into fans of triangles (for code that needs triangles, such as the
+        cotangent Laplacian). By default OBJ and OFF polygons are kept.
+
+    Returns
+    -------
+    V : (n, 3) float64 ndarray
+        Vertex positions.
+    F : (m, k) int64 ndarray, or Polygons
+        Faces; :class:`~meshlap.Polygons` when the sizes are mixed. Both go straight into
+        :func:`meshlap.laplacian`.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file does not exist.
+    MeshError
+        For unknown suffixes and files that cannot be parsed.
+
+    Notes
+    -----
+    STL stores every triangle's corners separately; they are merged with libigl's
+    ``remove_duplicate_vertices`` so that neighbouring triangles share vertices again.
+    Vertices that no face uses are kept (they get zero mass in the operator).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "quad.obj"
+    >>> _ = path.write_text("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nf 1/1 2/2 3/3 4/4\\n")
+    >>> V, F = read_mesh(path)
+    >>> V.shape, F.tolist()
+    ((4, 3), [[0, 1, 2, 3]])
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such mesh file: {path}")
+    suffix = path.suffix.lower()
+    if suffix not in MESH_FORMATS:
+        raise MeshError(f"{path.name}: unknown mesh format {suffix or '(no suffix)'!r}; "
+                        f"meshlap reads {', '.join(MESH_FORMATS)}")
+    if suffix in (".obj", ".off"):
+        try:
+            text = path.read_text(encoding="utf-8", errors="replace")
+        except UnicodeError as exc:  # pragma: no cover - errors="replace" makes this rare
+            raise MeshError(f"{path.name}: not a text file ({exc})") from exc
+        parse = parse_obj if suffix == ".obj" else _parse_off
+        V, F = parse(text, path.name)
+    else:
+        import igl
+
+        try:
+            if suffix == ".stl":
+                V, F, _ = igl.readSTL(str(path))
+                if len(F):
+                    V, _, _, F = igl.remove_duplicate_vertices(V, F, 0.0)
+            else:
+                V, F = igl.read_triangle_mesh(str(path))
+        except RuntimeError as exc:
+            raise MeshError(f"{path.name}: libigl could not read it ({exc})") from exc
+        if V.size == 0 or F.size == 0:
+            raise MeshError(f"{path.name}: no vertices or no faces could be read")
+    V = check_vertices(V, name=f"vertices of {path.name}")
+    faces = check_faces(F, len(V), name=f"faces of {path.name}")
+    if triangulate:
+        return V, faces.triangles()
+    return V, _faces_out(faces)
+
+
+def write_mesh(path: PathLike, V: Any, F: Any) -> Path:
+    """Write a mesh; OBJ and OFF keep polygons, PLY and STL need triangles.
+
+    Examples
+    --------
+    >>> import meshlap, tempfile, pathlib
+    >>> V, F = meshlap.shapes.sphere(50, seed=0)
+    >>> p = write_mesh(pathlib.Path(tempfile.mkdtemp()) / "s.obj", V, F)
+    >>> read_mesh(p)[1].shape
+    (96, 3)
+    """
+    path = Path(path)
+    V = check_vertices(V)
+    faces = check_faces(F, len(V))
+    suffix = path.suffix.lower()
+    if suffix not in MESH_FORMATS:
+        raise MeshError(f"{path.name}: unknown mesh format {suffix or '(no suffix)'!r}; "
+                        f"meshlap writes {', '.join(MESH_FORMATS)}")
+    if suffix in (".obj", ".off"):
+        sizes = faces.sizes
+        split = np.split(faces.indices, faces.offsets[1:-1])
+        with open(path, "w", encoding="utf-8") as fh:
+            if suffix == ".off":
+                fh.write(f"OFF\n{len(V)} {faces.n_faces} 0\n")
+                fh.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+                fh.writelines(f"{k} {' '.join(map(str, f.tolist()))}\n"
+                              for k, f in zip(sizes, split, strict=True))
+            else:
+                fh.write("# written by meshlap\n")
+                fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+                fh.writelines(f"f {' '.join(str(i + 1) for i in f.tolist())}\n" for f in split)
+        return path
+    if faces.uniform_size != 3:
+        raise MeshError(f"{suffix} files hold triangles only; write polygons as .obj or .off")
+    import igl
+
+    igl.write_triangle_mesh(str(path), V, faces.as_array())
+    return path
+
+
+def as_mesh(mesh: Any) -> tuple[np.ndarray, np.ndarray | Polygons]:
+    """``(V, F)`` from a path, a ``(V, F)`` pair or an object with ``vertices`` and ``faces``.
+
+    Objects such as ``trimesh.Trimesh`` are used through their attributes only, so
+    trimesh is not needed (or imported) here. Open3D's ``triangles`` attribute works too.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> class Tri:   # stands in for trimesh.Trimesh
+    ...     vertices = np.eye(3)
+    ...     faces = np.array([[0, 1, 2]])
+    >>> V, F = as_mesh(Tri())
+    >>> V.shape, F.tolist()
+    ((3, 3), [[0, 1, 2]])
+    """
+    if isinstance(mesh, (str, os.PathLike)):
+        return read_mesh(mesh)
+    if isinstance(mesh, tuple) and len(mesh) == 2:
+        V, F = mesh
+    elif hasattr(mesh, "vertices") and (hasattr(mesh, "faces") or hasattr(mesh, "triangles")):
+        V = mesh.vertices
+        F = mesh.faces if hasattr(mesh, "faces") else mesh.triangles
+    else:
+        raise MeshError(
+            f"cannot read a mesh from a {type(mesh).__name__}: pass a file path, a (V, F) pair "
+            "or an object with 'vertices' and 'faces' attributes"
+        )
+    V = check_vertices(np.asarray(V), name="mesh vertices")
+    F = np.asarray(F) if not isinstance(F, (Polygons, list)) else F
+    return V, _faces_out(check_faces(F, len(V), name="mesh faces"))
+
+
+class SavedLaplacian(SparseLaplacian):
+    """An operator read back by :func:`load_operator`.
+
+    Behaves like the :class:`~meshlap.MeshLaplacian` it was saved from: ``op @ f``,
+    ``L``, ``M``, ``S``, ``mass``, and the kernel parameters ``h``, ``tol``, ``radius``
+    and ``h_auto``. ``V`` and ``faces`` hold the mesh when it was saved (else None).
+    """
+
+    def __init__(self, L: Any, mass: Any, params: dict[str, Any], V: np.ndarray | None = None,
+                 faces: Polygons | None = None) -> None:
+        super().__init__(L, mass, name=str(params.get("name", "BSW")))
+        self.h = float(params["h"]) if "h" in params else None
+        self.tol = float(params["tol"]) if "tol" in params else None
+        self.radius = float(params["radius"]) if "radius" in params else None
+        self.h_auto = bool(params.get("h_auto", False))
+        self.exact = self.tol == 0.0
+        self.V = V
+        self.faces = faces
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the CSR arrays of L."""
+        return int(self.L.data.nbytes + self.L.indices.nbytes + self.L.indptr.nbytes)
+
+    def __repr__(self) -> str:
+        h = "" if self.h is None else f", h={self.h:.6g}, tol={self.tol:.3g}"
+        return f"SavedLaplacian({self.name}, vertices={self.n_vertices:,}, nnz={self.nnz:,}{h})"
+
+
+def save_operator(path: PathLike, op: Any, *, mesh: bool = True, compress: bool = False) -> Path:
+    """Save a built operator to ``.npz``: L in scipy's layout, the mass and the parameters.
+
+    ``scipy.sparse.load_npz(path)`` returns L alone; :func:`load_operator` gives back the
+    whole operator. The CSR arrays are stored as they are (rows keep their diagonal
+    first), so the loaded ``L`` is bit-for-bit the saved one.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Target file; ``.npz`` is appended when missing.
+    op : MeshLaplacian or SparseLaplacian
+        Any operator with ``L`` and ``mass`` (``h``, ``tol``, ``radius`` are saved when
+        present). Matrix-free operators hold no matrix and cannot be saved.
+    mesh : bool, default True
+        Also store the vertices and faces, so that the loaded operator can be plotted.
+    compress : bool, default False
+        Zip-compress the arrays (smaller, slower to write and read).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Examples
+    --------
+    >>> import meshlap, tempfile, pathlib, numpy as np
+    >>> V, F = meshlap.shapes.sphere(200, seed=0)
+    >>> op = meshlap.laplacian(V, F, h=0.02)
+    >>> p = save_operator(pathlib.Path(tempfile.mkdtemp()) / "op", op)
+    >>> back = load_operator(p)
+    >>> back.h, bool(np.array_equal((back @ V).ravel(), (op @ V).ravel()))
+    (0.02, True)
+    """
+    path = Path(path)
+    if path.suffix != ".npz":
+        path = path.with_name(path.name + ".npz")
+    if not (hasattr(op, "L") and hasattr(op, "mass")):
+        raise MeshError(f"save_operator needs an operator with L and mass; got {type(op).__name__}")
+    if getattr(op, "matrix_free", False):
+        raise MeshError("this operator is matrix-free: there is no stored matrix to save")
+    L = sp.csr_matrix(op.L)
+    arrays: dict[str, Any] = {
+        "format": np.array("csr"),
+        "shape": np.array(L.shape),
+        "data": L.data,
+        "indices": L.indices,
+        "indptr": L.indptr,
+        "mass": np.asarray(op.mass, dtype=np.float64),
+        "name": np.array(str(getattr(op, "name", "BSW"))),
+    }
+    from . import __version__
+
+    arrays["meshlap_version"] = np.array(__version__)
+    for key in ("h", "tol", "radius"):
+        value = getattr(op, key, None)
+        if value is not None:
+            arrays[key] = np.array(float(value))
+    arrays["h_auto"] = np.array(bool(getattr(op, "h_auto", False)))
+    V, faces = getattr(op, "V", None), getattr(op, "faces", None)
+    if mesh and V is not None and faces is not None:
+        arrays["V"] = np.asarray(V, dtype=np.float64)
+        arrays["face_indices"] = faces.indices
+        arrays["face_offsets"] = faces.offsets
+    (np.savez_compressed if compress else np.savez)(path, **arrays)
+    return path
+
+
+def load_operator(path: PathLike) -> SavedLaplacian:
+    """Load an operator written by :func:`save_operator`.
+
+    Returns
+    -------
+    SavedLaplacian
+        ``op @ f``, ``L``, ``M``, ``S``, ``mass``, ``h``, ``tol``, ``radius``, and ``V``
+        and ``faces`` when the mesh was saved.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the file does not exist.
+    MeshError
+        When the file is not an operator saved by meshlap.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such operator file: {path}")
+    try:
+        data = np.load(path, allow_pickle=False)
+    except (ValueError, OSError) as exc:
+        raise MeshError(f"{path.name}: not an .npz file saved by meshlap") from exc
+    with data:
+        missing = [k for k in ("format", "shape", "data", "indices", "indptr", "mass") if k not in data]
+        if missing or str(data["format"]) != "csr":
+            raise MeshError(f"{path.name}: not an operator saved by meshlap (missing {', '.join(missing)})")
+        n = int(data["shape"][0])
+        L = sp.csr_matrix((data["data"], data["indices"], data["indptr"]), shape=tuple(data["shape"]))
+        mass = data["mass"]
+        if mass.shape != (n,):
+            raise MeshError(f"{path.name}: mass has shape {mass.shape}, expected ({n},)")
+        params = {k: data[k].item() for k in ("h", "tol", "radius", "h_auto", "name") if k in data}
+        V = faces = None
+        if "V" in data:
+            V = check_vertices(data["V"], name=f"vertices in {path.name}")
+            faces = check_faces(Polygons(indices=data["face_indices"], offsets=data["face_offsets"]),
+                                len(V), name=f"faces in {path.name}")
+    return SavedLaplacian(L, mass, params, V=V, faces=faces)

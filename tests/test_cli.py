@@ -1,0 +1,211 @@
+"""The ``meshlap`` command, run in-process through ``meshlap.cli.main``."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import meshlap
+from meshlap import io
+from meshlap.cli import build_parser, main
+
+DATA = Path(__file__).parent / "data"
+SPOT = str(DATA / "spot.obj")
+SUBCOMMANDS = sorted(build_parser()._subparsers._group_actions[0].choices)
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def fails(capsys, expected, *argv, status=1):
+    """Run the command; it must exit with ``status`` and end stderr with one error line."""
+    code, _, err = run(capsys, *argv)
+    assert code == status
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("meshlap") and "error:" in last and expected in last, err
+    if status == 1:  # input errors: exactly one line; usage errors (2) print the usage first
+        assert err.count("\n") == 1
+
+
+def test_every_subcommand_has_help(capsys):
+    assert set(SUBCOMMANDS) == {"info", "build", "eigs", "smooth", "curvature", "reproduce", "demo"}
+    code, out, _ = run(capsys, "--help")
+    assert code == 0 and all(name in out for name in SUBCOMMANDS)
+    for name in SUBCOMMANDS:
+        code, out, _ = run(capsys, name, "--help")
+        assert code == 0 and out.startswith(f"usage: meshlap {name}"), name
+    code, out, _ = run(capsys, "--version")
+    assert code == 0 and meshlap.__version__ in out
+
+
+def test_usage_errors_exit_2(capsys):
+    fails(capsys, "required", status=2)
+    fails(capsys, "invalid choice", "frobnicate", status=2)
+    fails(capsys, "expected a positive number", "build", SPOT, "--h", "-1", status=2)
+    fails(capsys, "'abc'", "build", SPOT, "--h", "abc", status=2)
+    fails(capsys, "positive integer", "demo", "--ns", "0", status=2)
+
+
+def test_bad_input_exits_1_with_one_line(capsys, tmp_path):
+    fails(capsys, "no such mesh file", "info", tmp_path / "nope.obj")
+    bad = tmp_path / "bad.obj"
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    fails(capsys, "bad.obj, line 4: face index 9 refers to no vertex", "build", bad)
+    (tmp_path / "m.xyz").write_text("1 2 3\n")
+    fails(capsys, "unknown mesh format", "info", tmp_path / "m.xyz")
+    fails(capsys, "tol must lie in (0, 1)", "build", SPOT, "--tol", "3")
+    np.savez(tmp_path / "other.npz", a=np.arange(3))
+    fails(capsys, "not an operator saved by meshlap", "info", tmp_path / "other.npz")
+    missing_dir = tmp_path / "no" / "such" / "dir" / "op.npz"
+    fails(capsys, "No such file or directory", "build", SPOT, "--h", "0.001", "-o", missing_dir)
+
+
+def test_info_mesh(capsys):
+    code, out, _ = run(capsys, "info", SPOT)
+    assert code == 0
+    V, F = io.read_mesh(SPOT)
+    table = [line for line in out.splitlines() if line and not line.startswith(("-", "2,"))]
+    fields = dict(line.split(None, 1) for line in table)
+    assert fields["vertices"] == "2,930" and fields["faces"] == "5,856 triangles"
+    assert float(fields["h"].split()[0]) == pytest.approx(meshlap.default_h(V, F), rel=1e-5)
+    assert float(fields["surface"].split()[-1]) == pytest.approx(meshlap.vertex_mass(V, F).sum(), rel=1e-5)
+    assert "no problems found" in out
+    code, out, _ = run(capsys, "info", DATA / "spot-quads.obj", "--h", "0.002")
+    assert code == 0 and "2,928 quads" in out and "0.002" in out
+
+
+def test_info_mixed_polygons(capsys, tmp_path):
+    p = tmp_path / "mixed.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n")
+    code, out, _ = run(capsys, "info", p)
+    assert code == 0 and "1 triangles, 1 quads" in out and "1 boundary loop" in out
+
+
+def test_build_then_info_of_the_operator(capsys, tmp_path):
+    out_file = tmp_path / "spot.npz"
+    code, out, err = run(capsys, "build", SPOT, "--h", "0.002", "--tol", "1e-6", "-o", out_file, "--progress")
+    assert code == 0 and f"wrote {out_file}" in out
+    assert "100%" in err  # the progress bar
+    V, F = io.read_mesh(SPOT)
+    ref = meshlap.laplacian(V, F, h=0.002, tol=1e-6)
+    op = io.load_operator(out_file)
+    assert abs(op.L - ref.L).max() == 0 and op.h == 0.002 and op.tol == 1e-6 and op.V is not None
+    code, out, _ = run(capsys, "info", out_file)
+    assert code == 0 and "0.002" in out and f"{ref.nnz:,}" in out and "mesh stored  yes" in out
+
+
+def test_build_float32_without_mesh_default_name(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, _, _ = run(capsys, "build", SPOT, "--h", "0.001", "--float32", "--no-mesh")
+    assert code == 0
+    op = io.load_operator(tmp_path / "spot.npz")  # default: the mesh's name, in the current folder
+    assert op.L.dtype == np.float32 and op.V is None
+
+
+def test_demo_prints_falling_bsw_errors(capsys):
+    code, out, _ = run(capsys, "demo", "--ns", "300", "1200")
+    assert code == 0
+    assert "uniform sphere" in out and "noisy sphere" in out
+    rows = [line.split() for line in out.splitlines()]
+    bsw = [r for r in rows if "BSW" in r[:2]]
+    assert len(bsw) == 6 and all(r[-1] == "falling" for r in bsw)
+    for r in bsw:  # n = 300 then n = 1,200: the error falls
+        e300, e1200 = map(float, r[-3:-1])
+        assert e1200 < e300
+
+
+def test_reproduce_writes_tables_and_png(capsys, tmp_path):
+    out_dir = tmp_path / "tables"
+    code, out, _ = run(capsys, "reproduce", "--quick", "--ns", "300", "600", "--out", out_dir)
+    assert code == 0
+    md = (out_dir / "tables.md").read_text()
+    assert md.startswith("# Belkin–Sun–Wang") and "meshlap reproduce --quick --ns 300 600" in md
+    assert "| x^2 | BSW |" in md and "| x^2 | COT |" in md
+    assert (out_dir / "convergence.png").read_bytes()[:4] == b"\x89PNG"
+    assert f"wrote {out_dir / 'convergence.png'}" in out
+
+
+@pytest.fixture(scope="module")
+def sphere_file(tmp_path_factory):
+    V, F = meshlap.shapes.sphere(600, seed=0)
+    return io.write_mesh(tmp_path_factory.mktemp("mesh") / "sphere.obj", V, F)
+
+
+def eigen_table(out):
+    rows = [line.split() for line in out.splitlines() if line.strip()[:1].isdigit()]
+    return np.array([[float(v) for v in r[1:]] for r in rows])
+
+
+def test_eigs_of_a_mesh_and_of_a_saved_operator(capsys, tmp_path, sphere_file):
+    from meshlap.spectral import eigs
+
+    code, out, _ = run(capsys, "eigs", sphere_file, "-k", "9", "--h", "0.02", "--compare-cot",
+                       "-o", tmp_path / "e.npz", "--png", tmp_path / "modes.png")
+    assert code == 0 and "BSW" in out and "COT" in out
+    table = eigen_table(out)
+    V, F = io.read_mesh(sphere_file)
+    lam, phi = eigs(meshlap.laplacian(V, F, h=0.02), 9)
+    np.testing.assert_allclose(table[1:, 0], lam[1:], rtol=1e-5)
+    # the unit sphere: l(l+1) = 0, 2 (x3), 6 (x5); both operators within 4%
+    exact = np.array([0, 2, 2, 2, 6, 6, 6, 6, 6])
+    assert table[0, 0] == 0 and table[0, 1] == 0
+    np.testing.assert_allclose(table[1:], np.repeat(exact[1:, None], 2, axis=1), rtol=0.04)
+    saved = np.load(tmp_path / "e.npz")
+    np.testing.assert_allclose(saved["eigenvalues"], lam, atol=1e-9)
+    assert (tmp_path / "modes.png").read_bytes()[:4] == b"\x89PNG"
+    # the same from the saved operator
+    assert run(capsys, "build", sphere_file, "--h", "0.02", "-o", tmp_path / "op.npz")[0] == 0
+    code, out, _ = run(capsys, "eigs", tmp_path / "op.npz", "-k", "9")
+    assert code == 0
+    np.testing.assert_allclose(eigen_table(out)[:, 0], table[:, 0], rtol=1e-5, atol=1e-12)
+
+
+def test_eigs_errors(capsys, tmp_path, sphere_file):
+    assert run(capsys, "build", sphere_file, "--h", "0.02", "--no-mesh", "-o", tmp_path / "bare.npz")[0] == 0
+    fails(capsys, "--png needs the mesh", "eigs", tmp_path / "bare.npz", "-k", "3", "--png", tmp_path / "x.png")
+    fails(capsys, "--png expects a file name ending in .png", "eigs", sphere_file, "--png", tmp_path / "x.jpg")
+    fails(capsys, "k must lie in", "eigs", sphere_file, "--h", "0.02", "-k", "600")
+
+
+def test_smooth_makes_a_noisy_sphere_rounder(capsys, tmp_path):
+    V, F = meshlap.shapes.sphere(1500, kind="noisy", seed=1)
+    noisy = io.write_mesh(tmp_path / "noisy.off", V, F)
+    code, out, err = run(capsys, "smooth", noisy, "-o", tmp_path / "smooth.ply", "--steps", "2", "--progress")
+    assert code == 0 and "100%" in err and "enclosed volume" in out
+    W, F2 = io.read_mesh(tmp_path / "smooth.ply")
+    assert F2.shape == F.shape
+
+    def roughness(X):
+        r = np.linalg.norm(X, axis=1)
+        return r.std() / r.mean()
+
+    assert roughness(W) < 0.5 * roughness(V)
+    code, _, _ = run(capsys, "smooth", noisy, "-o", tmp_path / "fixed.obj", "--fixed", "--cot", "--steps", "1")
+    assert code == 0 and roughness(io.read_mesh(tmp_path / "fixed.obj")[0]) < roughness(V)
+    fails(capsys, "--output must end in one of", "smooth", noisy, "-o", tmp_path / "out.xyz")
+
+
+def test_curvature_of_a_sphere_of_radius_2(capsys, tmp_path):
+    from meshlap.curvature import mean_curvature
+
+    V, F = meshlap.shapes.sphere(2000, seed=0)
+    path = io.write_mesh(tmp_path / "r2.obj", 2 * V, F)
+    code, out, _ = run(capsys, "curvature", path, "--compare-cot", "-o", tmp_path / "H.npy",
+                       "--png", tmp_path / "H.png")
+    assert code == 0
+    H = np.load(tmp_path / "H.npy")
+    np.testing.assert_allclose(H, 0.5, atol=0.02)  # H = 1/R
+    W, G = io.read_mesh(path)
+    np.testing.assert_array_equal(H, mean_curvature(meshlap.laplacian(W, G), W, G))
+    rows = {line.split()[0]: [float(v) for v in line.split()[1:]] for line in out.splitlines()
+            if line.startswith(("BSW", "COT"))}
+    assert abs(rows["BSW"][2] - 0.5) < 0.01 and abs(rows["COT"][2] - 0.5) < 0.01  # medians
+    assert (tmp_path / "H.png").read_bytes()[:4] == b"\x89PNG"
+    code, _, _ = run(capsys, "curvature", path, "-o", tmp_path / "H.csv")
+    assert code == 0
+    np.testing.assert_allclose(np.loadtxt(tmp_path / "H.csv"), H, rtol=1e-12)
+    fails(capsys, "--output must end in .npy, .txt or .csv", "curvature", path, "-o", tmp_path / "H.bin")

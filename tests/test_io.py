@@ -1,0 +1,225 @@
+"""Mesh reading and writing, trimesh-like objects, and saving/loading built operators."""
+
+from pathlib import Path
+
+import igl
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import meshlap
+from meshlap import io
+from meshlap.baselines import cotangent
+
+DATA = Path(__file__).parent / "data"
+
+# Quads, a pentagon and triangles with every face-token form, negative (relative) indices,
+# comments, texture/normal lines, groups, a continued line and CRLF line ends.
+MIXED_OBJ = (
+    "# mixed polygons\r\n"
+    "mtllib none.mtl\n"
+    "o thing\n"
+    "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\nv 1.5 1.8 0.25 0.1 0.2 0.3\n"
+    "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+    "g quads\ns off\n"
+    "f 1/1/1 2/2/1 5/3/1 4/1/1\n"
+    "f 2//1 3//1 \\\n 6//1\n"
+    "usemtl red\n"
+    "f -6/2 -4/3 -1/1 -2\n"
+    "f 4 5 7\n"
+    "l 1 2\n"
+)
+
+
+def test_spot_quads_kept_as_quads():
+    V, F = io.read_mesh(DATA / "spot-quads.obj")
+    Vi, _, _, Fi, _, _ = igl.readOBJ(str(DATA / "spot-quads.obj"))
+    assert F.dtype == np.int64 and F.shape == (2928, 4)
+    np.testing.assert_array_equal(V, Vi)
+    np.testing.assert_array_equal(F, Fi)
+    # each quad gives Area/4 to each corner, so the masses add up to the surface area; a
+    # non-planar quad's vector area is a little below that of its two fan triangles
+    area_fan = igl.doublearea(V, io.read_mesh(DATA / "spot-quads.obj", triangulate=True)[1]).sum() / 2
+    total = meshlap.vertex_mass(V, F).sum()
+    assert 0.995 * area_fan < total < area_fan
+
+
+def test_triangle_obj_matches_libigl_exactly():
+    V, F = io.read_mesh(DATA / "spot.obj")
+    Vi, Fi = igl.read_triangle_mesh(str(DATA / "spot.obj"))
+    np.testing.assert_array_equal(V, Vi)
+    np.testing.assert_array_equal(F, Fi)
+
+
+def test_mixed_polygon_obj(tmp_path):
+    p = tmp_path / "mixed.obj"
+    p.write_bytes(MIXED_OBJ.encode())
+    V, F = io.read_mesh(p)
+    assert isinstance(F, meshlap.Polygons)
+    assert F.sizes.tolist() == [4, 3, 4, 3]
+    faces = np.split(F.indices, F.offsets[1:-1])
+    assert [f.tolist() for f in faces] == [[0, 1, 4, 3], [1, 2, 5], [1, 3, 6, 5], [3, 4, 6]]
+    np.testing.assert_array_equal(V[6], [1.5, 1.8, 0.25])  # colour values after xyz ignored
+    tri = io.read_mesh(p, triangulate=True)[1]
+    assert tri.shape == (2 + 1 + 2 + 1, 3)
+    op = meshlap.laplacian(V, F, h=0.5)
+    assert op.faces.sizes.tolist() == [4, 3, 4, 3]
+    # the operator takes the polygons as they are; its rows annihilate constants
+    np.testing.assert_allclose(op.L @ np.ones(7), 0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "index 0 refers to no vertex"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4: face index 4 refers to no vertex"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "index -4 refers to no vertex"),
+        ("v 0 0 0\nv 1 0 0\nf 1 2\n", "at least 3 corners"),
+        ("v 0 0 x\n", "line 1: bad vertex coordinate"),
+        ("v 0 0\n", "needs 3 coordinates"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 a 3\n", "bad face index 'a'"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces"),
+        ("# empty\n", "no vertices"),
+    ],
+)
+def test_obj_errors_name_the_line(tmp_path, text, message):
+    p = tmp_path / "bad.obj"
+    p.write_text(text)
+    with pytest.raises(meshlap.MeshError, match=message):
+        io.read_mesh(p)
+
+
+def test_off_polygons_and_errors(tmp_path):
+    p = tmp_path / "q.off"
+    p.write_text("OFF\n# comment\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0.5 0\n"
+                 "4 0 1 2 3 255 0 0\n3 1 4 2\n")
+    V, F = io.read_mesh(p)
+    assert F.sizes.tolist() == [4, 3] and F.indices.tolist() == [0, 1, 2, 3, 1, 4, 2]
+    for text, message in [
+        ("COFF\n3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n", "plain OFF"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "truncated"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n", "refers to vertex 5"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "fewer corners"),
+    ]:
+        p.write_text(text)
+        with pytest.raises(meshlap.MeshError, match=message):
+            io.read_mesh(p)
+
+
+def test_missing_file_and_unknown_format(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such mesh file"):
+        io.read_mesh(tmp_path / "nope.obj")
+    (tmp_path / "m.xyz").write_text("1 2 3\n")
+    with pytest.raises(meshlap.MeshError, match="unknown mesh format '.xyz'"):
+        io.read_mesh(tmp_path / "m.xyz")
+    (tmp_path / "m.ply").write_text("not a ply\n")
+    with pytest.raises(meshlap.MeshError, match="m.ply"):
+        io.read_mesh(tmp_path / "m.ply")
+
+
+@pytest.mark.parametrize(("suffix", "atol"), [(".obj", 0), (".off", 0), (".ply", 1e-6), (".stl", 1e-6)])
+def test_write_read_round_trip(tmp_path, suffix, atol):
+    V, F = meshlap.shapes.sphere(300, seed=2)
+    V2, F2 = io.read_mesh(io.write_mesh(tmp_path / f"s{suffix}", V, F))
+    assert V2.shape == V.shape and F2.shape == F.shape
+    if suffix == ".stl":
+        # STL has no shared vertices: they were merged back, in another order. Compare the
+        # triangles as sets of corner positions.
+        key = lambda V_, F_: np.sort(np.round(V_[F_], 5).reshape(len(F_), -1), axis=0)  # noqa: E731
+        np.testing.assert_allclose(key(V2, F2), key(V, F), atol=1e-5)
+        assert meshlap.vertex_mass(V2, F2).sum() == pytest.approx(meshlap.vertex_mass(V, F).sum(), rel=1e-6)
+    else:
+        np.testing.assert_allclose(V2, V, rtol=0, atol=atol)
+        np.testing.assert_array_equal(F2, F)
+
+
+def test_polygon_round_trip_and_triangle_only_formats(tmp_path):
+    p = tmp_path / "mixed.obj"
+    p.write_text(MIXED_OBJ)
+    V, F = io.read_mesh(p)
+    for suffix in (".obj", ".off"):
+        V2, F2 = io.read_mesh(io.write_mesh(tmp_path / f"again{suffix}", V, F))
+        np.testing.assert_array_equal(V2, V)
+        np.testing.assert_array_equal(F2.indices, F.indices)
+        np.testing.assert_array_equal(F2.offsets, F.offsets)
+    with pytest.raises(meshlap.MeshError, match="triangles only"):
+        io.write_mesh(tmp_path / "x.stl", V, F)
+
+
+def test_as_mesh_accepts_trimesh_like_objects_pairs_and_paths():
+    V, F = meshlap.shapes.sphere(100, seed=0)
+
+    class FakeTrimesh:  # what trimesh.Trimesh offers: TrackedArray subclasses of ndarray
+        vertices = V.astype(np.float32)
+        faces = F.astype(np.int32)
+
+    class FakeOpen3D:
+        vertices = V.tolist()
+        triangles = F.tolist()
+
+    for mesh in (FakeTrimesh(), FakeOpen3D(), (V, F)):
+        V2, F2 = io.as_mesh(mesh)
+        assert V2.dtype == np.float64 and F2.dtype == np.int64
+        np.testing.assert_allclose(V2, V, atol=1e-6)
+        np.testing.assert_array_equal(F2, F)
+    assert io.as_mesh(DATA / "spot.obj")[0].shape == (2930, 3)
+    with pytest.raises(meshlap.MeshError, match="cannot read a mesh from a dict"):
+        io.as_mesh({"V": V})
+
+    class Broken:
+        vertices = V
+        faces = F + 100
+
+    with pytest.raises(meshlap.MeshError, match="mesh faces refers to vertex"):
+        io.as_mesh(Broken())
+
+
+def test_save_load_operator_bit_for_bit(tmp_path):
+    V, F = io.read_mesh(DATA / "spot-quads.obj")
+    op = meshlap.laplacian(V, F, h=0.004, tol=1e-6)
+    path = io.save_operator(tmp_path / "spot", op)
+    assert path.name == "spot.npz"
+    back = io.load_operator(path)
+    assert isinstance(back, io.SavedLaplacian)
+    for a in ("data", "indices", "indptr"):
+        np.testing.assert_array_equal(getattr(back.L, a), getattr(op.L, a))
+    assert (back.h, back.tol, back.radius, back.h_auto) == (op.h, op.tol, op.radius, False)
+    np.testing.assert_array_equal(back.mass, op.mass)
+    np.testing.assert_array_equal(back.V, op.V)
+    np.testing.assert_array_equal(back.faces.offsets, op.faces.offsets)
+    f = np.sin(3 * V)
+    np.testing.assert_array_equal(back @ f, op @ f)
+    assert abs(back.S - op.S).max() == 0 and abs(back.M - op.M).max() == 0
+    assert back.nbytes == op.nbytes
+    # scipy reads the same file as a plain CSR matrix
+    assert abs(sp.load_npz(path) - op.L).max() == 0
+    assert "h=0.004" in repr(back)
+
+
+def test_save_load_variants(tmp_path):
+    V, F = meshlap.shapes.sphere(400, seed=1)
+    op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32)
+    back = io.load_operator(io.save_operator(tmp_path / "op32.npz", op32, mesh=False, compress=True))
+    assert back.L.dtype == np.float32 and back.V is None and back.faces is None
+    assert back.h_auto is False and back.h == 0.01
+    cot = io.load_operator(io.save_operator(tmp_path / "cot.npz", cotangent(V, F)))
+    assert cot.name == "COT" and cot.h is None
+    np.testing.assert_allclose(cot @ V, cotangent(V, F) @ V, rtol=1e-12, atol=1e-12)
+    auto = io.load_operator(io.save_operator(tmp_path / "auto.npz", meshlap.laplacian(V, F)))
+    assert auto.h_auto is True and auto.h == pytest.approx(meshlap.default_h(V, F))
+
+
+def test_save_load_errors(tmp_path):
+    V, F = meshlap.shapes.sphere(100, seed=0)
+    with pytest.raises(meshlap.MeshError, match="matrix-free"):
+        io.save_operator(tmp_path / "mf.npz", meshlap.laplacian(V, F, h=0.05, matrix_free=True))
+    with pytest.raises(meshlap.MeshError, match="needs an operator"):
+        io.save_operator(tmp_path / "x.npz", V)
+    with pytest.raises(FileNotFoundError):
+        io.load_operator(tmp_path / "missing.npz")
+    np.savez(tmp_path / "other.npz", a=np.arange(3))
+    with pytest.raises(meshlap.MeshError, match="not an operator saved by meshlap"):
+        io.load_operator(tmp_path / "other.npz")
+    (tmp_path / "text.npz").write_text("hello")
+    with pytest.raises(meshlap.MeshError, match="not an .npz file"):
+        io.load_operator(tmp_path / "text.npz")

@@ -1,0 +1,184 @@
+"""The assembly kernels: exact agreement with a brute-force build, the vectorized exponential,
+int64 indices, determinism under any schedule, the matrix-free product, memory."""
+
+import math
+import time
+import tracemalloc
+import warnings
+
+import numba
+import numpy as np
+import pytest
+
+import meshlap
+import meshlap.operator as operator_module
+from meshlap import kernel, shapes
+
+
+def brute_force_L(V, mass, h, tol):
+    """L row by row from all pairs: coef * m_p * exp(-d²/4h) for p ≠ w with mass within r."""
+    n = len(V)
+    r2 = kernel.cutoff_radius(h, tol) ** 2
+    coef = 1.0 / (4 * math.pi * h * h)
+    L = np.zeros((n, n))
+    pattern = np.zeros((n, n), dtype=bool)
+    for w in range(n):
+        d2 = np.sum((V - V[w]) ** 2, axis=1)
+        keep = (d2 <= r2) & (mass > 0)
+        keep[w] = False
+        L[w, keep] = coef * mass[keep] * np.exp(-d2[keep] / (4 * h))
+        pattern[w, keep] = True
+        L[w, w] = -L[w].sum()
+    return L, pattern
+
+
+def messy_mesh():
+    """A random sphere plus 3 unreferenced vertices (no mass): one at a vertex's position,
+    one inside the sphere, one far outside the grid of the sources."""
+    V, F = shapes.sphere(700, kind="random", seed=11)
+    extra = np.array([V[5], [0.1, 0.2, -0.1], [40.0, -3.0, 7.0]])
+    return np.vstack([V, extra]), F
+
+
+def test_exp_matches_libm_to_an_ulp():
+    @numba.njit
+    def run(x, out):
+        for i in range(len(x)):
+            out[i] = kernel._exp_neg(x[i])
+
+    rng = np.random.default_rng(0)
+    x = np.concatenate([-rng.uniform(0, 20, 200_000), -rng.uniform(0, 708, 20_000),
+                        [0.0, -0.0, -1e-300, -0.5 * math.log(2), -708.0, -708.5, -745.2, -1e6]])
+    out = np.empty_like(x)
+    run(x, out)
+    ref = np.exp(x)
+    normal = x >= -708
+    # about one rounding in the range reduction and a few in the polynomial
+    assert np.max(np.abs(out[normal] / ref[normal] - 1)) < 5e-16
+    # below -708 the true value is below the smallest normal double; the kernel gives 0
+    assert np.all(out[~normal] == 0) and ref[~normal].max() < 2.3e-308
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-8])
+def test_csr_equals_brute_force(tol):
+    V, F = messy_mesh()
+    h = 0.004
+    with warnings.catch_warnings():  # the mesh is messy on purpose
+        warnings.simplefilter("ignore")
+        op = meshlap.laplacian(V, F, h=h, tol=tol)
+    ref, pattern = brute_force_L(op.V, op.mass, h, tol)
+    L = op.L
+    # every row stores its diagonal first, then exactly the pairs within the cut-off
+    rows = np.arange(len(V))
+    assert np.array_equal(L.indices[L.indptr[:-1]], rows)
+    assert np.array_equal(np.diff(L.indptr), pattern.sum(axis=1) + 1)
+    stored = np.zeros_like(pattern)
+    stored[np.repeat(rows, np.diff(L.indptr)), L.indices] = True
+    assert np.array_equal(stored, pattern | np.eye(len(V), dtype=bool))
+    dense = L.toarray()
+    assert np.max(np.abs(dense - ref)) <= 1e-13 * np.abs(ref).max()
+    off = pattern
+    assert np.max(np.abs(dense[off] / ref[off] - 1)) < 1e-14
+    assert np.all(dense[-1] == 0)  # the far vertex
+
+
+def test_int64_indices_give_the_same_matrix(monkeypatch):
+    V, F = shapes.sphere(1500, kind="random", seed=3)
+    small = meshlap.laplacian(V, F, h=0.01)
+    assert small.L.indptr.dtype == np.int32 and small.L.indices.dtype == np.int32
+    # pretend int32 overflows: the int64 path must be taken and give identical arrays
+    monkeypatch.setattr(operator_module, "_INT32_MAX", small.nnz - 1)
+    big = meshlap.laplacian(V, F, h=0.01)
+    assert big.L.indptr.dtype == np.int64 and big.L.indices.dtype == np.int64
+    assert np.array_equal(big.L.indptr, small.L.indptr)
+    assert np.array_equal(big.L.indices, small.L.indices)
+    assert np.array_equal(big.L.data, small.L.data)
+    f = np.cos(3 * V[:, 0])
+    assert np.array_equal(big @ f, small @ f)
+    # the memory estimate counts 8-byte indices for it
+    assert big.nbytes == small.nnz * 16 + (len(V) + 1) * 8
+
+
+def test_identical_under_any_schedule(monkeypatch):
+    # an uneven mesh (dense and sparse regions) so that threads finish chunks out of order
+    V, F = shapes.sphere(3000, kind="random", seed=4)
+    ref = meshlap.laplacian(V, F, h=0.003).L
+    before = numba.get_num_threads()
+    variants = []
+    try:
+        numba.set_num_threads(1)
+        variants.append(meshlap.laplacian(V, F, h=0.003).L)
+    finally:
+        numba.set_num_threads(before)
+    monkeypatch.setattr(kernel, "_CHUNK_ROWS", 1)
+    variants.append(meshlap.laplacian(V, F, h=0.003).L)
+    # progress splits the build into several compiled calls
+    monkeypatch.setattr(kernel, "_PROGRESS_ENTRIES", ref.nnz // 7)
+    seen = []
+    variants.append(meshlap.laplacian(V, F, h=0.003, progress=lambda f, s: seen.append(s)).L)
+    assert seen.count("fill") >= 5 and seen.count("count") >= 5
+    for L in variants:
+        assert np.array_equal(L.indptr, ref.indptr)
+        assert np.array_equal(L.indices, ref.indices)
+        assert np.array_equal(L.data, ref.data)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_matrix_free_matches_the_matrix(dtype):
+    V, F = messy_mesh()
+    with warnings.catch_warnings():  # the mesh is messy on purpose
+        warnings.simplefilter("ignore")
+        op = meshlap.laplacian(V, F, h=0.01, dtype=dtype)
+        free = meshlap.laplacian(V, F, h=0.01, matrix_free=True)
+    rng = np.random.default_rng(1)
+    for f in (rng.normal(size=len(V)), rng.normal(size=(len(V), 1)), rng.normal(size=(len(V), 3))):
+        ref = np.asarray(op.L.astype(np.float64) @ f)
+        got = free @ f
+        assert got.shape == f.shape
+        scale = np.abs(ref).max()
+        assert np.abs(got - ref).max() < (1e-12 if dtype == np.float64 else 1e-6) * scale
+    lin = free.as_linear_operator()
+    x = rng.normal(size=len(V))
+    assert np.allclose(lin.matvec(x), free @ x, rtol=0, atol=0)
+    assert np.allclose(lin.matmat(np.column_stack([x, x])), np.column_stack([free @ x] * 2), rtol=0, atol=0)
+
+
+def test_estimate_is_close_and_cheap_when_dense():
+    V, F = shapes.sphere(4000, seed=0)
+    op = meshlap.laplacian(V, F, h=0.01)
+    assert abs(op.estimate_nnz() - op.nnz) < 0.03 * op.nnz
+    # a 200 x 200 grid of quads with h so large that L would be dense: 1.6e9 entries, 19 GB
+    n = 200
+    xs, ys = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    V = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(n * n)])
+    idx = np.arange(n * n).reshape(n, n)
+    Q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1).reshape(-1, 4)
+    free = meshlap.laplacian(V, Q, h=100.0, matrix_free=True)
+    t = time.perf_counter()
+    assert free.estimate_nnz() == n**4  # every sampled row is full
+    assert time.perf_counter() - t < 5.0
+    calls = []
+    original = kernel.count_entries
+    monkey = pytest.MonkeyPatch()
+    monkey.setattr(kernel, "count_entries", lambda *a, **k: calls.append(k.get("rows")) or original(*a, **k))
+    try:
+        with pytest.raises(meshlap.OperatorTooLargeError, match=r"at least about .* entries.*matrix_free"):
+            meshlap.laplacian(V, Q, h=100.0, max_memory=1 << 30)
+    finally:
+        monkey.undo()
+    # it stopped after the sample, before counting every row
+    assert len(calls) == 1 and calls[0] is not None
+
+
+def test_peak_memory_of_a_build():
+    V, F = shapes.sphere(4000, seed=1)
+    meshlap.laplacian(V, F, h=0.01)  # compile and warm up outside the measurement
+    tracemalloc.start()
+    try:
+        op = meshlap.laplacian(V, F, h=0.01)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    mesh = V.nbytes + F.nbytes
+    assert op.nbytes > 20 * mesh  # the matrix dominates: the bound below is meaningful
+    assert peak < 1.3 * op.nbytes + 4 * mesh

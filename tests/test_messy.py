@@ -1,0 +1,392 @@
+"""Bad input gives a MeshError naming the argument and the problem; messy meshes give a
+defined operator (checked against what the formula says it must be) and one specific warning."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import meshlap
+from meshlap import shapes, topology
+from meshlap.validation import MeshWarning, Polygons, check_faces, check_k, check_positive
+
+
+def dense(op):
+    return op.L.toarray()
+
+
+def build(V, F, **kw):
+    """Build and return (op, MeshWarnings raised during the build)."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        op = meshlap.laplacian(V, F, **kw)
+    return op, [w for w in seen if issubclass(w.category, MeshWarning)]
+
+
+def assert_sound(op):
+    """Nothing NaN, rows sum to zero relative to their diagonal."""
+    L = op.L
+    assert np.isfinite(L.data).all()
+    rows = np.asarray(L.sum(axis=1)).ravel()
+    assert np.all(np.abs(rows) <= 1e-12 * np.maximum(np.abs(L.diagonal()), 1e-300))
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return shapes.sphere(300, seed=4)
+
+
+# -- errors ----------------------------------------------------------------------------------
+TRI = [[0, 1, 2]]
+V3 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+
+
+@pytest.mark.parametrize(
+    ("V", "F", "kw", "match"),
+    [
+        (np.zeros((3, 10)), TRI, {}, r"V must have shape \(n, 3\).*transpose"),
+        (np.zeros(9), TRI, {}, r"V must have shape"),
+        (np.ones((3, 3), bool), TRI, {}, "V must hold coordinates; got a boolean"),
+        (V3 + 1j, TRI, {}, "V must be real"),
+        ([[0, 0], [1, 0, 0], [0, 1, 0]], TRI, {}, "V could not be read|ragged"),
+        (V3 * 1e151, TRI, {}, "squared distances would overflow"),
+        (V3, np.array([[0, 1, 2]], np.uint64) + np.uint64(2**63), {}, "beyond the int64 range"),
+        (V3, np.ones((1, 3), bool), {}, "F must hold vertex indices"),
+        (V3, np.array([[0, 1, np.nan]]), {}, "F holds NaN"),
+        (V3, np.array([0, 1, 2]), {}, r"F must have shape \(m, k\)"),
+        (V3, np.zeros((1, 3, 1), int), {}, r"F must have shape \(m, k\)"),
+        (V3, np.zeros((0, 3), int), {}, "F is empty"),
+        (V3, [], {}, "F is empty"),
+        (V3, [[0, 1, 2], [0, 1]], {}, "face 1 of F has 2 corner"),
+        (V3, None, {}, "F must be an .* index array"),
+        (V3, "012", {}, "F must be"),
+        (V3, [[0, 1, 2], [0, 1, 2**40]], {}, "vertex 1099511627776 in face 1"),
+        (V3, TRI, {"h": True}, "h must be a positive number; got the boolean"),
+        (V3, TRI, {"h": "wide"}, "h must be a positive number"),
+        (V3, TRI, {"h": math.inf}, "h must be finite"),
+        (V3, TRI, {"h": 1e-200}, r"outside \[1e-150, 1e\+150\]"),
+        (V3, TRI, {"h": 1e200}, r"outside \[1e-150, 1e\+150\]"),
+        (V3, TRI, {"tol": False}, "tol must be .*boolean"),
+        (V3, TRI, {"tol": math.nan}, "tol must lie in"),
+        (V3, TRI, {"dtype": np.int32}, "dtype must be float64 or float32"),
+        (V3, TRI, {"dtype": "no such type"}, "dtype must be float64 or float32"),
+        (V3, TRI, {"max_memory": -1}, "max_memory must be finite and > 0"),
+        (V3, TRI, {"max_memory": "lots"}, "max_memory must be a positive number"),
+        (V3 * 1e-100, TRI, {}, "V spans only 1e-100: face areas would underflow"),
+        (np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float), TRI, {}, "every face has zero area"),
+    ],
+)
+def test_bad_input_names_argument_and_problem(V, F, kw, match):
+    with pytest.raises(meshlap.MeshError, match=match):
+        meshlap.laplacian(V, F, **kw)
+
+
+@pytest.mark.parametrize(
+    "entry",
+    [
+        meshlap.laplacian,
+        meshlap.mesh_laplacian,
+        meshlap.default_h,
+        meshlap.face_areas,
+        meshlap.vertex_mass,
+        topology.diagnose,
+        topology.unreferenced_vertices,
+        topology.zero_area_faces,
+        topology.nonmanifold_edges,
+        topology.boundary_edges,
+        topology.boundary_vertices,
+        topology.boundary_loops,
+        topology.connected_components,
+        lambda V, F: topology.near_boundary(V, F, h=0.1),
+    ],
+)
+def test_every_entry_point_validates(entry):
+    with pytest.raises(meshlap.MeshError, match="NaN"):
+        entry(np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]]), TRI)
+    with pytest.raises(meshlap.MeshError, match="vertex 7 in face 0"):
+        entry(V3, [[0, 1, 7]])
+
+
+def test_check_k_and_positive():
+    assert check_k(np.int32(5), 10) == 5
+    for k, match in [(0, r"\[1, 9\]"), (10, r"\[1, 9\]"), (-1, r"\[1, 9\]"), (2.0, "integer"),
+                     (True, "integer"), ("3", "integer")]:
+        with pytest.raises(meshlap.MeshError, match=match):
+            check_k(k, 10)
+    with pytest.raises(meshlap.MeshError, match="size 1"):
+        check_k(1, 1)
+    assert check_positive(np.float32(0.5), "t") == 0.5
+    for bad in (0, -1.0, math.nan, math.inf, None, False):
+        with pytest.raises(meshlap.MeshError, match="^t must be"):
+            check_positive(bad, "t")
+
+
+def test_function_checks():
+    V, F = shapes.sphere(50, seed=0)
+    op = meshlap.laplacian(V, F, h=0.1)
+    with pytest.raises(meshlap.MeshError, match="f must be real"):
+        op @ (np.ones(50) * 1j)
+    with pytest.raises(meshlap.MeshError, match=r"f must have shape \(50,\)"):
+        op @ np.ones((50, 2, 2))
+    with pytest.raises(meshlap.MeshError, match="f has 1 NaN or infinite value"):
+        op @ np.r_[np.ones(49), np.inf]
+
+
+# -- accepted forms --------------------------------------------------------------------------
+def test_face_and_vertex_forms_agree(ball):
+    V, F = ball
+    ref = dense(meshlap.laplacian(V, F, h=0.05))
+    forms = [
+        F.astype(np.uint32),
+        F.astype(np.int16),
+        F.astype(np.float64),
+        F.tolist(),
+        [tuple(f) for f in F],
+        list(F),
+        check_faces(F, len(V)),
+    ]
+    for form in forms:
+        assert np.array_equal(dense(meshlap.laplacian(V, form, h=0.05)), ref)
+    assert np.array_equal(dense(meshlap.laplacian(V.astype(np.float32).astype(np.float64), F, h=0.05)),
+                          dense(meshlap.laplacian(V.astype(np.float32), F, h=0.05)))
+    # planar (n, 2) input is the plane z = 0; integer coordinates are converted
+    P, G = shapes.plane(60, seed=1)
+    assert np.array_equal(dense(meshlap.laplacian(P[:, :2], G, h=0.1)), dense(meshlap.laplacian(P, G, h=0.1)))
+    Vi = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 1]])
+    assert np.array_equal(dense(meshlap.laplacian(Vi, [[0, 1, 2], [1, 3, 2]], h=1.0)),
+                          dense(meshlap.laplacian(Vi.astype(float), [[0, 1, 2], [1, 3, 2]], h=1.0)))
+
+
+def test_repeated_corner_counts_once():
+    # a triangle stored as a quad [a, b, c, c] has #t = 3 distinct vertices (BSW eq. 1)
+    V, F = shapes.sphere(200, seed=1)
+    padded = np.column_stack([F, F[:, 2]])
+    faces = check_faces(padded, len(V))
+    assert np.all(faces.sizes == 3)
+    assert np.array_equal(dense(meshlap.laplacian(V, padded, h=0.05)), dense(meshlap.laplacian(V, F, h=0.05)))
+    # faces with fewer than 3 distinct corners stay as given: zero area, nothing added
+    assert check_faces([[0, 0, 1]], 2).sizes.tolist() == [3]
+
+
+# -- messy meshes ----------------------------------------------------------------------------
+def test_unreferenced_vertices(ball):
+    V, F = ball
+    h = 0.05
+    rng = np.random.default_rng(0)
+    extra = np.vstack([rng.normal(size=(5, 3)) * 0.6, [[40.0, 0, 0]]])  # inside the ball, one far away
+    W = np.vstack([V, extra])
+    op, warned = build(W, F, h=h)
+    ref = meshlap.laplacian(V, F, h=h)
+    n = len(V)
+    assert len(warned) == 1 and "6 unreferenced vertices" in str(warned[0].message)
+    assert np.all(op.mass[n:] == 0) and np.array_equal(op.mass[:n], ref.mass)
+    L = dense(op)
+    # they enter no other row (zero column), and the other rows are the mesh's own
+    assert np.all(L[:, n:][~np.eye(len(W), dtype=bool)[:, n:]] == 0)
+    assert np.allclose(L[:n, :n], dense(ref), rtol=0, atol=1e-13 * np.abs(L).max())
+    # at an unreferenced vertex w, L f(w) is still eq. (1): Σ_p K m_p (f(p) - f(w)) / 4πh²
+    f = W[:, 0] ** 2 + W[:, 2]
+    for w in range(n, n + 6):
+        K = np.exp(-np.sum((W[:n] - W[w]) ** 2, axis=1) / (4 * h))
+        K[K < op.tol] = 0
+        expect = (K * ref.mass * (f[:n] - f[w])).sum() / (4 * math.pi * h * h)
+        assert abs((L @ f)[w] - expect) <= 1e-12 * max(abs(expect), 1e-300) + 1e-15
+    assert np.all(L[-1] == 0)  # the far vertex sees no mass within the cut-off
+    assert_sound(op)
+    assert topology.unreferenced_vertices(W, F).tolist() == list(range(n, n + 6))
+
+
+def test_zero_area_faces(ball):
+    V, F = ball
+    W = np.vstack([V, (V[0] + V[1]) / 2])  # the midpoint of an edge: collinear with its ends
+    n = len(V)
+    degenerate = [[0, 1, n], [2, 2, 3], [4, 5, 4]]
+    op, warned = build(W, np.vstack([F, degenerate]), h=0.05)
+    assert len(warned) == 1
+    msg = str(warned[0].message)
+    assert "3 zero-area faces" in msg and "1 unreferenced" not in msg
+    zero = topology.zero_area_faces(W, np.vstack([F, degenerate]))
+    assert zero.tolist() == [len(F), len(F) + 1, len(F) + 2]
+    ref = meshlap.laplacian(V, F, h=0.05)
+    assert np.allclose(op.mass[:n], ref.mass, rtol=1e-15, atol=0) and op.mass[n] < 1e-16
+    assert_sound(op)
+
+
+def test_components_far_apart_decouple_near_ones_couple(ball):
+    V, F = ball
+    h = 0.05
+    one = meshlap.laplacian(V, F, h=h)
+    for gap, coupled in [(10.0, False), (2.1, True)]:
+        W = np.vstack([V, V + [gap, 0, 0]])
+        G = np.vstack([F, F + len(V)])
+        op, warned = build(W, G, h=h)
+        assert not warned  # several components are a defined, ordinary case
+        L = dense(op)
+        n = len(V)
+        assert (np.abs(L[:n, n:]).max() > 0) == coupled
+        if not coupled:
+            assert np.allclose(L[:n, :n], dense(one), rtol=0, atol=1e-14 * np.abs(L).max())
+        count, labels = topology.connected_components(W, G)
+        assert count == 2 and np.array_equal(labels, np.repeat([0, 1], n))
+        assert_sound(op)
+
+
+def test_nonmanifold_edge_fin():
+    # three sheets meeting along one edge: the edge is shared by three triangles
+    V = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 0.5], [-0.5, 0.8, 0.5], [-0.5, -0.8, 0.5]])
+    F = [[0, 1, 2], [1, 0, 3], [0, 1, 4]]
+    op, warned = build(V, F, h=0.2)
+    assert len(warned) == 1 and "1 non-manifold edges" in str(warned[0].message)
+    assert topology.nonmanifold_edges(V, F).tolist() == [[0, 1]]
+    S = op.S.toarray()
+    assert np.allclose(S, S.T, rtol=0, atol=1e-15 * np.abs(S).max())
+    assert np.linalg.eigvalsh(-S).min() > -1e-14 * np.abs(S).max()
+    assert_sound(op)
+    assert topology.boundary_loops(V, F) == 1
+
+
+def split_along_seam(V, F):
+    """Duplicate the vertices of the faces with x > 0 that lie near the plane y = 0 (a UV seam)."""
+    seam = np.flatnonzero((np.abs(V[:, 1]) < 0.15) & (V[:, 0] > 0))
+    copy = np.full(len(V), -1)
+    copy[seam] = len(V) + np.arange(len(seam))
+    W = np.vstack([V, V[seam]])
+    G = F.copy()
+    upper = V[F].mean(axis=1)[:, 1] > 0  # faces on one side use the copies
+    for c in range(3):
+        moved = upper & (copy[F[:, c]] >= 0)
+        G[moved, c] = copy[F[moved, c]]
+    return W, G, seam
+
+
+def test_duplicate_vertices_leave_L_unchanged(ball):
+    V, F = ball
+    h = 0.05
+    W, G, seam = split_along_seam(V, F)
+    op, warned = build(W, G, h=h)
+    assert len(warned) == 1 and f"{len(seam)} duplicate vertices" in str(warned[0].message)
+    rep = topology.duplicate_vertices(W)
+    assert np.array_equal(rep, np.r_[np.arange(len(V)), seam])
+    # the kernel sees positions and masses only: on functions that agree on copies, L equals
+    # the welded operator's (the copies' masses add up to the welded vertex's)
+    welded = meshlap.laplacian(V, F, h=h)
+    f = np.exp(V[:, 0]) * V[:, 1]
+    assert np.allclose(op @ f[rep], (welded @ f)[rep], rtol=0, atol=1e-12 * np.abs(welded @ f).max())
+    # welding keeps the closed sphere closed; the raw connectivity shows the seam as a boundary
+    assert not topology.boundary_vertices(W, G).any()
+    assert topology.boundary_vertices(W, G, weld=False).any()
+    assert topology.boundary_loops(W, G) == 0 and topology.boundary_loops(W, G, weld=False) >= 1
+    assert topology.connected_components(W, G)[0] == 1
+
+
+def test_duplicates_in_clusters():
+    # eleven copies of one point, three of another, one near-copy within the tolerance
+    P = np.array([[0.0, 0, 0]] * 11 + [[1.0, 2, 3]] * 3 + [[1.0, 2, 3 + 1e-12], [5.0, 5, 5]])
+    rep = topology.duplicate_vertices(P)
+    assert rep.tolist() == [0] * 11 + [11] * 4 + [15]
+    assert topology.duplicate_vertices(P, rtol=0).tolist() == [0] * 11 + [11] * 3 + [14, 15]
+
+
+def test_boundary_mask_and_bias():
+    # plane [-1, 1]²: the band is the set of vertices within width·√h of the square's sides
+    V, F = shapes.plane(4000, seed=7)
+    h = 0.01  # 4h = 0.04 as in the paper's Table 1
+    op = meshlap.laplacian(V, F, h=h)
+    Lf, exact = op @ V[:, 0] ** 2, 2.0
+    err = {}
+    for width in (3.0, 5.0):
+        mask = topology.near_boundary(V, F, h, width)
+        dist, r = 1 - np.abs(V[:, :2]).max(axis=1), width * math.sqrt(h)
+        # exact up to the sampling of the boundary edges at spacing r/16
+        assert np.all(mask[dist <= r * (1 - 1 / 32)]) and not np.any(mask[dist > r])
+        err[width] = np.linalg.norm(Lf[~mask] - exact) / (exact * math.sqrt((~mask).sum()))
+    # measured: 0.106 at 3√h (the missing half-plane), 0.008 at 5√h (mostly discretization;
+    # 0.0019 at n = 16,000); the default band is 5√h
+    assert err[3.0] > 0.08 and err[5.0] < 0.012
+    assert topology.DEFAULT_BOUNDARY_WIDTH == 5.0
+    assert topology.boundary_vertices(V, F).sum() == 4  # the Delaunay hull: the square's corners
+    assert not topology.near_boundary(*shapes.sphere(100, seed=0), h=0.1).any()
+
+
+def test_h_too_small_and_too_large(ball):
+    V, F = ball
+    with pytest.warns(RuntimeWarning, match="have no neighbour within the cut-off"):
+        op = meshlap.laplacian(V, F, h=1e-8)
+    assert np.all(op.L.data == 0) and np.isfinite(op.L.data).all()
+    with pytest.raises(meshlap.OperatorTooLargeError, match="max_memory"):
+        meshlap.laplacian(V, F, h=1e3, max_memory=100_000)
+    # with the memory for it, a very wide kernel gives a dense, sound operator
+    op = meshlap.laplacian(V, F, h=1e3)
+    assert op.nnz == len(V) ** 2
+    assert_sound(op)
+
+
+def test_large_coordinates_translation_and_scale():
+    V, F = shapes.sphere(400, kind="random", seed=5)
+    h = 0.02
+    ref = dense(meshlap.laplacian(V, F, h=h))
+    R = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
+    for shift, scale in [(1e6, 1.0), (1e6, 1e-3), (1e3, 1e4)]:
+        W = scale * (V @ R.T) + shift * scale
+        op, warned = build(W, F, h=h * scale**2)
+        assert not warned
+        # measured: relative error 3e-10 after a shift of 1e6 (input rounding, eps·1e6/edge)
+        assert np.abs(dense(op) * scale**2 - ref).max() <= 1e-8 * np.abs(ref).max()
+    # the kernel adds no error of its own: recentring the rounded input changes nothing
+    W = V + 1e10
+    with pytest.warns(MeshWarning, match="relative precision of only"):
+        far = meshlap.laplacian(W, F, h=h)
+    assert np.array_equal(dense(far), dense(meshlap.laplacian(W - 1e10, F, h=h)))
+
+
+def test_clean_mesh_is_quiet_and_messy_mesh_warns_once(ball):
+    V, F = ball
+    _, warned = build(V, F, h=0.05)
+    assert warned == []
+    W = np.vstack([V, V[:3], [[9.0, 9, 9]]])
+    G = np.vstack([F, [[0, 1, 0], [len(V), len(V) + 1, len(V) + 2]]])
+    _, warned = build(W, G, h=0.05)
+    assert len(warned) == 1
+    msg = str(warned[0].message)
+    for part in ("1 unreferenced vertices", "3 duplicate vertices", "1 zero-area faces"):
+        assert part in msg
+    report = topology.diagnose(W, G)
+    assert len(report.unreferenced) == 1 and len(report.duplicates) == 3 and len(report.zero_area) == 1
+    assert report.n_components == 1 and "no problems" not in str(report)
+
+
+def test_no_nan_from_any_messy_input(ball):
+    V, F = ball
+    n = len(V)
+    cases = {
+        "unreferenced": (np.vstack([V, [[0.0, 0, 0]]]), F),
+        "zero-area": (V, np.vstack([F, [[0, 0, 1]]])),
+        "duplicates": split_along_seam(V, F)[:2],
+        "quads+tris": (V, [list(f) + [f[2]] if i % 2 else list(f) for i, f in enumerate(F)]),
+        "one face": (V, F[:1]),
+        "stacked copies": (np.vstack([V, V]), np.vstack([F, F + n])),
+    }
+    for name, (W, G) in cases.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MeshWarning)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            for kw in ({}, {"h": 0.05}, {"h": 0.05, "matrix_free": True}):
+                op = meshlap.laplacian(W, G, **kw)
+                out = op @ np.cos(np.asarray(W)[:, 0])
+                assert np.isfinite(out).all(), name
+                if op.nnz:
+                    assert_sound(op)
+                    assert abs(op.mass.sum() - meshlap.face_areas(W, G).sum()) < 1e-12 * op.mass.sum()
+
+
+def test_polygons_input_is_trusted_but_checked():
+    bad = Polygons(indices=np.array([0, 1, 5], np.int64), offsets=np.array([0, 3], np.int64))
+    with pytest.raises(meshlap.MeshError, match="vertex 5 in face 0"):
+        meshlap.laplacian(V3, bad)
+    for offsets in ([0], [0, 2], [0, 3, 2], [1, 3]):
+        with pytest.raises(meshlap.MeshError, match="empty|inconsistent offsets"):
+            meshlap.laplacian(V3, Polygons(indices=np.array([0, 1, 2]), offsets=np.array(offsets)))
+    S = sp.csr_matrix(meshlap.laplacian(V3, TRI, h=1.0).S)
+    assert abs(S - S.T).max() < 1e-15

@@ -1,0 +1,209 @@
+"""Eigenpairs against the sphere's exact spectrum, against scipy, and on awkward meshes."""
+
+import math
+from pathlib import Path
+
+import igl
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+import meshlap
+from meshlap import shapes, spectral
+from meshlap.baselines import bsw_scipy, cotangent
+
+SHARED = Path(__file__).parents[2] / "shared" / "meshes"
+DATA = Path(__file__).parent / "data"
+SHELLS = [(0, 1), (1, 3), (2, 5), (3, 7)]  # (degree l, multiplicity 2l+1): 16 eigenpairs
+
+
+def check_eigenpairs(op, lam, phi, rtol):
+    """M-orthonormal, ascending, and -S φ = λ M φ to rtol·λ_max on the vertices with mass."""
+    P = op.mass > 0
+    M = sp.diags(op.mass)
+    assert np.all(np.diff(lam) >= -1e-12 * lam[-1])
+    assert np.abs(phi.T @ M @ phi - np.eye(len(lam))).max() < 1e-9
+    R = (-(op.S @ phi) - (M @ phi) * lam)[P]
+    res = np.sqrt(np.sum(R**2 / op.mass[P, None], axis=0))
+    assert res.max() < rtol * lam[-1]
+    assert np.isfinite(phi).all()
+
+
+def test_sphere_eigenvalue_closed_form_and_limit():
+    for h in (0.3, 0.05, 0.01):
+        exact = 2 * (1 - math.exp(-1 / h) * (1 + 1 / h))
+        assert abs(spectral.sphere_eigenvalue(1, h) - exact) < 1e-12
+    assert spectral.sphere_eigenvalue(0, 0.1) == 0.0
+    # c_l(h) -> l(l+1) linearly in h, with the slope (l-1)l(l+1)(l+2)/2 of the u² term of P_l
+    for l in (2, 3, 5):
+        gaps = [l * (l + 1) - spectral.sphere_eigenvalue(l, h) for h in (4e-3, 2e-3, 1e-3)]
+        assert all(g > 0 for g in gaps)
+        assert 1.9 < gaps[0] / gaps[1] < 2.1 and 1.9 < gaps[1] / gaps[2] < 2.1
+        slope = (l - 1) * l * (l + 1) * (l + 2) / 2
+        assert abs(gaps[2] / 1e-3 / slope - 1) < 0.05
+    with pytest.raises(meshlap.MeshError, match="l must"):
+        spectral.sphere_eigenvalue(-1, 0.1)
+    with pytest.raises(meshlap.MeshError, match="h must"):
+        spectral.sphere_eigenvalue(2, 0.0)
+
+
+def test_unit_sphere_multiplicities_and_convergence_in_n():
+    """Shells of 1, 3, 5, 7 eigenvalues; distance to c_l(h) falls as the mesh is refined."""
+    h = 0.01
+    errors = []
+    for n in (1000, 4000):
+        V, F = shapes.sphere(n, seed=0)
+        op = meshlap.laplacian(V, F, h=h)
+        lam, phi = spectral.eigs(op, 16, method="lobpcg")
+        check_eigenpairs(op, lam, phi, 1e-7)
+        start, err = 0, 0.0
+        for l, mult in SHELLS:
+            shell = lam[start:start + mult]
+            c = spectral.sphere_eigenvalue(l, h)
+            # a shell's spread is much smaller than the gap to the next shell
+            assert np.ptp(shell) < 0.05 * max(c, 1) and (start == 0 or shell[0] - lam[start - 1] > 1.5)
+            err = max(err, np.abs(shell - c).max() / max(c, 1))
+            start += mult
+        errors.append(err)
+    assert errors[0] < 0.01 and errors[1] < 0.5 * errors[0]  # measured 0.0071, 0.0029
+
+
+def test_unit_sphere_approaches_l_l_plus_1_as_h_shrinks():
+    """h halves and n doubles (h/ē² fixed): the shell means approach l(l+1) at rate ~h."""
+    gaps = []
+    for h, n in ((0.02, 1000), (0.01, 2000), (0.005, 4000)):
+        V, F = shapes.sphere(n, seed=1)
+        lam, _ = spectral.eigs(meshlap.laplacian(V, F, h=h), 16)
+        means = np.split(lam, np.cumsum([m for _, m in SHELLS])[:-1])
+        gaps.append(max(abs(s.mean() - l * (l + 1)) / (l * (l + 1)) for (l, _), s in zip(SHELLS[1:], means[1:])))
+    assert gaps[0] > gaps[1] > gaps[2]
+    assert gaps[2] < 0.035 and gaps[0] / gaps[2] > 3
+
+
+@pytest.mark.parametrize("kind", ["uniform", "random"])
+def test_lobpcg_matches_scipy_eigsh(kind):
+    V, F = shapes.sphere(1500, kind=kind, seed=2)
+    op = meshlap.laplacian(V, F, h=0.008)
+    lam, phi = spectral.eigs(op, 20, method="lobpcg")
+    ref, ref_phi = eigsh(-op.S, k=20, M=op.M.tocsc(), sigma=-1e-3, tol=1e-12)
+    assert np.abs(lam[1:] - ref[1:]).max() / ref[-1] < 1e-10
+    check_eigenpairs(op, lam, phi, 1e-7)
+    # same invariant subspace, to the residual tolerance (largest principal angle)
+    Q = np.linalg.qr(np.sqrt(op.mass)[:, None] * ref_phi)[0]
+    Y = np.sqrt(op.mass)[:, None] * phi
+    assert np.linalg.norm(Y - Q @ (Q.T @ Y), axis=0).max() < 1e-6
+    # the other two methods agree
+    for method in ("shift-invert", "dense"):
+        other, _ = spectral.eigs(op, 20, method=method)
+        assert np.abs(other[1:] - ref[1:]).max() / ref[-1] < 1e-9
+
+
+def test_cotangent_operator_and_mesh_argument():
+    V, F = shapes.sphere(1500, kind="random", seed=3)
+    cot = cotangent(V, F)
+    lam, phi = spectral.eigs(cot, 10)  # auto: sparse rows -> shift-invert
+    C = igl.cotmatrix(V, F)
+    Mv = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+    ref = eigsh(-C, k=10, M=Mv, sigma=-1e-3, return_eigenvectors=False)
+    assert np.abs(np.sort(ref) - lam)[1:].max() / lam[-1] < 1e-9
+    check_eigenpairs(cot, lam, phi, 1e-7)
+    # an operator without its mesh gets the cotangent preconditioner from `mesh=`
+    plain = bsw_scipy(V, F, h=0.02)
+    with_mesh, _ = spectral.eigs(plain, 10, method="lobpcg", mesh=(V, F))
+    direct, _ = spectral.eigs(meshlap.laplacian(V, F, h=0.02), 10, method="dense")
+    assert np.abs(with_mesh - direct)[1:].max() / direct[-1] < 1e-9
+
+
+def test_zero_mass_vertices_are_extended_not_nan():
+    V, F = shapes.sphere(1600, seed=4)
+    rng = np.random.default_rng(0)
+    extra = rng.normal(size=(40, 3))
+    extra *= (1 + 0.02 * rng.uniform(-1, 1, (40, 1))) / np.linalg.norm(extra, axis=1, keepdims=True)
+    # 40 unreferenced vertices near the surface (zero mass), numbered first
+    V2, F2 = np.vstack([extra, V]), F + 40
+    h = 0.01
+    op = meshlap.laplacian(V, F, h=h)
+    with pytest.warns(UserWarning, match="unreferenced"):
+        op2 = meshlap.laplacian(V2, F2, h=h)
+    lam, phi = spectral.eigs(op, 9, method="lobpcg")
+    lam2, phi2 = spectral.eigs(op2, 9, method="lobpcg")
+    assert np.abs(lam2 - lam).max() < 1e-9 * lam[-1]
+    check_eigenpairs(op2, lam2, phi2, 1e-7)
+    # degree-1 eigenfunctions extend smoothly: the mean of neighbours, close to the sphere's value
+    Z = np.arange(40)
+    L = op2.L.toarray()
+    off = L[Z].copy()
+    off[np.arange(len(Z)), Z] = 0
+    assert np.allclose(phi2[Z], off @ phi2 / off.sum(axis=1, keepdims=True), atol=1e-12)
+    span = phi2[:, 1:4]
+    coef = np.linalg.lstsq(span[40:], V, rcond=None)[0]  # x, y, z in the degree-1 shell
+    assert np.abs(span[Z] @ coef - extra).max() < 0.05
+    # cotangent rows vanish there: zeros, still finite
+    lam_c, phi_c = spectral.eigs(cotangent(V2, F2), 9)
+    assert np.all(phi_c[Z] == 0) and np.isfinite(lam_c).all()
+
+
+def read_quads(path):
+    V, F = [], []
+    for line in path.read_text().splitlines():
+        parts = line.split()
+        if parts and parts[0] == "v":
+            V.append([float(x) for x in parts[1:4]])
+        elif parts and parts[0] == "f":
+            F.append([int(p.split("/")[0]) - 1 for p in parts[1:]])
+    return np.array(V), np.array(F)
+
+
+def test_polygon_mesh_uses_fan_triangles():
+    V, F = read_quads(DATA / "spot-quads.obj")
+    assert F.shape[1] == 4
+    op = meshlap.laplacian(V, F)
+    lam, phi = spectral.eigs(op, 12, method="lobpcg")
+    ref, _ = spectral.eigs(op, 12, method="shift-invert", tol=1e-12)
+    assert np.abs(lam - ref)[1:].max() / ref[-1] < 1e-10
+    check_eigenpairs(op, lam, phi, 1e-7)
+
+
+def test_heat_kernel_signature_on_the_sphere():
+    V, F = shapes.sphere(2000, seed=5)
+    op = meshlap.laplacian(V, F, h=0.01)
+    lam, phi = spectral.eigs(op, 25)
+    t = np.array([0.5, 2.0])
+    hks = spectral.heat_kernel_signature(t=t, eig=(lam, phi))
+    assert hks.shape == (2000, 2)
+    # by symmetry Σ_l (2l+1) exp(-λ_l t) / area at every vertex (l ≤ 4 fills 25 pairs)
+    area = op.mass.sum()
+    expect = [sum((2 * l + 1) * math.exp(-spectral.sphere_eigenvalue(l, 0.01) * s) for l in range(5)) / area
+              for s in t]
+    assert np.abs(hks / expect - 1).max() < 0.01
+    assert np.allclose(spectral.heat_kernel_signature(op, 0.5, k=25), hks[:, 0], atol=1e-10)
+    with pytest.raises(meshlap.MeshError, match="t must"):
+        spectral.heat_kernel_signature(t=-1.0, eig=(lam, phi))
+
+
+def test_bad_arguments():
+    V, F = shapes.sphere(300, seed=0)
+    op = meshlap.laplacian(V, F, h=0.05)
+    for k in (0, 300, 2.5, True):
+        with pytest.raises(meshlap.MeshError, match="k must"):
+            spectral.eigs(op, k)
+    with pytest.raises(meshlap.MeshError, match="method must"):
+        spectral.eigs(op, 4, method="arnoldi")
+    with pytest.raises(meshlap.MeshError, match="tol must"):
+        spectral.eigs(op, 4, tol=2.0)
+    with pytest.raises(meshlap.MeshError, match="mesh has"):
+        spectral.eigs(op, 4, method="lobpcg", mesh=(V[:10], F[:2]))
+
+
+@pytest.mark.slow
+def test_bunny_50_eigenpairs():
+    path = SHARED / "stanford-bunny.obj"
+    if not path.exists():
+        pytest.skip("shared meshes not available")
+    V, F = igl.read_triangle_mesh(str(path))
+    op = meshlap.laplacian(V, F)
+    assert (op.mass == 0).sum() == 1113
+    lam, phi = spectral.eigs(op, 50)
+    check_eigenpairs(op, lam, phi, 1e-7)
+    assert abs(lam[0]) < 1e-8 * lam[-1] and lam[1] > 0
