@@ -9,7 +9,7 @@ Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 (500, 500)
 """
 
-from . import shapes, topology
+from . import curvature, heat, shapes, smoothing, spectral, topology
 from .mass import face_areas, vertex_mass
 from .operator import (
     DEFAULT_TOL,
@@ -29,6 +29,10 @@ __all__ = [
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
+    "curvature",
+    "heat",
+    "smoothing",
+    "spectral",
     "OperatorTooLargeError",
     "Polygons",
     "default_h",

@@ -108,7 +108,12 @@ def cotangent(V: Any, F: Any) -> SparseLaplacian:
     """
     V, T = _triangles(V, F, "cotangent Laplacian")
     C = igl.cotmatrix(V, T)
-    mass = igl.massmatrix(V, T, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    # libigl sizes both matrices by the largest face index: pad for trailing unreferenced vertices
+    C = sp.csr_matrix(C)
+    C.resize((len(V), len(V)))
+    mass = np.zeros(len(V))
+    vor = igl.massmatrix(V, T, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    mass[: len(vor)] = vor
     inv = np.divide(1.0, mass, out=np.zeros_like(mass), where=mass > 0)
     return SparseLaplacian(sp.diags(inv) @ C, mass, name="COT", S=C)
 

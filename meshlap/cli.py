@@ -32,10 +32,6 @@ def _face_summary(F: Any, n: int) -> str:
     return ", ".join(f"{c:,} {names.get(int(s), f'{s}-gons')}" for s, c in zip(sizes, counts, strict=True))
 
 
-def _read(path: str) -> tuple[np.ndarray, Any]:
-    return read_mesh(path)
-
-
 def _build(args: argparse.Namespace, V: np.ndarray, F: Any) -> Any:
     from .operator import laplacian
 
@@ -47,8 +43,8 @@ def _operator_from(args: argparse.Namespace) -> tuple[Any, np.ndarray | None, An
     """The operator named by ``args.input``: a saved .npz, or built from a mesh file."""
     if Path(args.input).suffix.lower() == ".npz":
         op = load_operator(args.input)
-        return op, op.V, op.faces
-    V, F = _read(args.input)
+        return op, getattr(op, "V", None), getattr(op, "faces", None)
+    V, F = read_mesh(args.input)
     return _build(args, V, F), V, F
 
 
@@ -90,14 +86,14 @@ def cmd_info(args: argparse.Namespace) -> int:
         rows += [
             ("nnz", f"{op.nnz:,} ({op.nnz / op.n_vertices:.1f} per row)"),
             ("memory", f"{op.nbytes / 2**20:.1f} MiB ({op.L.dtype})"),
-            ("mesh stored", "yes" if op.V is not None else "no"),
+            ("mesh stored", "yes" if hasattr(op, "V") else "no"),
         ]
         print(_table(rows))
         return 0
     from .operator import DEFAULT_TOL, MeshLaplacian
     from .topology import diagnose
 
-    V, F = _read(args.input)
+    V, F = read_mesh(args.input)
     tol = DEFAULT_TOL if args.tol is None else args.tol
     # matrix-free: sets up the kernel (h, radius, cell grid) without assembling L
     probe = MeshLaplacian(V, F, h=args.h, tol=tol, matrix_free=True)
@@ -121,7 +117,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 def cmd_build(args: argparse.Namespace) -> int:
     """Build the operator of a mesh and save it as .npz."""
-    V, F = _read(args.input)
+    V, F = read_mesh(args.input)
     out = Path(args.output) if args.output else Path(Path(args.input).stem + ".npz")
     op = _build(args, V, F)
     path = save_operator(out, op, mesh=not args.no_mesh)
@@ -141,7 +137,7 @@ def cmd_eigs(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     lam, phi = eigs(op, args.k)
     seconds = time.perf_counter() - t0
-    columns = {"BSW" if op.__class__.__name__ == "MeshLaplacian" else getattr(op, "name", "L"): lam}
+    columns = {getattr(op, "name", "BSW"): lam}
     if args.compare_cot:
         if V is None:
             raise MeshError("--compare-cot needs the mesh: give a mesh file or an operator saved with it")
@@ -177,12 +173,14 @@ def cmd_smooth(args: argparse.Namespace) -> int:
     from .progress import make_progress
     from .smoothing import mean_curvature_flow
 
-    V, F = _read(args.input)
+    V, F = read_mesh(args.input)
     out = Path(args.output)
     if out.suffix.lower() not in MESH_FORMATS:
         raise MeshError(f"--output must end in one of {', '.join(MESH_FORMATS)}; got {out.name!r}")
-    h = default_h(V, F) if args.h is None else args.h
-    dt = h / 4 if args.dt is None else args.dt  # (mean edge)² at the default h: smooths at the edge scale
+    # (mean edge)² for both: the operator damps frequencies up to about 1/h, and a step of
+    # dt = h halves the components at that scale, i.e. noise at the scale of the edges
+    h = default_h(V, F) / 4 if args.h is None else args.h
+    dt = h if args.dt is None else args.dt
     kwargs: dict[str, Any] = {"keep_volume": args.keep_volume}
     if args.cot:
         from .baselines import cotangent
@@ -227,7 +225,7 @@ def cmd_curvature(args: argparse.Namespace) -> int:
     _need_png_suffix(args.png)
     if args.output and Path(args.output).suffix.lower() not in (".npy", ".txt", ".csv"):
         raise MeshError(f"--output must end in .npy, .txt or .csv; got {args.output!r}")
-    V, F = _read(args.input)
+    V, F = read_mesh(args.input)
     H = mean_curvature(_build(args, V, F), V, F)
     rows = {"BSW": H}
     if args.compare_cot:
@@ -396,10 +394,11 @@ def build_parser() -> argparse.ArgumentParser:
                                    "rebuilt from the moving surface at every step; writes the mesh.")
     p.add_argument("input", help="mesh file")
     p.add_argument("-o", "--output", required=True, help="output mesh (.obj, .off, .ply or .stl)")
-    p.add_argument("--dt", type=_positive_float,
-                   help="time step (default h/4 = (mean edge)² at the default h)")
+    p.add_argument("--dt", type=_positive_float, help="time step (default h)")
     p.add_argument("--steps", type=_positive_int, default=3, help="number of steps (default 3)")
-    _kernel_options(p, 1e-8)
+    p.add_argument("--h", type=_positive_float, default=None,
+                   help="kernel width h (default (mean edge length)²: noise at the scale of the edges)")
+    p.add_argument("--tol", type=float, default=1e-8, help="kernel tolerance (default 1e-8)")
     p.add_argument("--fixed", action="store_true", help="keep the first step's operator (a linear filter)")
     p.add_argument("--keep-volume", action="store_true", help="rescale after each step to keep the volume")
     p.add_argument("--cot", action="store_true", help="use the cotangent Laplacian instead")

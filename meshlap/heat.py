@@ -100,7 +100,8 @@ def heat_flow(
         out = np.stack([phi @ (np.exp(-np.maximum(lam, 0.0) * s)[:, None] * coef) for s in tt])
     elif method == "krylov":
         if getattr(op, "matrix_free", False):
-            raise MeshError("method='krylov' needs a stored L; use method='spectral' for matrix-free operators")
+            raise MeshError("method='krylov' needs a stored L; use method='spectral' for a matrix-free "
+                            "operator")
         L = sp.csr_matrix(op.L, dtype=np.float64)
         order = np.argsort(tt, kind="stable")
         out = np.empty((len(tt), *f.shape))
@@ -212,10 +213,12 @@ class ImplicitHeat:
         Zp = self._precondition(R)
         Pd = Zp.copy()
         rz = np.sum(R * Zp, axis=0)
-        for it in range(1, 1001):
+        it = 0
+        while it < 1000:
             active = np.linalg.norm(R, axis=0) > self.rtol * bnorm
             if not active.any():
                 break
+            it += 1
             AP = self._apply(Pd[:, active])
             alpha = rz[active] / np.sum(Pd[:, active] * AP, axis=0)
             X[:, active] += alpha * Pd[:, active]
@@ -227,7 +230,7 @@ class ImplicitHeat:
         else:
             warnings.warn(f"ImplicitHeat: CG did not reach rtol={self.rtol:g} in 1000 iterations",
                           RuntimeWarning, stacklevel=3)
-        self.iterations.append(it - 1)
+        self.iterations.append(it)
         return X
 
     def step(self, f: Any, steps: int = 1) -> np.ndarray:

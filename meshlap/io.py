@@ -308,7 +308,8 @@ class SavedLaplacian(SparseLaplacian):
 
     Behaves like the :class:`~meshlap.MeshLaplacian` it was saved from: ``op @ f``,
     ``L``, ``M``, ``S``, ``mass``, and the kernel parameters ``h``, ``tol``, ``radius``
-    and ``h_auto``. ``V`` and ``faces`` hold the mesh when it was saved (else None).
+    and ``h_auto`` (None for operators without them, such as the cotangent Laplacian).
+    The attributes ``V`` and ``faces`` exist when the mesh was saved with it.
     """
 
     def __init__(self, L: Any, mass: Any, params: dict[str, Any], V: np.ndarray | None = None,
@@ -319,8 +320,9 @@ class SavedLaplacian(SparseLaplacian):
         self.radius = float(params["radius"]) if "radius" in params else None
         self.h_auto = bool(params.get("h_auto", False))
         self.exact = self.tol == 0.0
-        self.V = V
-        self.faces = faces
+        if V is not None:  # only then: code that looks for op.V/op.faces falls back without them
+            self.V = V
+            self.faces = faces
 
     @property
     def nbytes(self) -> int:
@@ -407,7 +409,7 @@ def load_operator(path: PathLike) -> SavedLaplacian:
     -------
     SavedLaplacian
         ``op @ f``, ``L``, ``M``, ``S``, ``mass``, ``h``, ``tol``, ``radius``, and ``V``
-        and ``faces`` when the mesh was saved.
+        and ``faces`` when the mesh was saved (``hasattr(op, "V")``).
 
     Raises
     ------

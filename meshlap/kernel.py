@@ -6,10 +6,11 @@ The heat kernel exp(-|p-w|^2 / 4h) is dropped where it falls below ``tol``, that
     r = sqrt(4 h ln(1/tol)).
 
 Points with positive mass (the only ones that contribute to a sum) are binned into cubic
-cells of side about r/2 and stored sorted by cell, coordinates in separate arrays. Cells
-that share (x, y) indices are consecutive in that order, so a row visits a short list of
-contiguous ranges: for each (x, y) column near its vertex, the cells whose z-extent can hold
-points within r (the z window shrinks with the column's distance in x and y).
+cells of side about r/3 and stored sorted by cell and, inside a cell, by z, coordinates in
+separate arrays. Cells that share (x, y) indices are consecutive in that order, so each
+(x, y) column is sorted by z and a row visits a short list of contiguous ranges: for each
+column near its vertex, the points inside the z window that r leaves at the column's
+distance in x and y, found by bisection.
 
 Assembly is two passes over the rows, count then fill, so the CSR arrays are allocated once
 at their final size. A row of the fill pass first gathers (source, d²) of the accepted
@@ -114,7 +115,9 @@ def build_grid(V: np.ndarray, mass: np.ndarray, radius: float) -> Grid:
                 break
             cell *= 1.26  # about 2^(1/3): halves the cell count
     src_cell = _cell_ids(V[src], lo, cell, dims) if len(src) else np.zeros(0, np.int64)
-    order = np.argsort(src_cell, kind="stable")
+    # by cell, then by z inside a cell: each (x, y) column is then sorted by z, and a row
+    # finds its exact z window by bisection
+    order = np.lexsort((V[src, 2], src_cell)) if len(src) else np.zeros(0, np.int64)
     n_cells = int(np.prod(dims))
     counts = np.bincount(src_cell, minlength=n_cells)
     cell_start = np.zeros(n_cells + 1, dtype=np.int64)
@@ -126,7 +129,7 @@ def build_grid(V: np.ndarray, mass: np.ndarray, radius: float) -> Grid:
     if full:
         max_columns = 1
     else:
-        span = int(min(2 * radius / cell + 2, 1 << 40))
+        span = int(min(2 * radius * (1.0 + 1e-7) / cell + 2, 1 << 40))  # the search radius of _columns
         max_columns = int(min(dims[0], span) * min(dims[1], span))
     P = V[sorted_src]
     return Grid(
@@ -259,15 +262,32 @@ def _gap(x, lo, cell, a):
 
 
 @njit(cache=True, inline="always")
-def _columns(x, y, z, cell_start, dims, lo, cell, r, full, cols):
-    # Source ranges [cols[i, 0], cols[i, 1]) that hold every point within r of (x, y, z).
+def _lower_bound(zs, lo, hi, v):
+    # first j in [lo, hi) with zs[j] >= v (zs sorted there), hi if none
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if zs[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, inline="always")
+def _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols):
+    # Source ranges [cols[i, 0], cols[i, 1]) that hold every point within r of (x, y, z):
+    # per (x, y) column, the points whose z lies within the window that r leaves there.
     if full:
         cols[0, 0] = 0
         cols[0, 1] = cell_start[len(cell_start) - 1]
         return 1
-    r2 = r * r
-    a0, a1 = _axis_range(x, lo[0], cell, r, dims[0])
-    b0, b1 = _axis_range(y, lo[1], cell, r, dims[1])
+    # A slightly larger radius for the search, so that rounding in the cell and window
+    # bounds can never drop a pair that the exact test d² <= r² keeps (then both (w, p) and
+    # (p, w) are stored or neither is, and S stays exactly symmetric).
+    rs = r * (1.0 + 1e-7)
+    r2 = rs * rs
+    a0, a1 = _axis_range(x, lo[0], cell, rs, dims[0])
+    b0, b1 = _axis_range(y, lo[1], cell, rs, dims[1])
     n = 0
     for a in range(a0, a1 + 1):
         gx = _gap(x, lo[0], cell, a)
@@ -276,12 +296,15 @@ def _columns(x, y, z, cell_start, dims, lo, cell, r, full, cols):
             rest = r2 - gx * gx - gy * gy
             if rest < 0.0:
                 continue
-            c0, c1 = _axis_range(z, lo[2], cell, math.sqrt(rest), dims[2])
+            rz = math.sqrt(rest)
+            c0, c1 = _axis_range(z, lo[2], cell, rz, dims[2])
             if c0 > c1:
                 continue
             base = (a * dims[1] + b) * dims[2]
             j0 = cell_start[base + c0]
             j1 = cell_start[base + c1 + 1]
+            j0 = _lower_bound(zs, j0, j1, z - rz)
+            j1 = _lower_bound(zs, j0, j1, math.nextafter(z + rz, math.inf))
             if j1 > j0:
                 cols[n, 0] = j0
                 cols[n, 1] = j1
@@ -384,7 +407,7 @@ def _count_rows(rows, V, xs, ys, zs, self_slot, cell_start, dims, lo, cell, r, f
             for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
                 w = rows[k]
                 x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, cell_start, dims, lo, cell, r, full, cols)
+                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
                 cnt = 0
                 for i in range(ncols):
                     for j in range(cols[i, 0], cols[i, 1]):
@@ -416,7 +439,7 @@ def _fill_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, l
             for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
                 w = rows[k]
                 x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, cell_start, dims, lo, cell, r, full, cols)
+                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
                 need = _candidates(cols, ncols)
                 if need > len(sj):
                     sj = np.empty(2 * need, dtype=np.int64)
@@ -460,7 +483,7 @@ def _apply_rows(rows, V, xs, ys, zs, m, self_slot, cell_start, dims, lo, cell, r
             for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
                 w = rows[k]
                 x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, cell_start, dims, lo, cell, r, full, cols)
+                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
                 need = _candidates(cols, ncols)
                 if need > len(sj):
                     sj = np.empty(2 * need, dtype=np.int64)

@@ -38,7 +38,7 @@ from numba import njit, prange
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
-from .validation import MeshError, check_faces, check_vertices
+from .validation import MeshError, check_faces, check_k, check_vertices
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 
@@ -113,14 +113,6 @@ def _check_mass(op: Any) -> tuple[np.ndarray, np.ndarray]:
     if len(P) == 0:
         raise MeshError("every vertex has zero mass: the mesh has no surface")
     return mass, P
-
-
-def _check_k(k: Any, n: int) -> int:
-    if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)):
-        raise MeshError(f"k must be a positive integer; got {k!r}")
-    if not 1 <= k < n:
-        raise MeshError(f"k must lie in [1, {n - 1}] (the vertices with mass, less one); got {k}")
-    return int(k)
 
 
 def _restricted_S(op: Any, P: np.ndarray) -> sp.csr_matrix:
@@ -351,7 +343,7 @@ def eigs(
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
     mass, P = _check_mass(op)
     n_p = len(P)
-    k = _check_k(k, n_p)
+    k = check_k(k, n_p)
     m = mass[P]
     matrix_free = getattr(op, "matrix_free", False)
     if method == "auto":
@@ -418,8 +410,10 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed):
     with _one_blas_thread():
         if K is not None:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
-            exact = _CotPreconditioner(K, m, np.full(n_p, np.inf), sigma)
-            _, X0, _, _ = _lobpcg(lambda Y: np.asarray(K @ Y), m, exact, X0, nb, 1e-2, 30)
+            def exact(R: np.ndarray) -> np.ndarray:  # the same factorization, without ½ D⁻¹
+                return T.lu.solve(np.asfortranarray(R))
+
+            _, X0, _, _ = _lobpcg(lambda Y: np.asarray(K @ Y), m, exact, X0, k, 1e-2, 10)
         lam, X, it, res = _lobpcg(apply_A, m, T, X0, k, tol, maxiter)
     scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
     if (res[:k] > tol * scale).any():

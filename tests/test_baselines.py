@@ -112,3 +112,12 @@ def test_triangles_only_and_block_apply(make):
     block = op @ V
     assert block.shape == (300, 3) and np.allclose(block[:, 1], op @ V[:, 1])
     assert op.shape == (300, 300) and op.M.shape == (300, 300)
+
+
+def test_cotangent_with_trailing_unreferenced_vertices():
+    # libigl sizes its matrices by the largest face index; trailing free vertices must still fit
+    V, F = shapes.sphere(300, seed=0)
+    V2 = np.vstack([V, [[5.0, 5.0, 5.0], [6.0, 6.0, 6.0]]])
+    cot, ref = baselines.cotangent(V2, F), baselines.cotangent(V, F)
+    assert cot.L.shape == (302, 302) and np.array_equal(cot.mass[-2:], [0.0, 0.0])
+    assert np.allclose((cot @ V2[:, 0])[:300], ref @ V[:, 0], rtol=1e-12, atol=1e-12)

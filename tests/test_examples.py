@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 import pytest
 
 matplotlib.use("Agg")
@@ -22,7 +23,8 @@ def run_example(name, args, monkeypatch, capsys):
 
 
 def test_every_example_is_tested():
-    assert set(SCRIPTS) == {"conventions.py", "noisy_sphere.py", "quickstart.py", "save_and_reload.py"}
+    assert set(SCRIPTS) == {"conventions.py", "eigenfunctions.py", "noisy_sphere.py", "quickstart.py",
+                            "save_and_reload.py"}
 
 
 def test_quickstart(monkeypatch, capsys, tmp_path):
@@ -49,6 +51,16 @@ def test_save_and_reload(monkeypatch, capsys, tmp_path):
     out = run_example("save_and_reload.py", [tmp_path / "out"], monkeypatch, capsys)
     assert (tmp_path / "out" / "spot-quads.npz").is_file() and (tmp_path / "out" / "sphere.ply").is_file()
     assert "bit-for-bit" in out and "max |L - op.L| = 0.0" in out
+
+
+def test_eigenfunctions(monkeypatch, capsys, tmp_path):
+    out = run_example("eigenfunctions.py", [tmp_path], monkeypatch, capsys)
+    assert (tmp_path / "spot_eigenfunctions.png").read_bytes()[:4] == b"\x89PNG"
+    rows = [line.split() for line in out.splitlines() if line[:2].strip().isdigit()]
+    assert len(rows) == 8 and [float(v) for v in rows[0][1:]] == [0.0, 0.0, 0.0]
+    wide, narrow, cot = (np.array([float(r[c]) for r in rows]) for c in (1, 2, 3))
+    assert np.all(np.diff(wide) >= 0) and np.all(np.diff(cot) >= 0)
+    assert abs(narrow[1] / cot[1] - 1) < 0.05
 
 
 def test_noisy_sphere(monkeypatch, capsys, tmp_path):

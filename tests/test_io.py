@@ -95,6 +95,8 @@ def test_off_polygons_and_errors(tmp_path):
                  "4 0 1 2 3 255 0 0\n3 1 4 2\n")
     V, F = io.read_mesh(p)
     assert F.sizes.tolist() == [4, 3] and F.indices.tolist() == [0, 1, 2, 3, 1, 4, 2]
+    p.write_text("OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")  # counts on the header line
+    assert io.read_mesh(p)[1].tolist() == [[0, 1, 2]]
     for text, message in [
         ("COFF\n3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n", "plain OFF"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "truncated"),
@@ -200,7 +202,7 @@ def test_save_load_variants(tmp_path):
     V, F = meshlap.shapes.sphere(400, seed=1)
     op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32)
     back = io.load_operator(io.save_operator(tmp_path / "op32.npz", op32, mesh=False, compress=True))
-    assert back.L.dtype == np.float32 and back.V is None and back.faces is None
+    assert back.L.dtype == np.float32 and not hasattr(back, "V") and not hasattr(back, "faces")
     assert back.h_auto is False and back.h == 0.01
     cot = io.load_operator(io.save_operator(tmp_path / "cot.npz", cotangent(V, F)))
     assert cot.name == "COT" and cot.h is None
@@ -223,3 +225,15 @@ def test_save_load_errors(tmp_path):
     (tmp_path / "text.npz").write_text("hello")
     with pytest.raises(meshlap.MeshError, match="not an .npz file"):
         io.load_operator(tmp_path / "text.npz")
+
+
+def test_loaded_operators_work_with_the_spectral_solver(tmp_path):
+    from meshlap.spectral import eigs
+
+    V, F = meshlap.shapes.sphere(1500, seed=0)
+    op = meshlap.laplacian(V, F, h=0.005)
+    lam = eigs(op, 6, method="lobpcg")[0]
+    for mesh in (True, False):  # without the mesh, LOBPCG runs without the cotangent preconditioner
+        back = io.load_operator(io.save_operator(tmp_path / f"op{mesh}.npz", op, mesh=mesh))
+        assert hasattr(back, "V") is mesh
+        np.testing.assert_allclose(eigs(back, 6, method="lobpcg")[0], lam, rtol=1e-6, atol=1e-9)

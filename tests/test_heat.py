@@ -1,0 +1,116 @@
+"""Heat flow against the exact decay of spherical harmonics, implicit steps, smoothing."""
+
+import math
+
+import numpy as np
+import pytest
+
+import meshlap
+from meshlap import heat, shapes, smoothing, spectral
+from meshlap.baselines import cotangent
+
+H = 0.01
+
+
+@pytest.fixture(scope="module")
+def sphere_op():
+    V, F = shapes.sphere(3000, seed=0)
+    return V, F, meshlap.laplacian(V, F, h=H)
+
+
+def harmonic(V, degree):
+    x, y, z = V.T
+    return {1: z, 2: x * y, 3: x * y * z}[degree]
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_harmonic_decays_as_exp_minus_lambda_t(sphere_op, degree):
+    V, F, op = sphere_op
+    f = harmonic(V, degree)
+    t = np.array([0.05, 0.2, 0.4])
+    lam = spectral.sphere_eigenvalue(degree, H)
+    norm = lambda u: math.sqrt(np.sum(op.mass * u * u))  # noqa: E731
+    for method in ("krylov", "spectral"):
+        u = heat.heat_flow(op, f, t, method=method, k=16)
+        rates = np.array([-math.log(norm(ui) / norm(f)) / ti for ui, ti in zip(u, t, strict=True)])
+        # the discrete operator's shell sits within 0.5% of the continuous value at this n
+        assert np.abs(rates / lam - 1).max() < 0.005, (method, rates, lam)
+        # and the shape is kept: u(t) stays proportional to f
+        for ui in u:
+            c = np.dot(ui, f) / np.dot(f, f)
+            assert np.linalg.norm(ui - c * f) < 0.02 * np.linalg.norm(ui)
+
+
+def test_many_times_match_single_calls(sphere_op):
+    V, F, op = sphere_op
+    f = np.exp(V[:, 0]) + V[:, 1] ** 2
+    times = [0.3, 0.0, 0.1]
+    many = heat.heat_flow(op, np.column_stack([f, 2 * f]), times)
+    assert many.shape == (3, len(V), 2)
+    for ti, ui in zip(times, many, strict=True):
+        one = heat.heat_flow(op, f, ti)
+        assert np.allclose(ui[:, 0], one, rtol=0, atol=1e-10) and np.allclose(ui[:, 1], 2 * one, atol=2e-10)
+    assert np.array_equal(many[1][:, 0], f)
+    with pytest.raises(meshlap.MeshError, match="t must"):
+        heat.heat_flow(op, f, -1.0)
+    with pytest.raises(meshlap.MeshError, match="method"):
+        heat.heat_flow(op, f, 1.0, method="euler")
+
+
+def test_implicit_steps_cg_matches_direct_and_converge_to_exp(sphere_op):
+    V, F, op = sphere_op
+    f = np.exp(V[:, 0]) + np.sin(3 * V[:, 2])
+    tau = 0.02
+    cg = heat.ImplicitHeat(op, tau, solver="cg", rtol=1e-12)
+    u_cg = cg(f)
+    # the direct solver agrees (on a smaller mesh, where its LU is cheap)
+    Vs, Fs = shapes.sphere(800, seed=3)
+    small = meshlap.laplacian(Vs, Fs, h=0.02)
+    fs = np.exp(Vs[:, 0])
+    u_dir = heat.ImplicitHeat(small, tau, solver="direct")(fs)
+    u_small = heat.ImplicitHeat(small, tau, solver="cg", rtol=1e-12)(fs)
+    assert np.linalg.norm(u_small - u_dir) < 1e-9 * np.linalg.norm(u_dir)
+    # residual of (M - τS) u = M f
+    r = op.M @ f - (op.M @ u_cg - tau * (op.S @ u_cg))
+    assert np.linalg.norm(r) < 1e-10 * np.linalg.norm(op.M @ f)
+    # the cotangent preconditioner keeps CG short even for a large step
+    big = heat.ImplicitHeat(op, 1.0, solver="cg", rtol=1e-10)
+    big(f)
+    # measured: 10 and 11 iterations
+    assert cg.iterations[-1] <= 14 and big.iterations[-1] <= 16, (cg.iterations, big.iterations)
+    # backward Euler is first order: doubling the steps halves the error to exp(tL) f
+    exact = heat.heat_flow(op, f, 0.2)
+    err = [np.linalg.norm(heat.implicit_heat(op, f, 0.2 / s, s) - exact) for s in (4, 8, 16)]
+    assert 1.8 < err[0] / err[1] < 2.2 and 1.8 < err[1] / err[2] < 2.2
+
+
+def test_implicit_heat_with_zero_mass_vertices():
+    V, F = shapes.sphere(1200, seed=1)
+    extra = 1.01 * shapes.fibonacci_sphere(10)
+    V2, F2 = np.vstack([extra, V]), F + 10
+    with pytest.warns(UserWarning):
+        op = meshlap.laplacian(V2, F2, h=0.02)
+    f = V2[:, 0].copy()
+    u = heat.implicit_heat(op, f, 0.05)
+    # the vertices with mass solve their own system; the others their row of (I - τL) u = f
+    L = op.L.toarray()
+    row = u[:10] - 0.05 * (L[:10] @ u)
+    assert np.allclose(row, f[:10], atol=1e-10)
+    assert np.abs(u[:10] / f[:10] - 1 / (1 + 0.05 * 2)).max() < 0.03
+    u_cot = heat.implicit_heat(cotangent(V2, F2), f, 0.05)
+    assert np.array_equal(u_cot[:10], f[:10])
+
+
+def test_smoothing_a_noisy_function(sphere_op):
+    V, F, op = sphere_op
+    clean = V[:, 2] + V[:, 0] * V[:, 1]
+    noise = 0.2 * np.random.default_rng(0).standard_normal(len(V))
+    # the operator's spectrum saturates near 1/h = 100, so noise is damped by about
+    # (1 + t/(h·steps))^-steps = 0.2 while the clean part (λ ≤ 6) loses less than 8%
+    out = smoothing.smooth_function(op, clean + noise, t=0.02, steps=4)
+    before, after = np.linalg.norm(noise), np.linalg.norm(out - clean)
+    assert after < before / 3, (before, after)
+    kept = smoothing.smooth_function(op, clean, t=0.02, steps=4)
+    assert np.linalg.norm(kept - clean) < 0.08 * np.linalg.norm(clean)
+    with pytest.raises(meshlap.MeshError, match="steps"):
+        smoothing.smooth_function(op, clean, 0.01, steps=0)
