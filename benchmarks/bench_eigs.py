@@ -161,8 +161,8 @@ def main(argv=None) -> None:
         "eigsh shift-invert with a sparse LU of the operator and tol = 1e-12 (cached in benchmarks/.cache). "
         "The ratio is to libigl's cotangent Laplacian (`igl.cotmatrix`, Voronoi mass) with scipy eigsh "
         "(shift-invert, same k) on the same mesh, measured in the same run with BLAS threads as installed "
-        "and with one BLAS thread; the faster of the two is the divisor. Other processes shared the 2 "
-        "CPUs during this run, so the CPU times and the ratios are the numbers to compare.",
+        "and with one BLAS thread; the faster of the two is the divisor. Run it with nothing else "
+        "on the machine: other processes on the same cores slow the threaded parts most.",
         "",
         "| method | time (CPU) | eigenvalue error | LOBPCG iterations | / libigl cotangent eigsh |",
         "|---|---|---|---|---|",
