@@ -9,7 +9,7 @@ Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 (500, 500)
 """
 
-from . import curvature, heat, shapes, smoothing, spectral, topology
+from . import baselines, curvature, heat, io, reproduce, shapes, smoothing, spectral, topology
 from .mass import face_areas, vertex_mass
 from .operator import (
     DEFAULT_TOL,
@@ -29,8 +29,11 @@ __all__ = [
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
+    "baselines",
     "curvature",
     "heat",
+    "io",
+    "reproduce",
     "smoothing",
     "spectral",
     "OperatorTooLargeError",

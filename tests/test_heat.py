@@ -30,7 +30,7 @@ def test_harmonic_decays_as_exp_minus_lambda_t(sphere_op, degree):
     t = np.array([0.05, 0.2, 0.4])
     lam = spectral.sphere_eigenvalue(degree, H)
     norm = lambda u: math.sqrt(np.sum(op.mass * u * u))  # noqa: E731
-    for method in ("krylov", "spectral"):
+    for method in ("chebyshev", "krylov", "spectral"):
         u = heat.heat_flow(op, f, t, method=method, k=16)
         rates = np.array([-math.log(norm(ui) / norm(f)) / ti for ui, ti in zip(u, t, strict=True)])
         # the discrete operator's shell sits within 0.5% of the continuous value at this n
@@ -39,6 +39,20 @@ def test_harmonic_decays_as_exp_minus_lambda_t(sphere_op, degree):
         for ui in u:
             c = np.dot(ui, f) / np.dot(f, f)
             assert np.linalg.norm(ui - c * f) < 0.02 * np.linalg.norm(ui)
+
+
+def test_chebyshev_matches_expm_multiply():
+    # the default series against scipy's expm_multiply, on BSW and on the cotangent operator
+    V, F = meshlap.shapes.sphere(1500, kind="random", seed=4)
+    f = np.exp(V[:, 0]) + V[:, 1] ** 2
+    times = [0.0, 0.02, 0.3, 1.5]
+    for op in (meshlap.laplacian(V, F, h=0.01), cotangent(V, F)):
+        cheb = heat.heat_flow(op, f, times)
+        ref = heat.heat_flow(op, f, times, method="krylov")
+        assert np.abs(cheb - ref).max() < 1e-12 * np.abs(f).max()
+    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True)
+    with pytest.raises(meshlap.MeshError, match="stored L"):
+        heat.heat_flow(free, f, 0.1)
 
 
 def test_many_times_match_single_calls(sphere_op):
