@@ -21,13 +21,13 @@ from scipy.sparse.linalg import LinearOperator
 from scipy.spatial import cKDTree
 
 from .mass import _vertex_mass
-from .operator import DEFAULT_TOL, default_h
+from .operator import DEFAULT_TOL, _LumpedLaplacian, default_h
 from .validation import MeshError, check_faces, check_function, check_h, check_tol, check_vertices
 
 __all__ = ["SparseLaplacian", "bsw_scipy", "cotangent", "intrinsic_delaunay", "uniform_graph"]
 
 
-class SparseLaplacian:
+class SparseLaplacian(_LumpedLaplacian):
     """A Laplacian ``L`` with a diagonal mass ``M``: the common surface of every operator.
 
     ``L`` approximates +Δ (negative semidefinite), ``S = M L`` is symmetric, and
@@ -57,16 +57,6 @@ class SparseLaplacian:
         self.mass = np.asarray(mass, dtype=np.float64)
         self.name = name
         self._S = None if S is None else sp.csr_matrix(S)
-
-    @property
-    def M(self) -> sp.csr_matrix:
-        return sp.diags(self.mass, format="csr")
-
-    @property
-    def S(self) -> sp.csr_matrix:
-        if self._S is None:
-            self._S = sp.csr_matrix(self.M @ self.L)
-        return self._S
 
     @property
     def n_vertices(self) -> int:

@@ -19,7 +19,7 @@ from .validation import MeshError, check_faces, check_vertices
 __all__ = ["mean_curvature_normal", "mean_curvature"]
 
 
-def _geometry(op: Any, V: Any, F: Any) -> tuple[np.ndarray, np.ndarray]:
+def _vertices(op: Any, V: Any) -> np.ndarray:
     if V is None:
         if not hasattr(op, "V"):
             raise MeshError("this operator does not carry its vertices; pass V (and F)")
@@ -27,6 +27,11 @@ def _geometry(op: Any, V: Any, F: Any) -> tuple[np.ndarray, np.ndarray]:
     V = check_vertices(V)
     if len(V) != op.n_vertices:
         raise MeshError(f"V has {len(V)} vertices but the operator has {op.n_vertices}")
+    return V
+
+
+def _geometry(op: Any, V: Any, F: Any) -> tuple[np.ndarray, np.ndarray]:
+    V = _vertices(op, V)
     if F is None:
         if not hasattr(op, "faces"):
             raise MeshError("this operator does not carry its faces; pass F")
@@ -54,14 +59,7 @@ def mean_curvature_normal(op: Any, V: Any = None) -> np.ndarray:
     >>> bool(np.allclose(Hn, V, atol=0.05))        # H = 1, n = x on the unit sphere
     True
     """
-    if V is None:
-        if not hasattr(op, "V"):
-            raise MeshError("this operator does not carry its vertices; pass V")
-        V = op.V
-    V = check_vertices(V)
-    if len(V) != op.n_vertices:
-        raise MeshError(f"V has {len(V)} vertices but the operator has {op.n_vertices}")
-    return -0.5 * np.asarray(op @ V)
+    return -0.5 * np.asarray(op @ _vertices(op, V))
 
 
 def mean_curvature(op: Any, V: Any = None, F: Any = None) -> np.ndarray:

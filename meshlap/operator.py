@@ -113,7 +113,27 @@ def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, n: int) -> s
     return L
 
 
-class MeshLaplacian:
+class _LumpedLaplacian:
+    """What every Laplacian with a lumped (diagonal) mass shares: ``M`` and ``S = M L``."""
+
+    mass: np.ndarray
+    L: sp.csr_matrix
+    _S: sp.csr_matrix | None = None
+
+    @property
+    def M(self) -> sp.csr_matrix:
+        """Diagonal lumped mass matrix, in the value type of L."""
+        return sp.diags(self.mass.astype(self.L.dtype), format="csr")
+
+    @property
+    def S(self) -> sp.csr_matrix:
+        """``M @ L``: symmetric and negative semidefinite."""
+        if self._S is None:
+            self._S = sp.csr_matrix(self.M @ self.L)
+        return self._S
+
+
+class MeshLaplacian(_LumpedLaplacian):
     r"""The heat-kernel mesh Laplacian of Belkin, Sun and Wang (SoCG 2008), built once.
 
     ``L`` approximates the Laplace–Beltrami operator :math:`+\Delta` (negative
@@ -294,13 +314,8 @@ class MeshLaplacian:
 
     @property
     def M(self) -> sp.csr_matrix:
+        # also for a matrix-free operator, which has no L to take the value type from
         return sp.diags(self.mass.astype(self.dtype), format="csr")
-
-    @property
-    def S(self) -> sp.csr_matrix:
-        if self._S is None:
-            self._S = sp.csr_matrix(self.M @ self.L)
-        return self._S
 
     # -- sizes --------------------------------------------------------------------------
     @property
