@@ -22,7 +22,6 @@ import argparse
 import json
 import math
 import os
-import re
 import subprocess
 import sys
 import time
@@ -30,13 +29,13 @@ from pathlib import Path
 
 import igl
 import numpy as np
+from results_file import RESULTS, write_section
 
 import meshlap
 from meshlap import shapes
 from meshlap.baselines import bsw_scipy
 
 HERE = Path(__file__).resolve().parent
-RESULTS = HERE / "RESULTS.md"
 BUNNY = HERE.parents[1] / "shared" / "meshes" / "stanford-bunny.obj"
 
 
@@ -193,20 +192,6 @@ def table(rows: list[dict], mem: dict) -> list[str]:
     return out
 
 
-def write_section(lines: list[str]) -> None:
-    section = "## Assembly\n\n" + "\n".join(lines).rstrip() + "\n"
-    if not RESULTS.exists():
-        RESULTS.write_text("# Benchmark results\n\n" + section)
-        return
-    text = RESULTS.read_text()
-    pattern = re.compile(r"^## Assembly\n.*?(?=^## |\Z)", re.S | re.M)
-    if pattern.search(text):
-        text = pattern.sub(lambda _: section + "\n", text, count=1).rstrip() + "\n"
-    else:
-        text = text.rstrip() + "\n\n" + section
-    RESULTS.write_text(text)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="small meshes only; writes nothing")
@@ -291,7 +276,7 @@ def main() -> None:
             f"operator applies L in {large['apply']:.2f} s (CPU {large['apply_cpu']:.2f} s) without "
             f"storing it, equal to the stored product to {large['apply_rel_diff']:.0e} (relative).",
         ]
-    write_section(lines)
+    write_section("Assembly", lines)
     print(f"wrote the Assembly section of {RESULTS}")
 
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import sys
 import time
 from pathlib import Path
@@ -30,13 +29,13 @@ from pathlib import Path
 import igl
 import numba
 import numpy as np
+from results_file import RESULTS, write_section
 from scipy.sparse.linalg import eigsh
 
 import meshlap
 from meshlap import spectral
 
 HERE = Path(__file__).parent
-RESULTS = HERE / "RESULTS.md"
 CACHE = HERE / ".cache"
 
 
@@ -85,20 +84,6 @@ def ablation(op, k, tol, *, with_diag, cot_start, seed=0):
         lam, _, it, _ = spectral._lobpcg(lambda Y: -m[:, None] * spectral.apply_block(op, Y), m, T, X0,
                                          k, tol, 300)
     return np.sort(lam[:k]), it
-
-
-def write_section(lines: list[str]) -> None:
-    section = "## Eigenpairs\n\n" + "\n".join(lines).rstrip() + "\n"
-    if not RESULTS.exists():
-        RESULTS.write_text("# Benchmark results\n\n" + section)
-        return
-    text = RESULTS.read_text()
-    pattern = re.compile(r"^## Eigenpairs\n.*?(?=^## |\Z)", re.S | re.M)
-    if pattern.search(text):
-        text = pattern.sub(lambda _: section + "\n", text)
-    else:
-        text = text.rstrip() + "\n\n" + section
-    RESULTS.write_text(text)
 
 
 def main(argv=None) -> None:
@@ -181,7 +166,7 @@ def main(argv=None) -> None:
     else:
         lines.append(f"| scipy eigsh shift-invert on the operator (reference) | {ref_time[0]:.1f} s "
                      f"({ref_time[1]:.1f} s) | 0 | – | {ref_time[0] / cot[0]:.0f}× |")
-    write_section(lines)
+    write_section("Eigenpairs", lines)
     print(f"wrote the Eigenpairs section of {RESULTS}")
 
 

@@ -56,8 +56,15 @@ def face_areas(V: Any, F: Any) -> np.ndarray:
     return _face_areas(V, check_faces(F, len(V)))
 
 
-def _vertex_mass(V: np.ndarray, faces: Polygons) -> np.ndarray:
-    share = np.repeat(_face_areas(V, faces) / faces.sizes, faces.sizes)
+def _mean_edge_length(V: np.ndarray, faces: Polygons) -> float:
+    e = faces.edges()
+    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+
+
+def _vertex_mass(V: np.ndarray, faces: Polygons, areas: np.ndarray | None = None) -> np.ndarray:
+    if areas is None:
+        areas = _face_areas(V, faces)
+    share = np.repeat(areas / faces.sizes, faces.sizes)
     return np.bincount(faces.indices, weights=share, minlength=len(V))
 
 

@@ -21,12 +21,11 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
 from . import kernel
-from .mass import _vertex_mass
+from .mass import _face_areas, _mean_edge_length, _vertex_mass
 from .progress import ProgressLike, make_progress
 from .topology import warn_if_messy
 from .validation import (
     MeshError,
-    Polygons,
     check_faces,
     check_function,
     check_h,
@@ -68,11 +67,6 @@ def available_memory() -> int:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (ValueError, OSError, AttributeError):
         return 8 << 30
-
-
-def _mean_edge_length(V: np.ndarray, faces: Polygons) -> float:
-    e = faces.edges()
-    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
 
 
 def default_h(V: Any, F: Any) -> float:
@@ -214,12 +208,14 @@ class MeshLaplacian(_LumpedLaplacian):
             raise MeshError(f"dtype must be float64 or float32; got {dtype!r}") from exc
         if self.dtype not in (np.float64, np.float32):
             raise MeshError(f"dtype must be float64 or float32; got {self.dtype}")
-        self.mass = _vertex_mass(self.V, self.faces)
+        areas = _face_areas(self.V, self.faces)
+        self.mass = _vertex_mass(self.V, self.faces, areas)
         if not self.mass.any():
             raise MeshError("every face has zero area: the mesh has no surface to integrate over")
-        warn_if_messy(self.V, self.faces)
+        mean_edge = _mean_edge_length(self.V, self.faces)
+        warn_if_messy(self.V, self.faces, areas, mean_edge)
         self.h_auto = h is None
-        self.h = (check_h(default_h(self.V, self.faces), "the automatic h = (2·mean edge)²")
+        self.h = (check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
                   if h is None else check_h(h))
         self.radius = kernel.cutoff_radius(self.h, self.tol)
         self.matrix_free = bool(matrix_free)

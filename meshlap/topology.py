@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components as _cc
 
-from .mass import _face_areas
+from .mass import _face_areas, _mean_edge_length
 from .validation import MeshWarning, Polygons, check_faces, check_h, check_vertices
 
 __all__ = [
@@ -435,7 +435,8 @@ class MeshReport:
 PRECISION_WARN = 1e-6
 
 
-def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray) -> dict[str, Any]:
+def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
+              mean_edge: float | None = None) -> dict[str, Any]:
     """The checks shared by :func:`diagnose` and the build-time warning of the operator."""
     n = len(V)
     unref = np.flatnonzero(np.bincount(faces.indices, minlength=n) == 0)
@@ -444,8 +445,8 @@ def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray) -> dict[str, Any
     dup = np.flatnonzero(rep != np.arange(n))
     edges, counts = _edge_counts(_undirected_edges(faces), n)
     nonman = edges[counts > 2]
-    e = faces.edges()
-    mean_edge = float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    if mean_edge is None:
+        mean_edge = _mean_edge_length(V, faces)
     loss = np.finfo(np.float64).eps * float(np.abs(V).max()) / mean_edge if mean_edge > 0 else math.inf
     problems = []
     if len(unref):
@@ -506,11 +507,14 @@ def diagnose(V: Any, F: Any) -> MeshReport:
     )
 
 
-def warn_if_messy(V: np.ndarray, faces: Polygons) -> None:
+def warn_if_messy(V: np.ndarray, faces: Polygons, area: np.ndarray | None = None,
+                  mean_edge: float | None = None) -> None:
     """Issue one :class:`~meshlap.validation.MeshWarning` listing the problems :func:`diagnose`
     finds in checked input (unreferenced, duplicate vertices, zero-area faces, non-manifold
     edges, coordinates that lost precision); silent on a clean mesh."""
-    problems = _problems(V, faces, _face_areas(V, faces))["problems"]
+    if area is None:
+        area = _face_areas(V, faces)
+    problems = _problems(V, faces, area, mean_edge)["problems"]
     if problems:
         warnings.warn("messy mesh: " + "; ".join(problems) + " (meshlap.topology.diagnose tells more)",
                       MeshWarning, stacklevel=_caller_level())
