@@ -39,7 +39,7 @@ t = 5.0 / lam[-1]
 hks = heat_kernel_signature(t=t, eig=(lam, phi))
 print(f"heat kernel signature at t = {t:.3g}: min {hks.min():.3g}, max {hks.max():.3g}")
 
-fig = plot_functions(V, F, np.column_stack([phi[:, 1:6], hks]), ncols=3, up="y", view=(10, 40),
+fig = plot_functions(V, F, np.column_stack([phi[:, 1:6], hks]), ncols=3,
                      titles=[f"φ{i}, λ = {lam[i]:.2f}" for i in range(1, 6)] + [f"HKS, t = {t:.2g}"])
 png = out / "spot_eigenfunctions.png"
 fig.savefig(png, dpi=90)

@@ -341,6 +341,12 @@ def _kernel_options(p: argparse.ArgumentParser, tol_default: float | None) -> No
                    help="kernel tolerance: weights below it are dropped (default 1e-8; 0 = exact)")
 
 
+def _up_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--up", choices=("auto", "x", "y", "z", "-x", "-y", "-z"), default="auto",
+                   help="the up direction in --png (default auto: the side the mesh stands on, "
+                        "as meshlap.plot.up_axis finds it)")
+
+
 def _progress_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--progress", action="store_true", help="draw a progress bar on stderr")
 
@@ -383,7 +389,7 @@ def build_parser() -> argparse.ArgumentParser:
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save eigenvalues and eigenvectors to this .npz")
     p.add_argument("--png", help="draw the first eigenfunctions on the surface into this PNG")
-    p.add_argument("--up", choices=("z", "y"), default="z", help="the up axis in --png (default z)")
+    _up_option(p)
     p.add_argument("--compare-cot", action="store_true",
                    help="also print the cotangent Laplacian's eigenvalues on the same mesh")
     _progress_option(p)
@@ -412,7 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save H to .npy, .txt or .csv")
     p.add_argument("--png", help="draw the mesh coloured by H into this PNG")
-    p.add_argument("--up", choices=("z", "y"), default="z", help="the up axis in --png (default z)")
+    _up_option(p)
     p.add_argument("--compare-cot", action="store_true", help="also summarize the cotangent estimate")
     _progress_option(p)
     p.set_defaults(func=cmd_curvature)

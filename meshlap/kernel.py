@@ -31,9 +31,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 from llvmlite import ir
-from numba import njit, prange, types
+from numba import prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
+
+from ._jit import jit
 
 __all__ = ["cutoff_radius", "Grid", "build_grid", "count_entries", "fill_csr", "apply"]
 
@@ -213,7 +215,7 @@ _LN2_LO = 1.90821492927058770002e-10
 _SHIFTER = 4503599627371519.0  # 2^52 + 1023
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _exp_neg(x):
     # exp(x) for x <= 0 (0 below -708): x = k ln2 + t with |t| <= ln2/2, exp(t) by its Taylor
     # series to t^13 (truncation < 1e-17), 2^k from exponent bits. k stays a float and
@@ -240,7 +242,7 @@ def _exp_neg(x):
     return p * scale if x >= -708.0 else 0.0
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _axis_range(x, lo, cell, r, dim):
     # cells [a, b] along one axis that intersect [x - r, x + r]; clamped in floating point
     # first so that a huge r cannot overflow the integer conversion
@@ -249,7 +251,7 @@ def _axis_range(x, lo, cell, r, dim):
     return int(a), int(b)
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _gap(x, lo, cell, a):
     # distance along one axis from x to the slab [lo + a*cell, lo + (a+1)*cell]
     left = lo + a * cell
@@ -261,7 +263,7 @@ def _gap(x, lo, cell, a):
     return 0.0
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _lower_bound(zs, lo, hi, v):
     # first j in [lo, hi) with zs[j] >= v (zs sorted there), hi if none
     while lo < hi:
@@ -273,7 +275,7 @@ def _lower_bound(zs, lo, hi, v):
     return lo
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols):
     # Source ranges [cols[i, 0], cols[i, 1]) that hold every point within r of (x, y, z):
     # per (x, y) column, the points whose z lies within the window that r leaves there.
@@ -312,7 +314,7 @@ def _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols):
     return n
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _gather(x, y, z, sw, xs, ys, zs, r2, cols, ncols, sj, sd):
     # Compact the sources within r (other than slot sw) into sj (slot) and sd (d²), in
     # column order; branch-free: every candidate is written, the position only advances
@@ -330,7 +332,7 @@ def _gather(x, y, z, sw, xs, ys, zs, r2, cols, ncols, sj, sd):
     return pos
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _candidates(cols, ncols):
     total = 0
     for i in range(ncols):
@@ -338,7 +340,7 @@ def _candidates(cols, ncols):
     return total
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _weights(sj, sd, sm, m, cnt, inv4h, scale):
     # sd[i] <- scale * m_j * exp(-d²/4h). The masses are gathered first: with the indirect
     # load in it the kernel loop would not vectorize.
@@ -348,7 +350,7 @@ def _weights(sj, sd, sm, m, cnt, inv4h, scale):
         sd[i] = scale * sm[i] * _exp_neg(-sd[i] * inv4h)
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _sum(v, first, cnt):
     # v[first:first + cnt] in four interleaved partial sums: a fixed order, but not one long
     # chain of dependent additions
@@ -370,7 +372,7 @@ def _sum(v, first, cnt):
     return (s0 + s1) + (s2 + s3)
 
 
-@njit(cache=True, inline="always")
+@jit(inline="always")
 def _dot_diff(wt, sj, fq, fw, cnt):
     # sum_i wt[i] * (fq[sj[i]] - fw), in four interleaved partial sums like _sum
     s0 = 0.0
@@ -391,7 +393,7 @@ def _dot_diff(wt, sj, fq, fw, cnt):
 
 
 # -- the parallel passes -------------------------------------------------------------------
-@njit(cache=True, parallel=True)
+@jit(parallel=True)
 def _count_rows(rows, V, xs, ys, zs, self_slot, cell_start, dims, lo, cell, r, full, max_columns,
                 chunk, n_workers, counts, by_vertex):
     n_rows = len(rows)
@@ -420,7 +422,7 @@ def _count_rows(rows, V, xs, ys, zs, self_slot, cell_start, dims, lo, cell, r, f
                 counts[w if by_vertex else k] = cnt
 
 
-@njit(cache=True, parallel=True)
+@jit(parallel=True)
 def _fill_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell, r, full,
                max_columns, chunk, n_workers, inv4h, coef, indptr, indices, data, status):
     n_rows = len(rows)
@@ -461,7 +463,7 @@ def _fill_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, l
                 data[start] = -_sum(data, first, cnt)
 
 
-@njit(cache=True, parallel=True)
+@jit(parallel=True)
 def _apply_rows(rows, V, xs, ys, zs, m, self_slot, cell_start, dims, lo, cell, r, full, max_columns,
                 chunk, n_workers, inv4h, coef, fs, f, out):
     # out[w] = coef * sum_p K_wp m_p (f_p - f_w); fs holds f in source order, one row per

@@ -34,10 +34,11 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from numba import njit, prange
+from numba import prange
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
+from ._jit import jit
 from .validation import MeshError, check_faces, check_k, check_vertices
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
@@ -62,7 +63,7 @@ def _one_blas_thread() -> contextlib.AbstractContextManager:
 
 
 # -- products with the operator ----------------------------------------------------------------
-@njit(cache=True, parallel=True)
+@jit(parallel=True)
 def _spmm(indptr, indices, data, X, Y):  # pragma: no cover - compiled
     n = len(indptr) - 1
     k = X.shape[1]

@@ -1,9 +1,12 @@
 """Plot helpers: what is drawn (faces, colours, rates), under the Agg backend."""
 
+from pathlib import Path
+
 import matplotlib
 
 matplotlib.use("Agg")
 
+import igl  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
@@ -11,6 +14,8 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 import meshlap  # noqa: E402
 from meshlap import plot  # noqa: E402
+
+DATA = Path(__file__).parent / "data"
 
 
 @pytest.fixture(autouse=True)
@@ -56,7 +61,33 @@ def test_plot_mesh_rejects_bad_values():
     with pytest.raises(meshlap.MeshError, match="one scalar per vertex"):
         plot.plot_mesh(V, F, V)
     with pytest.raises(meshlap.MeshError, match="up must be"):
-        plot.plot_mesh(V, F, up="x")
+        plot.plot_mesh(V, F, up="w")
+
+
+@pytest.mark.parametrize(("name", "up"), [("stanford-bunny", "+y"), ("spot", "+y")])
+def test_up_axis_of_real_meshes(name, up):
+    # both stand on their feet with y up (the bunny on a flat base, spot on four hooves)
+    V, F = igl.read_triangle_mesh(str(DATA / f"{name}.obj"))
+    assert plot.up_axis(V, F) == up
+
+
+@pytest.mark.parametrize("up", ["+x", "-x", "+y", "-y", "+z", "-z"])
+def test_up_axis_finds_the_base_whatever_the_orientation(up):
+    # a half sphere stands on its flat cut: rotated so that the cut faces -up, it is found
+    V, F = meshlap.shapes.sphere(800, seed=2)
+    V[:, 2] = np.maximum(V[:, 2], -0.3)
+    R = plot._to_z_up(np.eye(3), up)  # drawing takes W to W @ R, a rotation
+    assert np.linalg.det(R) == pytest.approx(1.0)
+    W = V @ R.T  # the half sphere turned so that it stands on its cut with `up` up
+    assert plot.up_axis(W, F) == up
+    np.testing.assert_allclose(plot._to_z_up(W, up), V, atol=1e-12)  # drawn upright again
+
+
+def test_up_axis_without_a_base_is_z():
+    V, F = meshlap.shapes.sphere(500, seed=0)
+    assert plot.up_axis(V, F) == "+z"
+    V, F = meshlap.shapes.torus(800, seed=0)  # lies flat: top and bottom alike
+    assert plot.up_axis(V, F) == "+z"
 
 
 def test_plot_functions_grid():

@@ -1,4 +1,4 @@
-"""Every real mesh we have (../shared/meshes and tests/data) builds with its default h and
+"""Every real mesh we ship (tests/data) builds with its default h and
 gives a sound operator: nothing NaN, zero row sums, masses that add up to the area,
 S = M L symmetric, and L applied to the coordinates along the surface normal (it is the
 mean-curvature normal, Δx = -2H n)."""
@@ -15,10 +15,9 @@ import meshlap
 from meshlap import topology
 from meshlap.validation import MeshWarning
 
-SHARED = Path(__file__).parents[2] / "shared" / "meshes"
 DATA = Path(__file__).parent / "data"
-BUNNY = SHARED / "stanford-bunny.obj"  # checked by test_bunny
-MESHES = [p for p in sorted(DATA.glob("*.obj")) + sorted(SHARED.glob("*.obj")) if p != BUNNY]
+BUNNY = DATA / "stanford-bunny.obj"  # checked by test_bunny
+MESHES = [p for p in sorted(DATA.glob("*.obj")) if p != BUNNY]
 
 
 def read(path):
@@ -82,8 +81,6 @@ def test_spot_quads_and_triangles_agree():
 
 @pytest.fixture(scope="module")
 def bunny():
-    if not BUNNY.exists():
-        pytest.skip(f"{BUNNY} not found")
     V, F = read(BUNNY)
     op, warned = build(V, F)
     return V, F, op, warned

@@ -13,7 +13,7 @@ import meshlap
 from meshlap import shapes, spectral
 from meshlap.baselines import bsw_scipy, cotangent
 
-SHARED = Path(__file__).parents[2] / "shared" / "meshes"
+DATA = Path(__file__).parent / "data"
 DATA = Path(__file__).parent / "data"
 SHELLS = [(0, 1), (1, 3), (2, 5), (3, 7)]  # (degree l, multiplicity 2l+1): 16 eigenpairs
 
@@ -199,10 +199,7 @@ def test_bad_arguments():
 
 @pytest.mark.slow
 def test_bunny_50_eigenpairs():
-    path = SHARED / "stanford-bunny.obj"
-    if not path.exists():
-        pytest.skip("shared meshes not available")
-    V, F = igl.read_triangle_mesh(str(path))
+    V, F = igl.read_triangle_mesh(str(DATA / "stanford-bunny.obj"))
     # a third of the automatic h (480 instead of 1,400 entries per row) keeps the test short
     op = meshlap.laplacian(V, F, h=3e-6)
     assert (op.mass == 0).sum() == 1113

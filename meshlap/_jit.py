@@ -1,0 +1,80 @@
+"""numba compilation with an on-disk cache that lives outside the package.
+
+numba's default cache (``cache=True``) writes ``*.nbi``/``*.nbc`` files into the package's own
+``__pycache__``. For a regular (non-editable) install that folder is in site-packages, and pip
+does not know about those files: when the package is later replaced by an editable install,
+pip removes its own files and leaves the folder behind with only the cache in it, and Python
+then imports that folder as an empty namespace package that shadows the real one. So meshlap
+keeps its compiled kernels in the user's cache directory instead (``$NUMBA_CACHE_DIR`` when the
+user set one, else ``$XDG_CACHE_HOME/meshlap/numba`` or ``~/.cache/meshlap/numba``), one
+sub-folder per installed copy of the sources, and never writes into the package.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numba
+from numba.core import config
+
+__all__ = ["cache_dir", "jit"]
+
+
+def cache_dir() -> Path:
+    """Folder that holds meshlap's compiled kernels.
+
+    Examples
+    --------
+    >>> cache_dir().name in {"numba"} or "NUMBA_CACHE_DIR" in os.environ
+    True
+    """
+    if config.CACHE_DIR:
+        return Path(config.CACHE_DIR)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    path = Path(base) / "meshlap" / "numba"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / f".probe-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+    except OSError:  # a read-only home: a per-user temporary folder still keeps site-packages clean
+        path = Path(tempfile.gettempdir()) / f"meshlap-numba-{os.getuid() if hasattr(os, 'getuid') else 0}"
+        path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@contextlib.contextmanager
+def _cache_in(path: Path) -> Iterator[None]:
+    # numba picks a function's cache locator when the function is decorated, from
+    # numba.config.CACHE_DIR; setting it only for that moment leaves the caller's own numba
+    # functions where they were.
+    old = config.CACHE_DIR
+    config.CACHE_DIR = str(path)
+    try:
+        yield
+    finally:
+        config.CACHE_DIR = old
+
+
+def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    """``numba.njit(cache=True, **options)`` with the cache in :func:`cache_dir`.
+
+    Examples
+    --------
+    >>> @jit(inline="always")
+    ... def twice(x):
+    ...     return 2 * x
+    >>> twice(3)
+    6
+    """
+
+    def decorate(fn: Callable[..., Any]) -> Any:
+        with _cache_in(cache_dir()):
+            return numba.njit(cache=True, **options)(fn)
+
+    return decorate

@@ -1,0 +1,46 @@
+"""Installing meshlap one way and then another never breaks it: numba's compiled-kernel cache
+is kept out of the package folder (see meshlap/_jit.py for why)."""
+
+import re
+from pathlib import Path
+
+import numba
+
+import meshlap
+from meshlap import _jit, kernel, spectral
+
+PACKAGE = Path(meshlap.__file__).resolve().parent
+
+
+def _compiled(module):
+    return [f for f in vars(module).values() if isinstance(f, numba.core.registry.CPUDispatcher)]
+
+
+def test_every_compiled_function_goes_through_meshlap_jit():
+    # a bare cache=True would put the cache in the package's __pycache__ again
+    for path in PACKAGE.glob("*.py"):
+        if path.name != "_jit.py":
+            assert not re.search(r"cache\s*=\s*True", path.read_text()), path.name
+
+
+def test_compiled_kernels_cache_outside_the_package():
+    functions = _compiled(kernel) + _compiled(spectral)
+    assert len(functions) >= 10
+    for f in functions:
+        where = Path(f._cache._cache_path).resolve()
+        assert PACKAGE not in where.parents, (f.__name__, where)
+        assert _jit.cache_dir().resolve() in where.parents
+
+
+def test_the_user_s_numba_cache_dir_is_left_as_it_was(monkeypatch, tmp_path):
+    monkeypatch.setattr(numba.core.config, "CACHE_DIR", "")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert _jit.cache_dir() == tmp_path / "meshlap" / "numba"
+
+    @_jit.jit()
+    def one():
+        return 1
+
+    assert one() == 1
+    assert numba.core.config.CACHE_DIR == ""  # set only while meshlap's function was decorated
+    assert tmp_path in Path(one._cache._cache_path).parents
