@@ -64,13 +64,14 @@ def _cache_in(path: Path) -> Iterator[None]:
 def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     """``numba.njit(cache=True, **options)`` with the cache in :func:`cache_dir`.
 
+    Use it as ``@jit(parallel=True)`` on a function in a module of meshlap (numba caches only
+    functions whose source is in a file).
+
     Examples
     --------
-    >>> @jit(inline="always")
-    ... def twice(x):
-    ...     return 2 * x
-    >>> twice(3)
-    6
+    >>> from meshlap import kernel
+    >>> cache_dir() in Path(kernel._fill_rows._cache._cache_path).parents
+    True
     """
 
     def decorate(fn: Callable[..., Any]) -> Any:
