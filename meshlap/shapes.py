@@ -130,7 +130,8 @@ def _nonuniform_points(n: int, rng: np.random.Generator) -> np.ndarray:
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
-def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def sphere(n: int, kind: str = "uniform", seed: int = 0,
+           noise: float = NOISE_FRACTION) -> tuple[np.ndarray, np.ndarray]:
     """A triangulated unit sphere with n vertices, faces oriented outward.
 
     Parameters
@@ -144,14 +145,18 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
         with density ∝ exp(β z), 50 times denser at the north pole than at the south pole,
         so triangle sizes vary by that factor and skinny triangles abound; "noisy": the
         "uniform" mesh with each vertex then moved by an isotropic Gaussian shift of
-        standard deviation ``NOISE_FRACTION`` (0.05) times the mean edge length a of a
-        regular mesh with n vertices (see :func:`mean_edge_estimate`). The shift scales with
-        a, so the roughness of the normals (≈ 4°) does not vanish under refinement, as for
+        standard deviation ``noise`` (default ``NOISE_FRACTION``, 0.05) times the mean edge
+        length a of a regular mesh with n vertices (see :func:`mean_edge_estimate`). The shift
+        scales with a, so the roughness of the normals (≈ 4° at 0.05) does not vanish under refinement, as for
         scanned data, while every face keeps its orientation (the shift is far below the
         edge length). The vertices of the noisy sphere are not on the unit sphere: evaluate
         test functions at ``V / |V|``.
     seed : int
         Random seed; the same (n, kind, seed) gives the same mesh.
+    noise : float
+        The noisy sphere's shift as a fraction of a (ignored by the other kinds). The same
+        seed gives the same points and shift directions for every ``noise``: only the
+        amplitude changes (the paper does not state its noise, see meshlap.reproduce).
 
     Returns
     -------
@@ -182,7 +187,9 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
     if kind == "noisy":
         # Triangulate the clean samples, then move them: the connectivity stays a spherical
         # Delaunay triangulation while the geometry becomes rough at the scale of the edges.
-        sigma = NOISE_FRACTION * mean_edge_estimate(4 * math.pi, n)
+        if not (math.isfinite(noise) and noise >= 0):
+            raise MeshError(f"sphere: noise must be a finite fraction >= 0; got {noise!r}")
+        sigma = noise * mean_edge_estimate(4 * math.pi, n)
         V = V + rng.normal(scale=sigma, size=V.shape)
     return V, F
 
