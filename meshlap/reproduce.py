@@ -256,12 +256,14 @@ def paper_tables() -> list[PaperCell]:
 #: Our table and error field in the metric of each of the paper's tables. Table 3 is in
 #: absolute errors (the paper: "not normalized"), so it is compared with ``abs_linf``.
 PAPER_METRICS = {1: ("plane", "l2"), 2: ("uniform", "l2"), 3: ("uniform", "abs_linf"), 4: ("noisy", "l2")}
-#: For each of the paper's tables, our row under another choice the paper leaves open:
-#: (our table, what the choice is). "plane-all": the plane scored over every vertex instead
-#: of the interior; "random": i.i.d. random sphere points instead of Fibonacci ones;
-#: "noisy-strong": the noisy sphere with ``STRONG_NOISE`` instead of 0.05 edge lengths.
-VARIANTS = {1: ("plane-all", "all vertices scored"), 2: ("random", "random sphere"),
-            3: ("random", "random sphere"), 4: ("noisy-strong", f"noise {STRONG_NOISE:g}·a")}
+#: For each of the paper's tables, our rows under other choices the paper leaves open, as
+#: (our table, what the choice is): "plane-all", the plane scored over every vertex instead of
+#: the interior; "plane-stratified", stratified instead of i.i.d. plane samples
+#: (:func:`meshlap.shapes.plane`); "random", i.i.d. random sphere points instead of Fibonacci
+#: ones; "noisy-strong", the noisy sphere with ``STRONG_NOISE`` instead of 0.05 edge lengths.
+VARIANTS = {1: (("plane-all", "all vertices scored"), ("plane-stratified", "stratified plane")),
+            2: (("random", "random sphere"),), 3: (("random", "random sphere"),),
+            4: (("noisy-strong", f"noise {STRONG_NOISE:g}·a"),)}
 
 
 @dataclass(frozen=True)
@@ -289,8 +291,7 @@ def _beside(records: Sequence[Record]) -> list[Beside]:
     out = []
     for cell in paper_tables():
         ours_table, metric = PAPER_METRICS[cell.table]
-        alt_table, alt = VARIANTS[cell.table]
-        for table, variant in ((ours_table, ""), (alt_table, alt)):
+        for table, variant in ((ours_table, ""), *VARIANTS[cell.table]):
             # the paper's COT rows have no h: ours are shown for each h we tabulate
             hs = sorted({r.h for r in records if r.table == table})
             for h in hs if cell.h is None else [h for h in hs if math.isclose(h, cell.h)]:
@@ -339,7 +340,8 @@ class Reproduction:
     """All measured errors, the claims checked on them, the markdown and the files written.
 
     ``records`` follow our protocol; ``variants`` are the extra rows that measure a choice
-    the paper leaves open (tables "plane-all", "noisy-strong", see :data:`VARIANTS`);
+    the paper leaves open (tables "plane-all", "plane-stratified", "noisy-strong", see
+    :data:`VARIANTS`);
     ``beside`` puts each published cell beside ours (both protocol and variant).
     """
 
@@ -395,10 +397,10 @@ def _other_methods(V: np.ndarray, F: np.ndarray, extra: bool) -> dict[str, basel
     return ops
 
 
-def _plane(n: int, hs: Sequence[float], seed: int, extra: bool,
-           variants: bool) -> tuple[list[Record], list[Record]]:
+def _plane(n: int, hs: Sequence[float], seed: int, extra: bool, variants: bool,
+           kind: str = "random", table: str = "plane") -> tuple[list[Record], list[Record]]:
     # the records on the interior vertices and (variants) the same over every vertex
-    V, F = shapes.plane(n, seed=seed)
+    V, F = shapes.plane(n, seed=seed, kind=kind)
     funcs = shapes.plane_functions()
     X = np.column_stack([f(V) for f, _ in funcs.values()])
     T = np.column_stack([lap(V) for _, lap in funcs.values()])
@@ -411,7 +413,7 @@ def _plane(n: int, hs: Sequence[float], seed: int, extra: bool,
             raise MeshError(f"plane with n={n} has no vertex {PLANE_MARGIN}√h from the boundary at h={h}")
         results = {"BSW": _bsw(V, F, h)(X), **others}
         limit = np.column_stack([square_heat_limit(name, h, V) for name in funcs])
-        out += _records("plane", h, n, list(funcs), {m: A[inner] for m, A in results.items()},
+        out += _records(table, h, n, list(funcs), {m: A[inner] for m, A in results.items()},
                         T[inner], limit[inner])
         if variants:
             # COT does not depend on h: over every vertex it is recorded once, at the first h
@@ -554,12 +556,16 @@ def _paper_section(rep: Reproduction) -> list[str]:
     L = ["## The paper beside ours", "",
          f"The paper's published cells (`meshlap.reproduce.paper_tables()`, {len(paper_tables())} in "
          "Tables 1–4, as printed) beside ours at the same n and in the paper's metric, with the ratio "
-         "ours/paper (below 1: our error is smaller). Table 3's published values are absolute errors "
-         "max|Lf − Δf| (the paper: \"not normalized\"), so ours are absolute there too; the normalized "
+         "ours/paper (below 1: our error is smaller); \"floor of L_h\" is the error of the continuous "
+         "operator at this h (BSW's limit as n → ∞, see below) in the same metric. Table 3's published "
+         "values are absolute errors max|Lf − Δf| (the paper: \"not normalized\"), so ours are absolute "
+         "there too; the normalized "
          "L∞ table further down is not comparable with the paper's. The paper's COT row of Table 1 "
          "has no h: it stands beside our COT on the vertices scored at each h. The rows \"ours, …\" "
-         "measure a choice the paper leaves open (`VARIANTS`): the plane scored over all vertices "
-         "(Table 1), i.i.d. random sphere points instead of Fibonacci ones (Tables 2–3), noise of "
+         "measure a choice the paper leaves open (`VARIANTS`): the plane scored over all vertices, "
+         "and the plane from stratified samples (an m × m grid, m = round(√n), each interior node "
+         "moved to a uniform point of its cell) instead of i.i.d. ones (Table 1); i.i.d. random "
+         "sphere points instead of Fibonacci ones (Tables 2–3); noise of "
          f"{STRONG_NOISE:g} instead of {shapes.NOISE_FRACTION:g} edge lengths (Table 4).", "",
          "| paper table | method | cells beside ours | ours smaller | ours larger | median ours/paper "
          "| min – max | median ours/paper, other choice |", "|---|---|---|---|---|---|---|---|"]
@@ -567,9 +573,14 @@ def _paper_section(rep: Reproduction) -> list[str]:
         for method in ("BSW", "COT"):
             r = np.array([b.ratio for b in rep.beside if (b.paper.table, b.paper.method, b.variant)
                           == (t, method, "")])
-            v = [b.ratio for b in rep.beside if (b.paper.table, b.paper.method) == (t, method) and b.variant]
+            alts = []
+            for _, variant in VARIANTS[t]:
+                v = [b.ratio for b in rep.beside if (b.paper.table, b.paper.method, b.variant)
+                     == (t, method, variant)]
+                if v:
+                    alts.append(f"{np.median(v):.3g} ({variant})")
             if len(r):
-                alt = f"{np.median(v):.3g} ({VARIANTS[t][1]})" if v else "–"
+                alt = "; ".join(alts) or "–"
                 L.append(f"| {t} | {method} | {len(r)} | {int((r < 1).sum())} | {int((r > 1).sum())} | "
                          f"{np.median(r):.3g} | {r.min():.3g} – {r.max():.3g} | {alt} |")
     L.append("")
@@ -578,7 +589,6 @@ def _paper_section(rep: Reproduction) -> list[str]:
     for t in sorted({b.paper.table for b in rep.beside}):
         L += [f"### {_PAPER_TITLES[t]}", ""]
         ours_table, metric = PAPER_METRICS[t]
-        alt_table, alt = VARIANTS[t]
         for h in sorted({b.h for b in rep.beside if b.paper.table == t}):
             if t == 1:
                 L += [f"4h = {4 * h:.2f} (h = {h:g})", ""]
@@ -587,15 +597,19 @@ def _paper_section(rep: Reproduction) -> list[str]:
             for fn, method in dict.fromkeys((b.paper.function, b.paper.method) for b in cells):
                 paper = {b.paper.n: b.paper.error for b in cells
                          if (b.paper.function, b.paper.method) == (fn, method)}
-                for table, suffix in ((ours_table, ""), (alt_table, f", {alt}")):
+                for table, suffix in ((ours_table, ""), *((v, f", {a}") for v, a in VARIANTS[t])):
                     rows = [index.get((table, h, fn, method, n)) for n in ns]
                     if not any(rows):
                         continue
                     ours = [math.nan if r is None else getattr(r, metric) for r in rows]
                     ratio = [o / paper[n] if n in paper else math.nan for o, n in zip(ours, ns, strict=True)]
-                    lines = [("ours", [_cell(o, ".4f" if not suffix else ".4g") for o in ours]),
+                    lines = [("ours", [_cell(o, ".4f" if not o >= 10 else ".4g") for o in ours]),
                              ("paper", [f"{paper[n]:g}" if n in paper else "–" for n in ns]),
                              ("ours/paper", [_cell(r, ".3g") for r in ratio])]
+                    if method == "BSW" and not suffix:
+                        # what BSW tends to as n → ∞ at this h, in the same metric
+                        floor = [math.nan if r is None else getattr(r, f"floor_{metric}") for r in rows]
+                        lines.append(("floor of L_h", [_cell(f, ".4f") for f in floor]))
                     for label, row in lines if not suffix else lines[::2]:
                         L.append(f"| {fn} | {method} | {label}{suffix} | " + " | ".join(row) + " |")
             L.append("")
@@ -723,8 +737,9 @@ def run(ns: Sequence[int] = FULL_NS, out_dir: str | Path | None = None, quick: b
     extra_baselines : bool, optional
         Also run the uniform graph and intrinsic Delaunay Laplacians (default: not in quick mode).
     variants : bool
-        Also measure the rows of :data:`VARIANTS` (the plane over every vertex, free; the noisy
-        sphere with ``STRONG_NOISE``, one more mesh per n; the random sphere is its own table).
+        Also measure the rows of :data:`VARIANTS` (the plane over every vertex, free; the
+        stratified plane and the noisy sphere with ``STRONG_NOISE``, one more mesh each per n;
+        the random sphere is its own table).
     command : str
         The command line to print at the top of the markdown.
 
@@ -756,6 +771,8 @@ def run(ns: Sequence[int] = FULL_NS, out_dir: str | Path | None = None, quick: b
     report = make_progress(progress)
     jobs: list[tuple[str, int]] = [("plane", n) for n in ns if plane_h]
     jobs += [(kind, n) for kind in sphere_kinds for n in ns]
+    if variants and plane_h:
+        jobs += [("plane-stratified", n) for n in ns]
     if variants and "noisy" in sphere_kinds:
         jobs += [("noisy-strong", n) for n in ns]
     work = np.array([n for _, n in jobs], dtype=float)
@@ -769,6 +786,8 @@ def run(ns: Sequence[int] = FULL_NS, out_dir: str | Path | None = None, quick: b
             rows, more = _plane(n, plane_h, seed, extra, variants)
             records += rows
             alt += more
+        elif table == "plane-stratified":
+            alt += _plane(n, plane_h, seed, False, False, kind="stratified", table=table)[0]
         elif table == "noisy-strong":
             alt += _sphere("noisy", n, sphere_h, seed, False, table=table, noise=STRONG_NOISE)
         else:
