@@ -77,8 +77,8 @@ SPHERE_H = 0.01
 #: On the plane only vertices at least PLANE_MARGIN·√h from the boundary are scored.
 PLANE_MARGIN = 5.0
 #: Noise of the extra Table 4 row (fraction of the edge length; the tables use 0.05): at 0.2
-#: COT's errors at n = 2,000 and 8,000 come close to the paper's (1.54 and 3.56 against 1.53
-#: and 3.02 for f = x), which 0.05 and 0.1 do not.
+#: COT's errors at n = 2,000 and 8,000 come close to the paper's (seed 0, f = x: 1.70 and 3.52
+#: against 1.53 and 3.02), which at 0.05 (0.067 and 0.129) they do not.
 STRONG_NOISE = 0.2
 
 _SPHERE_TABLES = {
