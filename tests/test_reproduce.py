@@ -176,7 +176,8 @@ def _check_paper_rows(md, ns):
     for (table, four_h, fn, method, label), cells in rows.items():
         if label != "paper":
             continue
-        key_h = four_h if method == "BSW" else ""
+        # Tables 2–4 are all at 4h = 0.04 and have no "4h = " heading
+        key_h = "" if method == "COT" else (four_h or f"{4 * reproduce.SPHERE_H:g}")
         ours = [float(x) for x in rows[(table, four_h, fn, method, "ours")]]
         ratio = rows[(table, four_h, fn, method, "ours/paper")]
         for n, value, o, r in zip(ns, cells, ours, ratio, strict=True):
