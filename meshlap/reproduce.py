@@ -667,11 +667,16 @@ def format_markdown(rep: Reproduction, command: str = "") -> str:
 
 
 def plot_convergence(rep: Reproduction, path: Path) -> Path:
-    """Log-log error against n for the main tables (BSW solid, COT dashed), saved as PNG."""
+    """Log-log error against n for the main tables (BSW solid, COT dashed), saved as PNG.
+
+    Where the paper has the panel's table in the same metric (plane, uniform sphere L2, noisy
+    sphere), its published values are drawn as × (BSW) and + (COT) in the function's colour.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     panels = [("plane", PLANE_H[1], "l2", "plane, 4h = 0.04, L2"),
               ("uniform", SPHERE_H, "l2", "uniform sphere, L2"),
@@ -692,18 +697,29 @@ def plot_convergence(rep: Reproduction, path: Path) -> Path:
                 e = rep.errors(table, fn, method, norm, h=h)
                 if len(e):
                     ax.loglog(ns, e, style, color=color, ms=4, label=f"{method} {fn}")
+            for method, marker in (("BSW", "x"), ("COT", "+")):
+                paper = sorted((b.paper.n, b.paper.error) for b in rep.beside if not b.variant
+                               and (b.table, b.h, b.paper.function, b.paper.method) == (table, h, fn, method)
+                               and PAPER_METRICS[b.paper.table][1] == norm)
+                if paper:
+                    ax.loglog(*zip(*paper, strict=True), marker, color=color, ms=7, ls="none",
+                              label=f"paper {method} {fn}" if k == 0 else None)
             fl = rep.select(table=table, h=h, function=fn, method="BSW")
             # a floor of (nearly) 0, e.g. for f = x on the sphere, has no place on a log axis
             if fl and getattr(fl[-1], f"floor_{norm}") > 1e-6:
                 ax.axhline(getattr(fl[-1], f"floor_{norm}"), color=color, lw=0.8, ls=":")
         ax.set_title(title, fontsize=10)
+        # label the measured n only: log-axis minor labels (2×10³, 3×10³, ...) overlap
+        ax.set_xticks(ns, [f"{n:,}" for n in ns])
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel("vertices n")
         ax.set_ylabel("normalized error")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
     for ax in axes.ravel()[len(panels):]:
         ax.axis("off")
-    fig.suptitle("BSW (solid) vs COT (dashed); dotted: the BSW floor at fixed h", fontsize=11)
+    fig.suptitle("BSW (solid) vs COT (dashed); dotted: the BSW floor at fixed h; "
+                 "× / +: the paper's published BSW / COT", fontsize=11)
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
