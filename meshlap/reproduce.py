@@ -341,8 +341,7 @@ class Reproduction:
 
     ``records`` follow our protocol; ``variants`` are the extra rows that measure a choice
     the paper leaves open (tables "plane-all", "plane-stratified", "noisy-strong", see
-    :data:`VARIANTS`);
-    ``beside`` puts each published cell beside ours (both protocol and variant).
+    :data:`VARIANTS`); ``beside`` puts each published cell beside ours (protocol and variants).
     """
 
     records: list[Record]
@@ -603,14 +602,15 @@ def _paper_section(rep: Reproduction) -> list[str]:
                         continue
                     ours = [math.nan if r is None else getattr(r, metric) for r in rows]
                     ratio = [o / paper[n] if n in paper else math.nan for o, n in zip(ours, ns, strict=True)]
-                    lines = [("ours", [_cell(o, ".4f" if not o >= 10 else ".4g") for o in ours]),
+                    lines = [("ours", [_cell(o, ".4g" if o >= 10 else ".4f") for o in ours]),
                              ("paper", [f"{paper[n]:g}" if n in paper else "–" for n in ns]),
                              ("ours/paper", [_cell(r, ".3g") for r in ratio])]
                     if method == "BSW" and not suffix:
                         # what BSW tends to as n → ∞ at this h, in the same metric
                         floor = [math.nan if r is None else getattr(r, f"floor_{metric}") for r in rows]
                         lines.append(("floor of L_h", [_cell(f, ".4f") for f in floor]))
-                    for label, row in lines if not suffix else lines[::2]:
+                    # a variant row: ours and the ratio only
+                    for label, row in lines if not suffix else [lines[0], lines[2]]:
                         L.append(f"| {fn} | {method} | {label}{suffix} | " + " | ".join(row) + " |")
             L.append("")
     return L
