@@ -5,9 +5,9 @@
 
 Writes benchmarks/tables/tables.md and benchmarks/tables/convergence.png (the committed
 outputs) and prints the tables, the paper's published values beside ours first. The tables
-use seed 0; the claims are then re-checked on
-meshes drawn with seeds 1–3 (BSW and COT only) and a section says how many seeds each
-claim held for. See docs/reproduction.md for the account of the numbers.
+use seed 0; the claims are then re-checked on meshes drawn with seeds 1–3 (BSW and COT only)
+and a section says how many seeds each claim held for. See docs/reproduction.md for the
+account of the numbers.
 """
 
 from __future__ import annotations
