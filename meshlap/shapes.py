@@ -26,6 +26,7 @@ from .validation import MeshError
 __all__ = [
     "NOISE_FRACTION",
     "NONUNIFORM_RATIO",
+    "PLANE_KINDS",
     "SPHERE_KINDS",
     "fibonacci_sphere",
     "mean_edge_estimate",
@@ -38,6 +39,9 @@ __all__ = [
     "torus_functions",
     "triangle_angles",
 ]
+
+#: Plane samplings understood by :func:`plane`.
+PLANE_KINDS = ("random", "stratified")
 
 #: Sphere samplings understood by :func:`sphere`.
 SPHERE_KINDS = ("uniform", "random", "nonuniform", "noisy")
@@ -57,21 +61,37 @@ def _check_count(n: int, least: int, what: str) -> int:
     return int(n)
 
 
-def plane(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Delaunay triangulation of the square [-1, 1]² from n uniform random samples.
+def plane(n: int, seed: int = 0, kind: str = "random") -> tuple[np.ndarray, np.ndarray]:
+    """Delaunay triangulation of the square [-1, 1]² from n samples.
 
-    The four corners are among the samples, so the mesh covers the whole square. Faces are
-    counter-clockwise seen from +z.
+    ``kind="random"``: the four corners and n − 4 uniform random samples (many skinny
+    triangles). ``kind="stratified"``: an m × m grid, m = round(√n) (so m² ≈ n vertices),
+    whose edge nodes stay on the square's edges and whose interior nodes each move to a
+    uniform random point of the grid cell around them: as random, but evenly spread. Either
+    mesh covers the whole square. Faces are counter-clockwise seen from +z.
 
     Examples
     --------
     >>> V, F = plane(100, seed=1)
     >>> V.shape, float(V[:, 2].max())
     ((100, 3), 0.0)
+    >>> plane(500, kind="stratified")[0].shape   # 22² vertices
+    (484, 3)
     """
     n = _check_count(n, 4, "plane")
     rng = np.random.default_rng(seed)
-    xy = np.vstack([[[-1, -1], [1, -1], [1, 1], [-1, 1]], rng.uniform(-1, 1, size=(n - 4, 2))])
+    if kind == "random":
+        xy = np.vstack([[[-1, -1], [1, -1], [1, 1], [-1, 1]], rng.uniform(-1, 1, size=(n - 4, 2))])
+    elif kind == "stratified":
+        m = max(2, round(math.sqrt(n)))
+        t = np.linspace(-1.0, 1.0, m)
+        xy = np.column_stack([np.repeat(t, m), np.tile(t, m)])
+        inner = np.abs(xy).max(axis=1) < 1.0
+        step = 2.0 / (m - 1)
+        xy[inner] += rng.uniform(-step / 2, step / 2, size=(int(inner.sum()), 2))
+    else:
+        raise MeshError(f"unknown plane kind {kind!r}; use one of {', '.join(PLANE_KINDS)}")
+    n = len(xy)
     F = Delaunay(xy).simplices.astype(np.int64)
     # counter-clockwise, so that normals point to +z
     a, b, c = xy[F[:, 0]], xy[F[:, 1]], xy[F[:, 2]]
@@ -130,7 +150,8 @@ def _nonuniform_points(n: int, rng: np.random.Generator) -> np.ndarray:
     return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
 
 
-def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def sphere(n: int, kind: str = "uniform", seed: int = 0,
+           noise: float = NOISE_FRACTION) -> tuple[np.ndarray, np.ndarray]:
     """A triangulated unit sphere with n vertices, faces oriented outward.
 
     Parameters
@@ -144,14 +165,18 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
         with density ∝ exp(β z), 50 times denser at the north pole than at the south pole,
         so triangle sizes vary by that factor and skinny triangles abound; "noisy": the
         "uniform" mesh with each vertex then moved by an isotropic Gaussian shift of
-        standard deviation ``NOISE_FRACTION`` (0.05) times the mean edge length a of a
-        regular mesh with n vertices (see :func:`mean_edge_estimate`). The shift scales with
-        a, so the roughness of the normals (≈ 4°) does not vanish under refinement, as for
+        standard deviation ``noise`` (default ``NOISE_FRACTION``, 0.05) times the mean edge
+        length a of a regular mesh with n vertices (see :func:`mean_edge_estimate`). The shift
+        scales with a, so the roughness of the normals (≈ 4° at 0.05) does not vanish under refinement, as for
         scanned data, while every face keeps its orientation (the shift is far below the
         edge length). The vertices of the noisy sphere are not on the unit sphere: evaluate
         test functions at ``V / |V|``.
     seed : int
         Random seed; the same (n, kind, seed) gives the same mesh.
+    noise : float
+        The noisy sphere's shift as a fraction of a (ignored by the other kinds). The same
+        seed gives the same points and shift directions for every ``noise``: only the
+        amplitude changes (the paper does not state its noise, see meshlap.reproduce).
 
     Returns
     -------
@@ -182,7 +207,9 @@ def sphere(n: int, kind: str = "uniform", seed: int = 0) -> tuple[np.ndarray, np
     if kind == "noisy":
         # Triangulate the clean samples, then move them: the connectivity stays a spherical
         # Delaunay triangulation while the geometry becomes rough at the scale of the edges.
-        sigma = NOISE_FRACTION * mean_edge_estimate(4 * math.pi, n)
+        if not (math.isfinite(noise) and noise >= 0):
+            raise MeshError(f"sphere: noise must be a finite fraction >= 0; got {noise!r}")
+        sigma = noise * mean_edge_estimate(4 * math.pi, n)
         V = V + rng.normal(scale=sigma, size=V.shape)
     return V, F
 

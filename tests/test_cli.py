@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import meshlap
-from meshlap import io
+from meshlap import io, reproduce
 from meshlap.cli import build_parser, main
 
 DATA = Path(__file__).parent / "data"
@@ -106,25 +106,49 @@ def test_build_float32_without_mesh_default_name(capsys, tmp_path, monkeypatch):
     assert op.L.dtype == np.float32 and not hasattr(op, "V")
 
 
-def test_demo_prints_falling_bsw_errors(capsys):
-    code, out, _ = run(capsys, "demo", "--ns", "300", "1200")
+def test_demo_prints_falling_bsw_errors_beside_the_paper(capsys):
+    code, out, _ = run(capsys, "demo", "--ns", "500", "2000")
     assert code == 0
-    assert "uniform sphere" in out and "noisy sphere" in out
+    assert "uniform sphere" in out and "noisy sphere" in out and "absolute, as in the paper" in out
     rows = [line.split() for line in out.splitlines()]
     bsw = [r for r in rows if "BSW" in r[:2]]
     assert len(bsw) == 6 and all(r[-1] == "falling" for r in bsw)
-    for r in bsw:  # n = 300 then n = 1,200: the error falls
-        e300, e1200 = map(float, r[-3:-1])
-        assert e1200 < e300
+    for r in bsw:  # n = 500 then n = 2,000: the error falls
+        e500, e2000 = map(float, r[-3:-1])
+        assert e2000 < e500
+    # under every BSW and COT row: the paper's value and ours/paper, for all 24 published cells
+    published = {(c.table, c.function, c.method, c.n): c.error for c in reproduce.paper_tables()}
+    table, fn, seen = 3, None, 0
+    for k, r in enumerate(rows):
+        if r and r[0] == "noisy":
+            table = 4
+        if r and r[-1] in ("falling", "rising", "flat"):
+            fn = r[0] if "BSW" == r[1] else fn
+            method = r[-4]
+            paper, ratio = rows[k + 1], rows[k + 2]
+            assert paper[0] == "paper" and ratio[0] == "ours/paper"
+            for n, ours, p, q in zip((500, 2000), map(float, r[-3:-1]), paper[1:], ratio[1:], strict=True):
+                assert float(p) == published[(table, fn, method, n)]
+                assert float(q) == pytest.approx(ours / float(p), rel=5e-3, abs=0.6e-4 / float(p))
+                seen += 1
+    assert seen == 24
 
 
 def test_reproduce_writes_tables_and_png(capsys, tmp_path):
     out_dir = tmp_path / "tables"
-    code, out, _ = run(capsys, "reproduce", "--quick", "--ns", "300", "600", "--out", out_dir)
+    code, out, _ = run(capsys, "reproduce", "--quick", "--ns", "300", "500", "--out", out_dir)
     assert code == 0
     md = (out_dir / "tables.md").read_text()
-    assert md.startswith("# Belkin–Sun–Wang") and "meshlap reproduce --quick --ns 300 600" in md
+    assert md.startswith("# Belkin–Sun–Wang") and "meshlap reproduce --quick --ns 300 500" in md
     assert "| x^2 | BSW |" in md and "| x^2 | COT |" in md
+    # the paper beside ours at n = 500 (it has no n = 300): 26 published cells, each with its ratio
+    assert md == out[: len(md)]
+    paper = [line for line in md.splitlines() if "| paper |" in line]
+    published = [c for c in reproduce.paper_tables() if c.n == 500]
+    cells = [line.strip("|").split("|")[-1].strip() for line in paper]
+    assert all(line.split("|")[4].strip() == "–" for line in paper)  # n = 300
+    # Table 1's COT row stands under each of the three h
+    assert len(cells) == len(published) + 2 * 2 and {float(c) for c in cells} == {c.error for c in published}
     assert (out_dir / "convergence.png").read_bytes()[:4] == b"\x89PNG"
     assert f"wrote {out_dir / 'convergence.png'}" in out
 

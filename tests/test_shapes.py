@@ -29,6 +29,33 @@ def test_plane_counts_orientation_seed():
     assert not np.array_equal(V, shapes.plane(300, seed=4)[0])
 
 
+def test_stratified_plane_one_sample_per_cell():
+    V, F = shapes.plane(500, seed=2, kind="stratified")
+    m = 22  # round(√500)
+    assert V.shape == (m * m, 3) and np.all(V[:, 2] == 0)
+    N = igl.per_face_normals(V, F, np.array([0.0, 0, 1]))
+    assert np.all(N[:, 2] > 0.999)
+    assert igl.doublearea(V, F).sum() / 2 == pytest.approx(4.0, rel=1e-12)  # covers the square
+    # each vertex lies in the grid cell around its node; the edge nodes stay on the edges
+    grid = np.linspace(-1, 1, m)
+    nodes = np.column_stack([np.repeat(grid, m), np.tile(grid, m)])
+    step = 2 / (m - 1)
+    assert np.abs(V[:, :2] - nodes).max() <= step / 2
+    edge = np.abs(nodes).max(axis=1) == 1
+    assert np.array_equal(V[edge, :2], nodes[edge]) and np.abs(V[~edge, :2] - nodes[~edge]).max() > 0.4 * step
+    assert np.array_equal(V, shapes.plane(500, seed=2, kind="stratified")[0])
+
+
+def test_noisy_sphere_amplitude():
+    clean, F0 = shapes.sphere(2000, kind="uniform", seed=5)
+    a = shapes.mean_edge_estimate(4 * math.pi, 2000)
+    for noise in (0.05, 0.2):
+        V, F = shapes.sphere(2000, kind="noisy", seed=5, noise=noise)
+        assert np.array_equal(F, F0)  # the clean mesh's connectivity, its vertices moved
+        assert np.std(V - clean) == pytest.approx(noise * a, rel=0.03)
+    assert np.array_equal(shapes.sphere(2000, kind="noisy", seed=5, noise=0.0)[0], clean)
+
+
 @pytest.mark.parametrize("kind", shapes.SPHERE_KINDS)
 def test_sphere_counts_orientation_seed(kind):
     n = 1000
@@ -87,7 +114,8 @@ def test_torus_mesh():
 
 @pytest.mark.parametrize("call", [lambda: shapes.sphere(3), lambda: shapes.sphere(100, kind="cube"),
                                   lambda: shapes.plane(2), lambda: shapes.torus(100, R=1, r=2),
-                                  lambda: shapes.sphere(10.5)])
+                                  lambda: shapes.sphere(10.5), lambda: shapes.plane(100, kind="hex"),
+                                  lambda: shapes.sphere(100, kind="noisy", noise=-0.1)])
 def test_bad_arguments(call):
     with pytest.raises(MeshError):
         call()
