@@ -20,12 +20,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
+from . import correction as _corr
 from . import kernel
 from .mass import _face_areas, _mean_edge_length, _vertex_mass
 from .progress import ProgressLike, make_progress
 from .topology import warn_if_messy
 from .validation import (
     MeshError,
+    MeshWarning,
     check_faces,
     check_function,
     check_h,
@@ -35,6 +37,8 @@ from .validation import (
 )
 
 __all__ = [
+    "CORRECTIONS",
+    "DEFAULT_H_SCALE",
     "DEFAULT_TOL",
     "MeshLaplacian",
     "OperatorTooLargeError",
@@ -47,6 +51,11 @@ __all__ = [
 
 #: Default kernel tolerance: Gaussian weights below 1e-8 of the peak are dropped.
 DEFAULT_TOL = 1e-8
+#: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
+CORRECTIONS = ("richardson", "none")
+#: With the default correction, h_w = DEFAULT_H_SCALE · ℓ_w² (ℓ_w² the local mean squared
+#: edge length, smoothed); docs/accuracy.md has the measurements behind the choice.
+DEFAULT_H_SCALE = 2.0
 _INT32_MAX = np.iinfo(np.int32).max
 
 
@@ -197,7 +206,28 @@ class MeshLaplacian(_LumpedLaplacian):
         matrix_free: bool = False,
         max_memory: int | None = None,
         progress: ProgressLike = None,
+        correction: str = "richardson",
+        adaptive: bool | None = None,
+        arc_distance: bool | None = None,
+        pointwise: bool | None = None,
+        check_psd: bool = True,
     ) -> None:
+        if correction not in CORRECTIONS:
+            raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
+        plain = correction == "none"
+        # the accuracy options follow the correction unless given; matrix-free keeps a fixed h
+        adaptive = (not plain and h is None and not matrix_free) if adaptive is None else bool(adaptive)
+        arc_distance = (not plain and not matrix_free) if arc_distance is None else bool(arc_distance)
+        pointwise = (not plain and not matrix_free) if pointwise is None else bool(pointwise)
+        if matrix_free and (adaptive or arc_distance or pointwise):
+            raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: "
+                            "pass adaptive=False, arc_distance=False, pointwise=False")
+        if adaptive and h is not None:
+            raise MeshError("adaptive=True chooses h per vertex; do not pass h with it")
+        self.correction = correction
+        self.adaptive = adaptive
+        self.arc_distance = arc_distance
+        self.fallback_reason: str | None = None
         self.V = check_vertices(V)
         self.faces = check_faces(F, len(self.V))
         self.tol = 0.0 if exact else check_tol(tol)
@@ -215,17 +245,44 @@ class MeshLaplacian(_LumpedLaplacian):
         mean_edge = _mean_edge_length(self.V, self.faces)
         warn_if_messy(self.V, self.faces, areas, mean_edge)
         self.h_auto = h is None
-        self.h = (check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
-                  if h is None else check_h(h))
-        self.radius = kernel.cutoff_radius(self.h, self.tol)
+        if h is not None:
+            self.h = check_h(h)
+        elif plain:
+            self.h = check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
+        else:
+            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 2·(mean edge)²")
+        self.h_vertex: np.ndarray | None = None
+        if adaptive:
+            hv = _corr.local_h(self.V, self.faces, DEFAULT_H_SCALE)
+            check_h(float(hv.min()), "the smallest local h")
+            check_h(float(hv.max()), "the largest local h")
+            self.h_vertex = hv
+            self.h = float(np.median(hv[self.mass > 0])) if (self.mass > 0).any() else self.h
+        self.radius = kernel.cutoff_radius(self.h if self.h_vertex is None
+                                           else float(self.h_vertex.max()), self.tol)
         self.matrix_free = bool(matrix_free)
         self.max_memory = (int(available_memory() * 0.8) if max_memory is None
                            else int(check_positive(max_memory, "max_memory")))
         self._grid = kernel.build_grid(self.V, self.mass, self.radius)
         self._L: sp.csr_matrix | None = None
         self._S: sp.csr_matrix | None = None
-        if not self.matrix_free:
-            self._L = self._assemble(make_progress(progress))
+        self._L_pointwise: sp.csr_matrix | None = None
+        self.pointwise = False
+        if self.matrix_free:
+            return
+        report = make_progress(progress)
+        if plain and not adaptive and not arc_distance:
+            self._L = self._assemble(report)  # the paper's operator, unchanged
+        else:
+            self._L = self._assemble_variable(not plain)
+            if not plain and check_psd:
+                self._check_psd()
+        if pointwise:
+            self._L_pointwise, unchanged = _corr.moment_correction(self._L, self.V)
+            self.pointwise = True
+            self.pointwise_unchanged = unchanged
+        if report is not None:
+            report(1.0, "done")
 
     # -- assembly -----------------------------------------------------------------------
     def _bytes_for(self, nnz: float) -> float:
@@ -298,6 +355,36 @@ class MeshLaplacian(_LumpedLaplacian):
             report(1.0, "done")
         return _csr(data, indices, indptr, n)
 
+    def _assemble_variable(self, dog: bool) -> sp.csr_matrix:
+        n = self.n_vertices
+        hv = np.full(n, self.h) if self.h_vertex is None else self.h_vertex
+        normals = _corr.vertex_normals(self.V, self.faces) if self.arc_distance else None
+        mean, err = self._sample_counts(512, 0)
+        self._guard(max(mean - 4.0 * err, 0.0), estimated=True)
+        index_dtype = np.int32 if n <= _INT32_MAX else np.int64
+
+        def guard(nnz: int) -> None:
+            self._guard(nnz, estimated=False)
+            if nnz > _INT32_MAX:
+                raise OperatorTooLargeError(f"{nnz:,} entries need 64-bit indices; use a smaller h")
+
+        indptr, indices, data = kernel.variable_csr(self.V, self._grid, hv, self.tol, normals, dog,
+                                                    index_dtype, self.dtype, max_nnz=guard)
+        return _csr(data, indices, indptr, n)
+
+    def _check_psd(self) -> None:
+        lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V, self.faces)
+        self.psd_margin = lam_min / scale
+        if lam_min < -1e-6 * scale:
+            self.fallback_reason = (
+                f"the Richardson operator is not negative semidefinite here (eigenvalue "
+                f"{lam_min:.3g} of -S against the scale {scale:.3g}): h is too small for the "
+                f"mesh to resolve the narrow kernel h/2; using the plain kernel (O(h) bias)")
+            warnings.warn(self.fallback_reason + "; pass a larger h to keep the correction",
+                          MeshWarning, stacklevel=4)
+            self.correction = "none"
+            self._L = self._assemble_variable(False)
+
     # -- the matrices -------------------------------------------------------------------
     @property
     def L(self) -> sp.csr_matrix:
@@ -338,8 +425,24 @@ class MeshLaplacian(_LumpedLaplacian):
     def __matmul__(self, f: Any) -> np.ndarray:
         f = check_function(f, self.n_vertices)
         if self._L is None:
-            return kernel.apply(self.V, self._grid, self.h, f)
+            return self._apply_free(f)
+        if self._L_pointwise is not None:
+            return np.asarray(self._L_pointwise @ f)
         return np.asarray(self._L @ f)
+
+    def _apply_free(self, f: np.ndarray) -> np.ndarray:
+        if self.correction == "none":
+            return kernel.apply(self.V, self._grid, self.h, f)
+        # the same pairs as the assembled Richardson operator: both widths cut at r(h)
+        return (2.0 * kernel.apply(self.V, self._grid, 0.5 * self.h, f)
+                - kernel.apply(self.V, self._grid, self.h, f))
+
+    @property
+    def L_pointwise(self) -> sp.csr_matrix:
+        """The point-wise operator that ``op @ f`` applies: L with each row corrected to be
+        exact for quadratics in the tangent plane (:func:`meshlap.correction.moment_correction`);
+        ``L`` itself when the correction is off. Not symmetric: spectra use ``S``."""
+        return self.L if self._L_pointwise is None else self._L_pointwise
 
     def matvec(self, f: Any) -> np.ndarray:
         """``L @ f`` for a vector or an (n, k) block of functions."""
@@ -349,11 +452,10 @@ class MeshLaplacian(_LumpedLaplacian):
         """L as a :class:`scipy.sparse.linalg.LinearOperator` (matrix-free when not stored)."""
         if self._L is not None:
             return sp.linalg.aslinearoperator(self._L)
-        V, grid, h = self.V, self._grid, self.h
         return LinearOperator(
             self.shape,
-            matvec=lambda x: kernel.apply(V, grid, h, np.asarray(x, np.float64).reshape(-1)),
-            matmat=lambda X: kernel.apply(V, grid, h, np.asarray(X, np.float64)),
+            matvec=lambda x: self._apply_free(np.asarray(x, np.float64).reshape(-1)),
+            matmat=lambda X: self._apply_free(np.asarray(X, np.float64)),
             dtype=np.float64,
         )
 
