@@ -53,9 +53,9 @@ __all__ = [
 DEFAULT_TOL = 1e-8
 #: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
 CORRECTIONS = ("richardson", "none")
-#: With the default correction, h_w = DEFAULT_H_SCALE · ℓ_w² (ℓ_w² the local mean squared
-#: edge length, smoothed); docs/accuracy.md has the measurements behind the choice.
-DEFAULT_H_SCALE = 2.0
+#: With the default correction h = DEFAULT_H_SCALE · ē² (ē the mean edge length), or per vertex
+#: h_w = DEFAULT_H_SCALE · ℓ_w² with ``adaptive=True``; docs/accuracy.md has the measurements.
+DEFAULT_H_SCALE = 3.0
 _INT32_MAX = np.iinfo(np.int32).max
 
 
@@ -207,7 +207,7 @@ class MeshLaplacian(_LumpedLaplacian):
         max_memory: int | None = None,
         progress: ProgressLike = None,
         correction: str = "richardson",
-        adaptive: bool | None = None,
+        adaptive: bool = False,
         arc_distance: bool | None = None,
         pointwise: bool | None = None,
         check_psd: bool = True,
@@ -216,7 +216,7 @@ class MeshLaplacian(_LumpedLaplacian):
             raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
         plain = correction == "none"
         # the accuracy options follow the correction unless given; matrix-free keeps a fixed h
-        adaptive = (not plain and h is None and not matrix_free) if adaptive is None else bool(adaptive)
+        adaptive = bool(adaptive)
         arc_distance = (not plain and not matrix_free) if arc_distance is None else bool(arc_distance)
         pointwise = (not plain and not matrix_free) if pointwise is None else bool(pointwise)
         if matrix_free and (adaptive or arc_distance or pointwise):
@@ -250,7 +250,7 @@ class MeshLaplacian(_LumpedLaplacian):
         elif plain:
             self.h = check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
         else:
-            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 2·(mean edge)²")
+            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 3·(mean edge)²")
         self.h_vertex: np.ndarray | None = None
         if adaptive:
             hv = _corr.local_h(self.V, self.faces, DEFAULT_H_SCALE)
@@ -461,11 +461,15 @@ class MeshLaplacian(_LumpedLaplacian):
 
     # -- display ------------------------------------------------------------------------
     def _summary(self) -> list[tuple[str, str]]:
-        h_note = " (auto: (2·mean edge)²)" if self.h_auto else ""
+        scale = "(2·mean edge)²" if self.correction == "none" else "3·(mean edge)²"
+        h_note = f" (auto: {scale})" if self.h_auto else ""
+        if self.h_vertex is not None:
+            h_note = " (median of the per-vertex widths, adaptive)"
         rows = [
             ("vertices", f"{self.n_vertices:,}"),
             ("faces", f"{self.faces.n_faces:,}"),
             ("h", f"{self.h:.6g}{h_note}"),
+            ("correction", self.correction + (" + point-wise moments" if self.pointwise else "")),
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
         ]
