@@ -38,7 +38,8 @@ from numba import njit, prange
 
 from .validation import Polygons
 
-__all__ = ["local_h", "moment_correction", "smallest_eigenvalue", "vertex_normals"]
+__all__ = ["boundary_frames", "local_h", "moment_correction", "neumann_images", "second_moment_scale",
+           "smallest_eigenvalue", "vertex_normals"]
 
 
 @njit(cache=True, inline="always")
@@ -242,3 +243,117 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
                       if (mass > 0).sum() > 1200 else "dense")
     scale = float(np.max(-L.diagonal()))
     return float(lam.min()), scale
+
+
+def _boundary_frames(V: np.ndarray, faces: Polygons, radius: float):
+    """For every vertex within ``radius`` of the boundary: its nearest boundary point b and
+    the outward unit normal ν of the boundary there (in the plane of the adjacent face)."""
+    from pykdtree.kdtree import KDTree
+
+    n = len(V)
+    sides = faces.edges()
+    face_of = np.repeat(np.arange(faces.n_faces), faces.sizes)
+    key = np.sort(sides, axis=1)
+    k = key[:, 0] * np.int64(n) + key[:, 1]
+    uniq, inv, cnt = np.unique(k, return_inverse=True, return_counts=True)
+    on = cnt[inv] == 1
+    if not on.any():
+        return None
+    e, fid = sides[on], face_of[on]
+    a, b = V[e[:, 0]], V[e[:, 1]]
+    # the outward normal of each boundary edge: in the plane of its face, away from the face
+    cen = np.zeros((faces.n_faces, 3))
+    np.add.at(cen, face_of, V[sides[:, 0]])
+    cen /= faces.sizes[:, None]
+    t = b - a
+    fn = np.cross(t, cen[fid] - a)  # normal of the plane through the edge and the centroid
+    nu = np.cross(t, fn)
+    nu /= np.maximum(np.linalg.norm(nu, axis=1, keepdims=True), 1e-300)
+    flip = ((cen[fid] - a) * nu).sum(axis=1) > 0
+    nu[flip] *= -1
+    length = np.linalg.norm(t, axis=1)
+    step = max(radius / 16, length.sum() / (4 * n))
+    pieces = np.maximum(np.ceil(length / step).astype(np.int64), 1)
+    edge = np.repeat(np.arange(len(e)), pieces + 1)
+    start = np.repeat(np.cumsum(pieces + 1) - (pieces + 1), pieces + 1)
+    frac = (np.arange(len(edge)) - start) / pieces[edge]
+    samples = a[edge] + frac[:, None] * t[edge]
+    dist, idx = KDTree(samples).query(V, k=1, distance_upper_bound=radius * (1 + 1e-9))
+    band = np.flatnonzero(np.isfinite(dist) & (idx < len(samples)))
+    return band, samples[idx[band]], nu[edge[idx[band]]]
+
+
+def boundary_frames(V: np.ndarray, faces: Polygons, radius: float):
+    """``(band, b, ν)``: the vertices within ``radius`` of the boundary, their nearest boundary
+    point and its outward unit normal; None on a closed mesh."""
+    return _boundary_frames(V, faces, radius)
+
+
+def second_moment_scale(L: sp.csr_matrix, V: np.ndarray, mass: np.ndarray,
+                        exclude: np.ndarray | None) -> float:
+    """The factor that brings the mass-weighted mean of the rows' second moments
+    μ_w = Σ_p L_wp |p − w|² to 4, its value for Δ on a surface (L |x − w|² = 2·2).
+
+    The lumped-mass quadrature underestimates μ systematically when h is a few squared edge
+    lengths (by 0.3-4% on the meshes of docs/accuracy.md), which lowers every eigenvalue by
+    that fraction; one global factor removes this part and keeps S symmetric and −S
+    semidefinite. Rows in ``exclude`` (the boundary band, where μ is one-sided) do not count.
+    """
+    L = sp.csr_matrix(L)
+    rows = np.repeat(np.arange(L.shape[0]), np.diff(L.indptr))
+    d2 = ((V[rows] - V[L.indices]) ** 2).sum(axis=1)
+    mu = np.bincount(rows, weights=L.data * d2, minlength=L.shape[0])
+    use = mass > 0
+    if exclude is not None:
+        use[exclude] = False
+    if not use.any():
+        return 1.0
+    mean = float((mu[use] * mass[use]).sum() / mass[use].sum())
+    return 4.0 / mean if mean > 0 else 1.0
+
+
+def neumann_images(L: sp.csr_matrix, V: np.ndarray, frames, mass: np.ndarray,
+                   hv: np.ndarray, dog: bool) -> sp.csr_matrix:
+    """Add to L the kernel between each vertex and the mirror images of its neighbours across
+    the nearest boundary line (the method of images: on a half-plane, K(x, y) + K(x, Ry) is
+    the heat kernel with Neumann conditions, so the spectral problem gets natural boundary
+    conditions). Pair (w, p) gets ½(K(|w − R_w p|) + K(|p − R_p w|)) with R_w the reflection
+    across the boundary line nearest w, which keeps S = M L symmetric. ``frames`` comes from
+    :func:`boundary_frames`."""
+    if frames is None:
+        return L
+    band, bpt, nu = frames
+    pos = np.full(len(V), -1)
+    pos[band] = np.arange(len(band))
+    L = sp.csr_matrix(L, copy=True)
+    rows = np.repeat(np.arange(L.shape[0]), np.diff(L.indptr))
+    cols = L.indices
+    sel = np.flatnonzero((pos[rows] >= 0) & (pos[cols] >= 0) & (rows != cols))
+    w, p = rows[sel], cols[sel]
+    iw, ip = pos[w], pos[p]
+
+    def image_d2(x, y, bx, nx):
+        # |x − R y|², R the reflection across the line through bx with normal nx
+        ry = y - 2.0 * ((y - bx) * nx).sum(axis=1)[:, None] * nx
+        return ((x - ry) ** 2).sum(axis=1)
+
+    # a mirror image only where the half-plane picture holds: each point lies on the inner
+    # side of the other's boundary line (across a small hole or a thin strip it does not,
+    # and the image would fall on the surface itself)
+    inner = (((V[p] - bpt[iw]) * nu[iw]).sum(axis=1) <= 0) & (((V[w] - bpt[ip]) * nu[ip]).sum(axis=1) <= 0)
+    sel, w, p, iw, ip = sel[inner], w[inner], p[inner], iw[inner], ip[inner]
+    d2w = image_d2(V[w], V[p], bpt[iw], nu[iw])
+    d2p = image_d2(V[p], V[w], bpt[ip], nu[ip])
+    hp = 0.5 * (hv[w] + hv[p])
+
+    def kern(d2):
+        e = np.exp(-d2 / (4 * hp))
+        return e * (8 * e - 1) if dog else e
+
+    add = mass[p] * 0.5 * (kern(d2w) + kern(d2p)) / (4 * math.pi * hp * hp)
+    L.data[sel] += add.astype(L.dtype)
+    # rows keep summing to zero
+    diag = np.flatnonzero(rows == cols)
+    off = np.asarray(L.sum(axis=1)).ravel() - L.data[diag]
+    L.data[diag] = -off[rows[diag]]
+    return L

@@ -210,6 +210,7 @@ class MeshLaplacian(_LumpedLaplacian):
         adaptive: bool = False,
         arc_distance: bool | None = None,
         pointwise: bool | None = None,
+        neumann: bool | None = None,
         check_psd: bool = True,
     ) -> None:
         if correction not in CORRECTIONS:
@@ -219,9 +220,10 @@ class MeshLaplacian(_LumpedLaplacian):
         adaptive = bool(adaptive)
         arc_distance = (not plain and not matrix_free) if arc_distance is None else bool(arc_distance)
         pointwise = (not plain and not matrix_free) if pointwise is None else bool(pointwise)
-        if matrix_free and (adaptive or arc_distance or pointwise):
+        neumann = (not plain and not matrix_free) if neumann is None else bool(neumann)
+        if matrix_free and (adaptive or arc_distance or pointwise or neumann):
             raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: "
-                            "pass adaptive=False, arc_distance=False, pointwise=False")
+                            "pass adaptive=False, arc_distance=False, pointwise=False, neumann=False")
         if adaptive and h is not None:
             raise MeshError("adaptive=True chooses h per vertex; do not pass h with it")
         self.correction = correction
@@ -268,17 +270,31 @@ class MeshLaplacian(_LumpedLaplacian):
         self._S: sp.csr_matrix | None = None
         self._L_pointwise: sp.csr_matrix | None = None
         self.pointwise = False
+        self.neumann = neumann
+        self.moment_scale = 1.0
+        self._frames = None
+        self.boundary_rows = 0
         if self.matrix_free:
             return
         report = make_progress(progress)
-        if plain and not adaptive and not arc_distance:
+        if plain and not adaptive and not arc_distance and not neumann:
             self._L = self._assemble(report)  # the paper's operator, unchanged
+            free = self._L
         else:
-            self._L = self._assemble_variable(not plain)
-            if not plain and check_psd:
-                self._check_psd()
+            self._frames = _corr.boundary_frames(self.V, self.faces, self.radius)
+            free = self._assemble_variable(not plain)
+            self._L = self._with_images(free, not plain)
+            if not plain and check_psd and not self._psd_ok():
+                free = self._assemble_variable(False)
+                self._L = self._with_images(free, False)
+            if not plain:
+                band = None if self._frames is None else self._frames[0]
+                self.moment_scale = _corr.second_moment_scale(free, self.V, self.mass, band)
+                self._L.data *= self.moment_scale
         if pointwise:
-            self._L_pointwise, unchanged = _corr.moment_correction(self._L, self.V)
+            # point-wise rows from the operator without mirror images: f need not satisfy
+            # Neumann conditions, and the moment correction handles the one-sided rows
+            self._L_pointwise, unchanged = _corr.moment_correction(free, self.V)
             self.pointwise = True
             self.pointwise_unchanged = unchanged
         if report is not None:
@@ -372,7 +388,15 @@ class MeshLaplacian(_LumpedLaplacian):
                                                     index_dtype, self.dtype, max_nnz=guard)
         return _csr(data, indices, indptr, n)
 
-    def _check_psd(self) -> None:
+    def _with_images(self, L: sp.csr_matrix, dog: bool) -> sp.csr_matrix:
+        if not self.neumann:
+            return L
+        hv = np.full(self.n_vertices, self.h) if self.h_vertex is None else self.h_vertex
+        if self._frames is not None:
+            self.boundary_rows = len(self._frames[0])
+        return _corr.neumann_images(L, self.V, self._frames, self.mass, hv, dog)
+
+    def _psd_ok(self) -> bool:
         lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V, self.faces)
         self.psd_margin = lam_min / scale
         if lam_min < -1e-6 * scale:
@@ -383,7 +407,8 @@ class MeshLaplacian(_LumpedLaplacian):
             warnings.warn(self.fallback_reason + "; pass a larger h to keep the correction",
                           MeshWarning, stacklevel=4)
             self.correction = "none"
-            self._L = self._assemble_variable(False)
+            return False
+        return True
 
     # -- the matrices -------------------------------------------------------------------
     @property
