@@ -55,7 +55,7 @@ DEFAULT_TOL = 1e-8
 CORRECTIONS = ("richardson", "none")
 #: With the default correction h = DEFAULT_H_SCALE · ē² (ē the mean edge length), or per vertex
 #: h_w = DEFAULT_H_SCALE · ℓ_w² with ``adaptive=True``; docs/accuracy.md has the measurements.
-DEFAULT_H_SCALE = 3.0
+DEFAULT_H_SCALE = 4.0
 _INT32_MAX = np.iinfo(np.int32).max
 
 
@@ -252,7 +252,7 @@ class MeshLaplacian(_LumpedLaplacian):
         elif plain:
             self.h = check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
         else:
-            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 3·(mean edge)²")
+            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 4·(mean edge)²")
         self.h_vertex: np.ndarray | None = None
         if adaptive:
             hv = _corr.local_h(self.V, self.faces, DEFAULT_H_SCALE)
@@ -275,6 +275,10 @@ class MeshLaplacian(_LumpedLaplacian):
         self._frames = None
         self.boundary_rows = 0
         if self.matrix_free:
+            if not plain:
+                self._frames = _corr.boundary_frames(self.V, self.faces, self.radius)
+                self.moment_scale = _corr.second_moment_scale(self._apply_free, self.V, self.mass,
+                                                              self._band())
             return
         report = make_progress(progress)
         if plain and not adaptive and not arc_distance and not neumann:
@@ -288,8 +292,8 @@ class MeshLaplacian(_LumpedLaplacian):
                 free = self._assemble_variable(False)
                 self._L = self._with_images(free, False)
             if not plain:
-                band = None if self._frames is None else self._frames[0]
-                self.moment_scale = _corr.second_moment_scale(free, self.V, self.mass, band)
+                self.moment_scale = _corr.second_moment_scale(lambda X: free @ X, self.V,
+                                                              self.mass, self._band())
                 self._L.data *= self.moment_scale
         if pointwise:
             # point-wise rows from the operator without mirror images: f need not satisfy
@@ -388,6 +392,9 @@ class MeshLaplacian(_LumpedLaplacian):
                                                     index_dtype, self.dtype, max_nnz=guard)
         return _csr(data, indices, indptr, n)
 
+    def _band(self) -> np.ndarray | None:
+        return None if self._frames is None else self._frames[0]
+
     def _with_images(self, L: sp.csr_matrix, dog: bool) -> sp.csr_matrix:
         if not self.neumann:
             return L
@@ -459,8 +466,8 @@ class MeshLaplacian(_LumpedLaplacian):
         if self.correction == "none":
             return kernel.apply(self.V, self._grid, self.h, f)
         # the same pairs as the assembled Richardson operator: both widths cut at r(h)
-        return (2.0 * kernel.apply(self.V, self._grid, 0.5 * self.h, f)
-                - kernel.apply(self.V, self._grid, self.h, f))
+        return self.moment_scale * (2.0 * kernel.apply(self.V, self._grid, 0.5 * self.h, f)
+                                    - kernel.apply(self.V, self._grid, self.h, f))
 
     @property
     def L_pointwise(self) -> sp.csr_matrix:
@@ -486,7 +493,7 @@ class MeshLaplacian(_LumpedLaplacian):
 
     # -- display ------------------------------------------------------------------------
     def _summary(self) -> list[tuple[str, str]]:
-        scale = "(2·mean edge)²" if self.correction == "none" else "3·(mean edge)²"
+        scale = "(2·mean edge)²"
         h_note = f" (auto: {scale})" if self.h_auto else ""
         if self.h_vertex is not None:
             h_note = " (median of the per-vertex widths, adaptive)"
