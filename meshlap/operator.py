@@ -56,6 +56,9 @@ CORRECTIONS = ("richardson", "none")
 #: With the default correction h = DEFAULT_H_SCALE · ē² (ē the mean edge length), or per vertex
 #: h_w = DEFAULT_H_SCALE · ℓ_w² with ``adaptive=True``; docs/accuracy.md has the measurements.
 DEFAULT_H_SCALE = 4.0
+#: With the default correction the width is also capped at β/κ_w² (κ_w² the squared normal
+#: variation per length at w), β = CURVATURE_LIMIT: the kernel narrows where the surface bends.
+CURVATURE_LIMIT = 0.05
 _INT32_MAX = np.iinfo(np.int32).max
 
 
@@ -211,6 +214,7 @@ class MeshLaplacian(_LumpedLaplacian):
         arc_distance: bool | None = None,
         pointwise: bool | None = None,
         neumann: bool | None = None,
+        curvature_limit: float | None = None,
         check_psd: bool = True,
     ) -> None:
         if correction not in CORRECTIONS:
@@ -224,6 +228,10 @@ class MeshLaplacian(_LumpedLaplacian):
         if matrix_free and (adaptive or arc_distance or pointwise or neumann):
             raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: "
                             "pass adaptive=False, arc_distance=False, pointwise=False, neumann=False")
+        if curvature_limit is None:
+            curvature_limit = CURVATURE_LIMIT if (not plain and h is None and not matrix_free) else 0.0
+        if curvature_limit and matrix_free:
+            raise MeshError("matrix_free=True supports a fixed h only: pass curvature_limit=0")
         if adaptive and h is not None:
             raise MeshError("adaptive=True chooses h per vertex; do not pass h with it")
         self.correction = correction
@@ -260,6 +268,15 @@ class MeshLaplacian(_LumpedLaplacian):
             check_h(float(hv.max()), "the largest local h")
             self.h_vertex = hv
             self.h = float(np.median(hv[self.mass > 0])) if (self.mass > 0).any() else self.h
+        if curvature_limit:
+            normals = _corr.vertex_normals(self.V, self.faces)
+            hv = _corr.curvature_h(self.V, self.faces, normals,
+                                   self.h if self.h_vertex is None else self.h_vertex,
+                                   check_positive(curvature_limit, "curvature_limit"))
+            if (hv != (self.h if self.h_vertex is None else self.h_vertex)).any():
+                check_h(float(hv.min()), "the smallest curvature-limited h")
+                self.h_vertex = hv
+        self.curvature_limit = float(curvature_limit)
         self.radius = kernel.cutoff_radius(self.h if self.h_vertex is None
                                            else float(self.h_vertex.max()), self.tol)
         self.matrix_free = bool(matrix_free)
@@ -495,8 +512,10 @@ class MeshLaplacian(_LumpedLaplacian):
     def _summary(self) -> list[tuple[str, str]]:
         scale = "(2·mean edge)²"
         h_note = f" (auto: {scale})" if self.h_auto else ""
-        if self.h_vertex is not None:
+        if self.adaptive:
             h_note = " (median of the per-vertex widths, adaptive)"
+        elif self.h_vertex is not None:
+            h_note += f"; narrower where the surface bends, down to {self.h_vertex.min():.3g}"
         rows = [
             ("vertices", f"{self.n_vertices:,}"),
             ("faces", f"{self.faces.n_faces:,}"),
