@@ -180,11 +180,13 @@ def moment_correction(L: sp.csr_matrix, V: np.ndarray) -> tuple[sp.csr_matrix, n
     (True, 0)
     """
     L = sp.csr_matrix(L)
-    data = np.ascontiguousarray(L.data, dtype=np.float64)
-    out = np.empty_like(data)
+    out = np.empty_like(L.data)
     failed = np.zeros(L.shape[0], dtype=np.int8)
-    _moment_rows(L.indptr, L.indices, data, np.ascontiguousarray(V, dtype=np.float64), out, failed)
-    Lc = sp.csr_matrix((out.astype(L.dtype), L.indices.copy(), L.indptr.copy()), shape=L.shape)
+    _moment_rows(L.indptr, L.indices, L.data, np.ascontiguousarray(V, dtype=np.float64), out, failed)
+    # same pattern: share the index arrays (neither matrix is changed in place afterwards)
+    Lc = sp.csr_matrix(L.shape, dtype=L.dtype)
+    Lc.data, Lc.indices, Lc.indptr = out, L.indices, L.indptr
+    Lc.has_sorted_indices = L.has_sorted_indices
     return Lc, failed.astype(bool)
 
 

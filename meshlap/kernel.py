@@ -591,11 +591,15 @@ def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
     # (α/2)/sin(α/2) squared, α the angle between the unit normals: the squared ratio of arc
     # to chord for a circle through both points with those normals (1 for parallel normals)
     c = nw0 * np0 + nw1 * np1 + nw2 * np2
-    c = min(max(c, -1.0), 1.0)
-    half = 0.5 * math.acos(c)
-    if half < 1e-4:
-        return 1.0 + half * half / 3.0
-    q = half / math.sin(half)
+    t = min(max(0.5 * (1.0 - c), 0.0), 1.0)  # sin²(α/2)
+    if t <= 0.1:
+        # asin(s)/s as a series in t = s² (truncation below 2e-8): no libm call for the
+        # nearly parallel normals of most pairs
+        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
+                                                                         + t * 63.0 / 2816.0))))
+    else:
+        sn = math.sqrt(t)
+        q = math.asin(sn) / sn
     return q * q
 
 
