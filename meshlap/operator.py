@@ -496,10 +496,11 @@ class MeshLaplacian(_LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L (0 when matrix-free)."""
+        """Bytes held by the CSR arrays of L and L_pointwise (0 when matrix-free)."""
         if self._L is None:
             return 0
-        return int(self._L.data.nbytes + self._L.indices.nbytes + self._L.indptr.nbytes)
+        extra = 0 if self._L_pointwise is None else self._L_pointwise.data.nbytes  # shares the indices
+        return int(self._L.data.nbytes + self._L.indices.nbytes + self._L.indptr.nbytes + extra)
 
     # -- application --------------------------------------------------------------------
     def __matmul__(self, f: Any) -> np.ndarray:
