@@ -195,7 +195,11 @@ class MeshLaplacian(_LumpedLaplacian):
     Attributes
     ----------
     L : scipy.sparse.csr_matrix
-        The operator; ``L @ f`` is eq. (1) of the paper at every vertex.
+        The symmetric operator (S = M L): eq. (1) of the paper with ``correction="none"``;
+        by default the Richardson kernel with mirror images at the boundary (Neumann).
+    L_pointwise : scipy.sparse.csr_matrix
+        What ``op @ f`` applies: L's rows corrected to be exact for quadratics (not
+        symmetric); L itself when ``pointwise`` is off.
     M : scipy.sparse.csr_matrix
         Diagonal lumped mass matrix.
     S : scipy.sparse.csr_matrix
@@ -203,7 +207,14 @@ class MeshLaplacian(_LumpedLaplacian):
     mass : (n,) ndarray
         Vertex masses m_p = Σ_{t∋p} Area(t)/#t.
     h, tol, radius : float
-        Kernel width, tolerance and the cut-off radius that follows from them.
+        Kernel width (the largest, with per-vertex widths), tolerance and the cut-off radius.
+    h_vertex : (n,) ndarray or None
+        Per-vertex widths, when they differ.
+    correction, fallback_reason : str, str or None
+        The correction in effect, and why the Richardson kernel was given up if it was.
+    psd_margin, moment_scale : float or None, float
+        Smallest eigenvalue of (−S, M) over the largest diagonal entry of −L (the check),
+        and the global second-moment factor (docs/accuracy.md).
 
     Examples
     --------
@@ -320,6 +331,7 @@ class MeshLaplacian(_LumpedLaplacian):
         self.pointwise = False
         self.neumann = neumann
         self.moment_scale = 1.0
+        self.psd_margin: float | None = None
         self._frames = None
         self.boundary_rows = 0
         if self.matrix_free:
@@ -624,13 +636,16 @@ def laplacian(
         Vertex positions.
     F : (m, k) array_like or list of sequences
         Faces of any size.
-    h : float, optional
-        Kernel width (exp(-d²/4h)); default :func:`default_h`.
+    h : float or (n,) array_like, optional
+        Kernel width (exp(-d²/4h)); default 4ē² narrowed where the surface bends
+        (:func:`default_h` = (2ē)² with ``correction="none"``).
     tol : float, default 1e-8
         Kernel tolerance; 0 for the untruncated operator.
     **kwargs
-        ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress``: see
-        :class:`MeshLaplacian`.
+        ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the accuracy
+        options ``correction`` (default "richardson"; "none" is the paper's operator),
+        ``adaptive``, ``arc_distance``, ``pointwise``, ``neumann``, ``curvature_limit``,
+        ``check_psd``: see :class:`MeshLaplacian` and docs/accuracy.md.
 
     Returns
     -------
