@@ -47,6 +47,7 @@ def check_sound(op, V):
     # S = M L symmetric <=> its columns sum to zero as its rows do: m^T L f = 0 for every f
     LV = op.L @ V  # op @ f applies the point-wise (non-symmetric) rows by default
     assert np.abs(m @ LV).max() <= 1e-13 * np.abs(m[:, None] * LV).sum()
+    LV = op @ V
     # L x is the mean-curvature normal: along the vertex normal (measured medians 0.92-0.99)
     used = m > 0
     N = igl.per_vertex_normals(V, op.faces.triangles())[used]
