@@ -23,7 +23,7 @@ t = 0.05
 exact = x / (1 + 2 * t)
 
 # -- the three operators --------------------------------------------------------------
-op = meshlap.laplacian(V, F, h=0.002)  # L ≈ +Δ; S = M L symmetric, negative semidefinite
+op = meshlap.laplacian(V, F, h=0.002, correction="none")  # L ≈ +Δ; S = M L symmetric, negative semidefinite
 C = igl.cotmatrix(V, F)  # libigl: symmetric, negative semidefinite (the weak form of +Δ)
 M_igl = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
 L_rl, M_rl = robust_laplacian.mesh_laplacian(V, F)  # positive semidefinite: the weak form of -Δ

@@ -381,7 +381,7 @@ def _errors(A: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nd
 def _bsw(V: np.ndarray, F: np.ndarray, h: float) -> Callable[[np.ndarray], np.ndarray]:
     # The one place the paper's operator is built: the plain BSW operator at the given h.
     # Matrix-free: at 4h = 0.09 the kernel reaches across the square and L would be dense.
-    op = laplacian(V, F, h=h, matrix_free=True)
+    op = laplacian(V, F, h=h, matrix_free=True, correction="none")
     return lambda X: op @ X
 
 

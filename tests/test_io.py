@@ -62,7 +62,7 @@ def test_mixed_polygon_obj(tmp_path):
     np.testing.assert_array_equal(V[6], [1.5, 1.8, 0.25])  # colour values after xyz ignored
     tri = io.read_mesh(p, triangulate=True)[1]
     assert tri.shape == (2 + 1 + 2 + 1, 3)
-    op = meshlap.laplacian(V, F, h=0.5)
+    op = meshlap.laplacian(V, F, h=0.5, correction="none")
     assert op.faces.sizes.tolist() == [4, 3, 4, 3]
     # the operator takes the polygons as they are; its rows annihilate constants
     np.testing.assert_allclose(op.L @ np.ones(7), 0, atol=1e-12)
@@ -178,7 +178,7 @@ def test_as_mesh_accepts_trimesh_like_objects_pairs_and_paths():
 
 def test_save_load_operator_bit_for_bit(tmp_path):
     V, F = io.read_mesh(DATA / "spot-quads.obj")
-    op = meshlap.laplacian(V, F, h=0.004, tol=1e-6)
+    op = meshlap.laplacian(V, F, h=0.004, tol=1e-6, correction="none")
     path = io.save_operator(tmp_path / "spot", op)
     assert path.name == "spot.npz"
     back = io.load_operator(path)
@@ -200,21 +200,23 @@ def test_save_load_operator_bit_for_bit(tmp_path):
 
 def test_save_load_variants(tmp_path):
     V, F = meshlap.shapes.sphere(400, seed=1)
-    op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32)
+    op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32, correction="none")
     back = io.load_operator(io.save_operator(tmp_path / "op32.npz", op32, mesh=False, compress=True))
     assert back.L.dtype == np.float32 and not hasattr(back, "V") and not hasattr(back, "faces")
     assert back.h_auto is False and back.h == 0.01
     cot = io.load_operator(io.save_operator(tmp_path / "cot.npz", cotangent(V, F)))
     assert cot.name == "COT" and cot.h is None
     np.testing.assert_allclose(cot @ V, cotangent(V, F) @ V, rtol=1e-12, atol=1e-12)
-    auto = io.load_operator(io.save_operator(tmp_path / "auto.npz", meshlap.laplacian(V, F)))
+    auto = io.load_operator(io.save_operator(tmp_path / "auto.npz", meshlap.laplacian(V, F,
+            correction="none")))
     assert auto.h_auto is True and auto.h == pytest.approx(meshlap.default_h(V, F))
 
 
 def test_save_load_errors(tmp_path):
     V, F = meshlap.shapes.sphere(100, seed=0)
     with pytest.raises(meshlap.MeshError, match="matrix-free"):
-        io.save_operator(tmp_path / "mf.npz", meshlap.laplacian(V, F, h=0.05, matrix_free=True))
+        io.save_operator(tmp_path / "mf.npz", meshlap.laplacian(V, F, h=0.05, matrix_free=True,
+                correction="none"))
     with pytest.raises(meshlap.MeshError, match="needs an operator"):
         io.save_operator(tmp_path / "x.npz", V)
     with pytest.raises(FileNotFoundError):
@@ -231,7 +233,7 @@ def test_loaded_operators_work_with_the_spectral_solver(tmp_path):
     from meshlap.spectral import eigs
 
     V, F = meshlap.shapes.sphere(1500, seed=0)
-    op = meshlap.laplacian(V, F, h=0.005)
+    op = meshlap.laplacian(V, F, h=0.005, correction="none")
     lam = eigs(op, 6, method="lobpcg")[0]
     for mesh in (True, False):  # without the mesh, LOBPCG runs without the cotangent preconditioner
         back = io.load_operator(io.save_operator(tmp_path / f"op{mesh}.npz", op, mesh=mesh))

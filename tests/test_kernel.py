@@ -65,7 +65,7 @@ def test_csr_equals_brute_force(tol):
     h = 0.004
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
-        op = meshlap.laplacian(V, F, h=h, tol=tol)
+        op = meshlap.laplacian(V, F, h=h, tol=tol, correction="none")
     ref, pattern = brute_force_L(op.V, op.mass, h, tol)
     L = op.L
     # every row stores its diagonal first, then exactly the pairs within the cut-off
@@ -84,11 +84,11 @@ def test_csr_equals_brute_force(tol):
 
 def test_int64_indices_give_the_same_matrix(monkeypatch):
     V, F = shapes.sphere(1500, kind="random", seed=3)
-    small = meshlap.laplacian(V, F, h=0.01)
+    small = meshlap.laplacian(V, F, h=0.01, correction="none")
     assert small.L.indptr.dtype == np.int32 and small.L.indices.dtype == np.int32
     # pretend int32 overflows: the int64 path must be taken and give identical arrays
     monkeypatch.setattr(operator_module, "_INT32_MAX", small.nnz - 1)
-    big = meshlap.laplacian(V, F, h=0.01)
+    big = meshlap.laplacian(V, F, h=0.01, correction="none")
     assert big.L.indptr.dtype == np.int64 and big.L.indices.dtype == np.int64
     assert np.array_equal(big.L.indptr, small.L.indptr)
     assert np.array_equal(big.L.indices, small.L.indices)
@@ -102,20 +102,21 @@ def test_int64_indices_give_the_same_matrix(monkeypatch):
 def test_identical_under_any_schedule(monkeypatch):
     # an uneven mesh (dense and sparse regions) so that threads finish chunks out of order
     V, F = shapes.sphere(3000, kind="random", seed=4)
-    ref = meshlap.laplacian(V, F, h=0.003).L
+    ref = meshlap.laplacian(V, F, h=0.003, correction="none").L
     before = numba.get_num_threads()
     variants = []
     try:
         numba.set_num_threads(1)
-        variants.append(meshlap.laplacian(V, F, h=0.003).L)
+        variants.append(meshlap.laplacian(V, F, h=0.003, correction="none").L)
     finally:
         numba.set_num_threads(before)
     monkeypatch.setattr(kernel, "_CHUNK_ROWS", 1)
-    variants.append(meshlap.laplacian(V, F, h=0.003).L)
+    variants.append(meshlap.laplacian(V, F, h=0.003, correction="none").L)
     # progress splits the build into several compiled calls
     monkeypatch.setattr(kernel, "_PROGRESS_ENTRIES", ref.nnz // 7)
     seen = []
-    variants.append(meshlap.laplacian(V, F, h=0.003, progress=lambda f, s: seen.append(s)).L)
+    variants.append(meshlap.laplacian(V, F, h=0.003, progress=lambda f, s: seen.append(s),
+            correction="none").L)
     assert seen.count("fill") >= 5 and seen.count("count") >= 5
     for L in variants:
         assert np.array_equal(L.indptr, ref.indptr)
@@ -128,8 +129,8 @@ def test_matrix_free_matches_the_matrix(dtype):
     V, F = messy_mesh()
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
-        op = meshlap.laplacian(V, F, h=0.01, dtype=dtype)
-        free = meshlap.laplacian(V, F, h=0.01, matrix_free=True)
+        op = meshlap.laplacian(V, F, h=0.01, dtype=dtype, correction="none")
+        free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
     rng = np.random.default_rng(1)
     for f in (rng.normal(size=len(V)), rng.normal(size=(len(V), 1)), rng.normal(size=(len(V), 3))):
         ref = np.asarray(op.L.astype(np.float64) @ f)
@@ -145,7 +146,7 @@ def test_matrix_free_matches_the_matrix(dtype):
 
 def test_estimate_is_close_and_cheap_when_dense():
     V, F = shapes.sphere(4000, seed=0)
-    op = meshlap.laplacian(V, F, h=0.01)
+    op = meshlap.laplacian(V, F, h=0.01, correction="none")
     assert abs(op.estimate_nnz() - op.nnz) < 0.03 * op.nnz
     # a 200 x 200 grid of quads with h so large that L would be dense: 1.6e9 entries, 19 GB
     n = 200
@@ -153,7 +154,7 @@ def test_estimate_is_close_and_cheap_when_dense():
     V = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(n * n)])
     idx = np.arange(n * n).reshape(n, n)
     Q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1).reshape(-1, 4)
-    free = meshlap.laplacian(V, Q, h=100.0, matrix_free=True)
+    free = meshlap.laplacian(V, Q, h=100.0, matrix_free=True, correction="none")
     t = time.perf_counter()
     assert free.estimate_nnz() == n**4  # every sampled row is full
     assert time.perf_counter() - t < 5.0
@@ -163,7 +164,7 @@ def test_estimate_is_close_and_cheap_when_dense():
     monkey.setattr(kernel, "count_entries", lambda *a, **k: calls.append(k.get("rows")) or original(*a, **k))
     try:
         with pytest.raises(meshlap.OperatorTooLargeError, match=r"at least about .* entries.*matrix_free"):
-            meshlap.laplacian(V, Q, h=100.0, max_memory=1 << 30)
+            meshlap.laplacian(V, Q, h=100.0, max_memory=1 << 30, correction="none")
     finally:
         monkey.undo()
     # it stopped after the sample, before counting every row
@@ -172,10 +173,10 @@ def test_estimate_is_close_and_cheap_when_dense():
 
 def test_peak_memory_of_a_build():
     V, F = shapes.sphere(4000, seed=1)
-    meshlap.laplacian(V, F, h=0.01)  # compile and warm up outside the measurement
+    meshlap.laplacian(V, F, h=0.01, correction="none")  # compile and warm up outside the measurement
     tracemalloc.start()
     try:
-        op = meshlap.laplacian(V, F, h=0.01)
+        op = meshlap.laplacian(V, F, h=0.01, correction="none")
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()

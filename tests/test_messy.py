@@ -21,7 +21,7 @@ def build(V, F, **kw):
     """Build and return (op, MeshWarnings raised during the build)."""
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        op = meshlap.laplacian(V, F, **kw)
+        op = meshlap.laplacian(V, F, **{"correction": "none", **kw})
     return op, [w for w in seen if issubclass(w.category, MeshWarning)]
 
 
@@ -80,7 +80,7 @@ V3 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
 )
 def test_bad_input_names_argument_and_problem(V, F, kw, match):
     with pytest.raises(meshlap.MeshError, match=match):
-        meshlap.laplacian(V, F, **kw)
+        meshlap.laplacian(V, F, **{"correction": "none", **kw})
 
 
 @pytest.mark.parametrize(
@@ -125,7 +125,7 @@ def test_check_k_and_positive():
 
 def test_function_checks():
     V, F = shapes.sphere(50, seed=0)
-    op = meshlap.laplacian(V, F, h=0.1)
+    op = meshlap.laplacian(V, F, h=0.1, correction="none")
     with pytest.raises(meshlap.MeshError, match="f must be real"):
         op @ (np.ones(50) * 1j)
     with pytest.raises(meshlap.MeshError, match=r"f must have shape \(50,\)"):
@@ -137,7 +137,7 @@ def test_function_checks():
 # -- accepted forms --------------------------------------------------------------------------
 def test_face_and_vertex_forms_agree(ball):
     V, F = ball
-    ref = dense(meshlap.laplacian(V, F, h=0.05))
+    ref = dense(meshlap.laplacian(V, F, h=0.05, correction="none"))
     forms = [
         F.astype(np.uint32),
         F.astype(np.int16),
@@ -148,15 +148,18 @@ def test_face_and_vertex_forms_agree(ball):
         check_faces(F, len(V)),
     ]
     for form in forms:
-        assert np.array_equal(dense(meshlap.laplacian(V, form, h=0.05)), ref)
-    assert np.array_equal(dense(meshlap.laplacian(V.astype(np.float32).astype(np.float64), F, h=0.05)),
-                          dense(meshlap.laplacian(V.astype(np.float32), F, h=0.05)))
+        assert np.array_equal(dense(meshlap.laplacian(V, form, h=0.05, correction="none")), ref)
+    assert np.array_equal(dense(meshlap.laplacian(V.astype(np.float32).astype(np.float64), F, h=0.05,
+            correction="none")),
+                          dense(meshlap.laplacian(V.astype(np.float32), F, h=0.05, correction="none")))
     # planar (n, 2) input is the plane z = 0; integer coordinates are converted
     P, G = shapes.plane(60, seed=1)
-    assert np.array_equal(dense(meshlap.laplacian(P[:, :2], G, h=0.1)), dense(meshlap.laplacian(P, G, h=0.1)))
+    assert np.array_equal(dense(meshlap.laplacian(P[:, :2], G, h=0.1,
+            correction="none")), dense(meshlap.laplacian(P, G, h=0.1, correction="none")))
     Vi = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 1]])
-    assert np.array_equal(dense(meshlap.laplacian(Vi, [[0, 1, 2], [1, 3, 2]], h=1.0)),
-                          dense(meshlap.laplacian(Vi.astype(float), [[0, 1, 2], [1, 3, 2]], h=1.0)))
+    assert np.array_equal(dense(meshlap.laplacian(Vi, [[0, 1, 2], [1, 3, 2]], h=1.0, correction="none")),
+                          dense(meshlap.laplacian(Vi.astype(float), [[0, 1, 2], [1, 3, 2]], h=1.0,
+                                  correction="none")))
 
 
 def test_repeated_corner_counts_once():
@@ -165,7 +168,8 @@ def test_repeated_corner_counts_once():
     padded = np.column_stack([F, F[:, 2]])
     faces = check_faces(padded, len(V))
     assert np.all(faces.sizes == 3)
-    assert np.array_equal(dense(meshlap.laplacian(V, padded, h=0.05)), dense(meshlap.laplacian(V, F, h=0.05)))
+    assert np.array_equal(dense(meshlap.laplacian(V, padded, h=0.05,
+            correction="none")), dense(meshlap.laplacian(V, F, h=0.05, correction="none")))
     # faces with fewer than 3 distinct corners stay as given: zero area, nothing added
     assert check_faces([[0, 0, 1]], 2).sizes.tolist() == [3]
 
@@ -178,7 +182,7 @@ def test_unreferenced_vertices(ball):
     extra = np.vstack([rng.normal(size=(5, 3)) * 0.6, [[40.0, 0, 0]]])  # inside the ball, one far away
     W = np.vstack([V, extra])
     op, warned = build(W, F, h=h)
-    ref = meshlap.laplacian(V, F, h=h)
+    ref = meshlap.laplacian(V, F, h=h, correction="none")
     n = len(V)
     assert len(warned) == 1 and "6 unreferenced vertices" in str(warned[0].message)
     assert np.all(op.mass[n:] == 0) and np.array_equal(op.mass[:n], ref.mass)
@@ -209,7 +213,7 @@ def test_zero_area_faces(ball):
     assert "3 zero-area faces" in msg and "1 unreferenced" not in msg
     zero = topology.zero_area_faces(W, np.vstack([F, degenerate]))
     assert zero.tolist() == [len(F), len(F) + 1, len(F) + 2]
-    ref = meshlap.laplacian(V, F, h=0.05)
+    ref = meshlap.laplacian(V, F, h=0.05, correction="none")
     assert np.allclose(op.mass[:n], ref.mass, rtol=1e-15, atol=0) and op.mass[n] < 1e-16
     assert_sound(op)
 
@@ -217,7 +221,7 @@ def test_zero_area_faces(ball):
 def test_components_far_apart_decouple_near_ones_couple(ball):
     V, F = ball
     h = 0.05
-    one = meshlap.laplacian(V, F, h=h)
+    one = meshlap.laplacian(V, F, h=h, correction="none")
     for gap, coupled in [(10.0, False), (2.1, True)]:
         W = np.vstack([V, V + [gap, 0, 0]])
         G = np.vstack([F, F + len(V)])
@@ -271,7 +275,7 @@ def test_duplicate_vertices_leave_L_unchanged(ball):
     assert np.array_equal(rep, np.r_[np.arange(len(V)), seam])
     # the kernel sees positions and masses only: on functions that agree on copies, L equals
     # the welded operator's (the copies' masses add up to the welded vertex's)
-    welded = meshlap.laplacian(V, F, h=h)
+    welded = meshlap.laplacian(V, F, h=h, correction="none")
     f = np.exp(V[:, 0]) * V[:, 1]
     assert np.allclose(op @ f[rep], (welded @ f)[rep], rtol=0, atol=1e-12 * np.abs(welded @ f).max())
     # welding keeps the closed sphere closed; the raw connectivity shows the seam as a boundary
@@ -293,7 +297,7 @@ def test_boundary_mask_and_bias():
     # plane [-1, 1]²: the band is the set of vertices within width·√h of the square's sides
     V, F = shapes.plane(4000, seed=7)
     h = 0.01  # 4h = 0.04 as in the paper's Table 1
-    op = meshlap.laplacian(V, F, h=h)
+    op = meshlap.laplacian(V, F, h=h, correction="none")
     Lf, exact = op @ V[:, 0] ** 2, 2.0
     err = {}
     for width in (3.0, 5.0):
@@ -313,12 +317,12 @@ def test_boundary_mask_and_bias():
 def test_h_too_small_and_too_large(ball):
     V, F = ball
     with pytest.warns(RuntimeWarning, match="have no neighbour within the cut-off"):
-        op = meshlap.laplacian(V, F, h=1e-8)
+        op = meshlap.laplacian(V, F, h=1e-8, correction="none")
     assert np.all(op.L.data == 0) and np.isfinite(op.L.data).all()
     with pytest.raises(meshlap.OperatorTooLargeError, match="max_memory"):
-        meshlap.laplacian(V, F, h=1e3, max_memory=100_000)
+        meshlap.laplacian(V, F, h=1e3, max_memory=100_000, correction="none")
     # with the memory for it, a very wide kernel gives a dense, sound operator
-    op = meshlap.laplacian(V, F, h=1e3)
+    op = meshlap.laplacian(V, F, h=1e3, correction="none")
     assert op.nnz == len(V) ** 2
     assert_sound(op)
 
@@ -326,7 +330,7 @@ def test_h_too_small_and_too_large(ball):
 def test_large_coordinates_translation_and_scale():
     V, F = shapes.sphere(400, kind="random", seed=5)
     h = 0.02
-    ref = dense(meshlap.laplacian(V, F, h=h))
+    ref = dense(meshlap.laplacian(V, F, h=h, correction="none"))
     R = np.linalg.qr(np.random.default_rng(1).normal(size=(3, 3)))[0]
     for shift, scale in [(1e6, 1.0), (1e6, 1e-3), (1e3, 1e4)]:
         W = scale * (V @ R.T) + shift * scale
@@ -337,8 +341,8 @@ def test_large_coordinates_translation_and_scale():
     # the kernel adds no error of its own: recentring the rounded input changes nothing
     W = V + 1e10
     with pytest.warns(MeshWarning, match="relative precision of only"):
-        far = meshlap.laplacian(W, F, h=h)
-    assert np.array_equal(dense(far), dense(meshlap.laplacian(W - 1e10, F, h=h)))
+        far = meshlap.laplacian(W, F, h=h, correction="none")
+    assert np.array_equal(dense(far), dense(meshlap.laplacian(W - 1e10, F, h=h, correction="none")))
 
 
 def test_clean_mesh_is_quiet_and_messy_mesh_warns_once(ball):
@@ -373,7 +377,7 @@ def test_no_nan_from_any_messy_input(ball):
             warnings.simplefilter("ignore", MeshWarning)
             warnings.simplefilter("ignore", RuntimeWarning)
             for kw in ({}, {"h": 0.05}, {"h": 0.05, "matrix_free": True}):
-                op = meshlap.laplacian(W, G, **kw)
+                op = meshlap.laplacian(W, G, **{"correction": "none", **kw})
                 out = op @ np.cos(np.asarray(W)[:, 0])
                 assert np.isfinite(out).all(), name
                 if op.nnz:
@@ -384,9 +388,10 @@ def test_no_nan_from_any_messy_input(ball):
 def test_polygons_input_is_trusted_but_checked():
     bad = Polygons(indices=np.array([0, 1, 5], np.int64), offsets=np.array([0, 3], np.int64))
     with pytest.raises(meshlap.MeshError, match="vertex 5 in face 0"):
-        meshlap.laplacian(V3, bad)
+        meshlap.laplacian(V3, bad, correction="none")
     for offsets in ([0], [0, 2], [0, 3, 2], [1, 3]):
         with pytest.raises(meshlap.MeshError, match="empty|inconsistent offsets"):
-            meshlap.laplacian(V3, Polygons(indices=np.array([0, 1, 2]), offsets=np.array(offsets)))
-    S = sp.csr_matrix(meshlap.laplacian(V3, TRI, h=1.0).S)
+            meshlap.laplacian(V3, Polygons(indices=np.array([0, 1, 2]), offsets=np.array(offsets)),
+                    correction="none")
+    S = sp.csr_matrix(meshlap.laplacian(V3, TRI, h=1.0, correction="none").S)
     assert abs(S - S.T).max() < 1e-15

@@ -54,7 +54,7 @@ def test_matches_formula_1_untruncated():
     f = rng.normal(size=len(V))
     h = 0.05
     ref = formula_1(V, F, h, f)
-    op = meshlap.laplacian(V, F, h=h, tol=0)
+    op = meshlap.laplacian(V, F, h=h, tol=0, correction="none")
     assert op.exact and math.isinf(op.radius)
     assert np.linalg.norm(op @ f - ref) / np.linalg.norm(ref) < 1e-12
 
@@ -64,7 +64,7 @@ def test_matches_formula_1_mixed_polygons():
     f = np.cos(2 * V[:, 0]) + V[:, 1] ** 2
     h = 0.02
     ref = formula_1(V, faces, h, f)
-    op = meshlap.laplacian(V, faces, h=h, exact=True)
+    op = meshlap.laplacian(V, faces, h=h, exact=True, correction="none")
     assert np.linalg.norm(op @ f - ref) / np.linalg.norm(ref) < 1e-12
     # the block form applies the operator column by column
     block = op @ np.column_stack([f, 2 * f])
@@ -76,8 +76,8 @@ def test_truncation_within_stated_bound(tol):
     V, F = shapes.sphere(400, kind="random", seed=1)
     f = np.exp(V[:, 0]) + V[:, 2]
     h = 0.02
-    exact = meshlap.laplacian(V, F, h=h, tol=0) @ f
-    op = meshlap.laplacian(V, F, h=h, tol=tol)
+    exact = meshlap.laplacian(V, F, h=h, tol=0, correction="none") @ f
+    op = meshlap.laplacian(V, F, h=h, tol=tol, correction="none")
     assert op.radius == pytest.approx(math.sqrt(4 * h * math.log(1 / tol)))
     err = np.abs(op @ f - exact)
     bound = meshlap.truncation_bound(op, f)
@@ -97,7 +97,7 @@ def test_plane_analytic_and_convergence():
     errors = {}
     for n in (2000, 16000):
         V, F = shapes.plane(n, seed=7)
-        op = meshlap.laplacian(V, F, h=h, matrix_free=n > 4000)
+        op = meshlap.laplacian(V, F, h=h, matrix_free=n > 4000, correction="none")
         inner = _interior(V, h)
         for name, (f, lap) in shapes.plane_functions().items():
             approx, exact = (op @ f(V))[inner], lap(V)[inner]
@@ -116,7 +116,7 @@ def test_sphere_analytic_and_convergence(kind):
     errors = {}
     for n in (500, 2000, 8000):
         V, F = shapes.sphere(n, kind=kind, seed=2)
-        op = meshlap.laplacian(V, F, h=h)
+        op = meshlap.laplacian(V, F, h=h, correction="none")
         for name, (f, lap) in shapes.sphere_functions().items():
             errors[name, n] = np.linalg.norm(op @ f(V) - lap(V)) / np.linalg.norm(lap(V))
     for name in shapes.sphere_functions():
@@ -129,7 +129,7 @@ def test_sphere_analytic_and_convergence(kind):
 @pytest.fixture(scope="module")
 def sphere_op():
     V, F = shapes.sphere(600, kind="random", seed=5)
-    return meshlap.laplacian(V, F, h=0.02)
+    return meshlap.laplacian(V, F, h=0.02, correction="none")
 
 
 def test_rows_sum_to_zero_and_constants(sphere_op):
@@ -154,9 +154,9 @@ def test_S_symmetric_negative_semidefinite(sphere_op):
 def test_scaling_law():
     V, F = shapes.sphere(300, seed=4)
     f = V[:, 0] ** 2
-    a = meshlap.laplacian(V, F, h=0.02) @ f
+    a = meshlap.laplacian(V, F, h=0.02, correction="none") @ f
     s = 3.5
-    b = meshlap.laplacian(s * V, F, h=0.02 * s * s) @ f
+    b = meshlap.laplacian(s * V, F, h=0.02 * s * s, correction="none") @ f
     assert np.allclose(b, a / s**2, rtol=1e-10, atol=1e-12)
 
 
@@ -168,20 +168,20 @@ def test_L_x2_is_two_on_the_plane_quads():
     idx = np.arange(n * n).reshape(n, n)
     Q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1).reshape(-1, 4)
     h = 0.005
-    op = meshlap.laplacian(V, Q, h=h)
+    op = meshlap.laplacian(V, Q, h=h, correction="none")
     inner = _interior(op.V, h)
     assert np.abs((op @ (op.V[:, 0] ** 2))[inner] - 2).max() < 0.02
 
 
 def test_spot_triangles_and_quads():
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
-    op = meshlap.laplacian(V, F)
+    op = meshlap.laplacian(V, F, correction="none")
     assert not op.h_auto or op.h == pytest.approx(meshlap.default_h(V, F))
     area = 0.5 * igl.doublearea(V, F).sum()
     assert op.mass.sum() == pytest.approx(area, rel=1e-12)
     Vq, _, _, Fq, _, _ = igl.readOBJ(str(DATA / "spot-quads.obj"))
     assert Fq.shape[1] == 4
-    opq = meshlap.laplacian(Vq, Fq, h=op.h)
+    opq = meshlap.laplacian(Vq, Fq, h=op.h, correction="none")
     # quads hand a quarter of their area to each corner: total = the quads' area
     assert opq.mass.sum() == pytest.approx(meshlap.face_areas(Vq, Fq).sum(), rel=1e-12)
     # both discretize the same surface: coordinates' Laplacians agree to a few percent
@@ -191,12 +191,12 @@ def test_spot_triangles_and_quads():
 
 def test_operator_surface():
     V, F = shapes.sphere(200, seed=0)
-    op = meshlap.laplacian(V, F, h=0.05)
+    op = meshlap.laplacian(V, F, h=0.05, correction="none")
     assert isinstance(op.L, sp.csr_matrix) and op.L.shape == (200, 200)
     assert op.nnz == op.L.nnz and op.nbytes > 0
     assert "MeshLaplacian(" in repr(op) and "h=0.05" in repr(op)
     assert "<table>" in op._repr_html_()
-    L, M = meshlap.mesh_laplacian(V, F, h=0.05)
+    L, M = meshlap.mesh_laplacian(V, F, h=0.05, correction="none")
     assert abs(L - op.L).max() == 0 and np.allclose(M.diagonal(), op.mass)
     lin = op.as_linear_operator()
     x = np.random.default_rng(0).normal(size=200)
@@ -206,14 +206,14 @@ def test_operator_surface():
 def test_matrix_free_and_float32_agree():
     V, F = shapes.sphere(1000, kind="random", seed=8)
     f = np.column_stack([np.exp(V[:, 0]), V[:, 1] ** 2])
-    op = meshlap.laplacian(V, F, h=0.01)
-    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True)
+    op = meshlap.laplacian(V, F, h=0.01, correction="none")
+    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
     ref = op @ f
     assert np.abs(free @ f - ref).max() < 1e-10 * np.abs(ref).max()
     assert np.allclose(free.as_linear_operator().matmat(f), ref, rtol=1e-10, atol=1e-10)
     with pytest.raises(meshlap.MeshError, match="matrix-free"):
         free.L  # noqa: B018
-    op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32)
+    op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32, correction="none")
     assert op32.L.dtype == np.float32
     assert np.abs(op32 @ f - ref).max() < 1e-5 * np.abs(ref).max()
 
@@ -222,11 +222,11 @@ def test_deterministic_whatever_thread_count():
     import numba
 
     V, F = shapes.sphere(3000, kind="random", seed=9)
-    a = meshlap.laplacian(V, F, h=0.005).L
+    a = meshlap.laplacian(V, F, h=0.005, correction="none").L
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
-        b = meshlap.laplacian(V, F, h=0.005).L
+        b = meshlap.laplacian(V, F, h=0.005, correction="none").L
     finally:
         numba.set_num_threads(before)
     assert np.array_equal(a.indptr, b.indptr)
@@ -237,7 +237,8 @@ def test_deterministic_whatever_thread_count():
 def test_progress_callback():
     V, F = shapes.sphere(6000, seed=0)
     seen = []
-    meshlap.laplacian(V, F, h=0.002, progress=lambda frac, stage: seen.append((frac, stage)))
+    meshlap.laplacian(V, F, h=0.002, progress=lambda frac, stage: seen.append((frac, stage)),
+            correction="none")
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and fracs[-1] == 1.0
     assert {"count", "fill", "done"} <= {s for _, s in seen}
@@ -246,8 +247,8 @@ def test_progress_callback():
 def test_memory_guard():
     V, F = shapes.sphere(2000, seed=0)
     with pytest.raises(meshlap.OperatorTooLargeError, match="matrix_free=True"):
-        meshlap.laplacian(V, F, h=1.0, max_memory=1_000_000)
-    free = meshlap.laplacian(V, F, h=1.0, max_memory=1_000_000, matrix_free=True)
+        meshlap.laplacian(V, F, h=1.0, max_memory=1_000_000, correction="none")
+    free = meshlap.laplacian(V, F, h=1.0, max_memory=1_000_000, matrix_free=True, correction="none")
     assert free.nnz == 0
 
 
@@ -277,7 +278,7 @@ def test_bad_input_names_the_problem(V, F, kw, match):
 
 def test_bad_function_shape():
     V, F = shapes.sphere(50, seed=0)
-    op = meshlap.laplacian(V, F, h=0.1)
+    op = meshlap.laplacian(V, F, h=0.1, correction="none")
     with pytest.raises(meshlap.MeshError, match=r"shape \(50,\)"):
         op @ np.ones(49)
     with pytest.raises(meshlap.MeshError, match="NaN"):

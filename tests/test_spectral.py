@@ -54,7 +54,7 @@ def test_unit_sphere_multiplicities_and_convergence_in_n():
     errors = []
     for n in (1000, 4000):
         V, F = shapes.sphere(n, seed=0)
-        op = meshlap.laplacian(V, F, h=h)
+        op = meshlap.laplacian(V, F, h=h, correction="none")
         lam, phi = spectral.eigs(op, 16, method="lobpcg")
         check_eigenpairs(op, lam, phi, 1e-7)
         start, err = 0, 0.0
@@ -74,7 +74,7 @@ def test_unit_sphere_approaches_l_l_plus_1_as_h_shrinks():
     gaps = []
     for h, n in ((0.02, 1000), (0.01, 2000), (0.005, 4000)):
         V, F = shapes.sphere(n, seed=1)
-        lam, _ = spectral.eigs(meshlap.laplacian(V, F, h=h), 16)
+        lam, _ = spectral.eigs(meshlap.laplacian(V, F, h=h, correction="none"), 16)
         means = np.split(lam, np.cumsum([m for _, m in SHELLS])[:-1])
         gaps.append(max(abs(s.mean() - d * (d + 1)) / (d * (d + 1))
                         for (d, _), s in zip(SHELLS[1:], means[1:], strict=True)))
@@ -85,7 +85,7 @@ def test_unit_sphere_approaches_l_l_plus_1_as_h_shrinks():
 @pytest.mark.parametrize("kind", ["uniform", "random"])
 def test_lobpcg_matches_scipy_eigsh(kind):
     V, F = shapes.sphere(1300, kind=kind, seed=2)
-    op = meshlap.laplacian(V, F, h=0.008)
+    op = meshlap.laplacian(V, F, h=0.008, correction="none")
     lam, phi = spectral.eigs(op, 20, method="lobpcg")
     ref, ref_phi = eigsh(-op.S, k=20, M=op.M.tocsc(), sigma=-1e-3, tol=1e-12)
     assert np.abs(lam[1:] - ref[1:]).max() / ref[-1] < 1e-10
@@ -112,7 +112,7 @@ def test_cotangent_operator_and_mesh_argument():
     # an operator without its mesh gets the cotangent preconditioner from `mesh=`
     plain = bsw_scipy(V, F, h=0.02)
     with_mesh, _ = spectral.eigs(plain, 10, method="lobpcg", mesh=(V, F))
-    direct, _ = spectral.eigs(meshlap.laplacian(V, F, h=0.02), 10, method="dense")
+    direct, _ = spectral.eigs(meshlap.laplacian(V, F, h=0.02, correction="none"), 10, method="dense")
     assert np.abs(with_mesh - direct)[1:].max() / direct[-1] < 1e-9
 
 
@@ -124,9 +124,9 @@ def test_zero_mass_vertices_are_extended_not_nan():
     # 40 unreferenced vertices near the surface (zero mass), numbered first
     V2, F2 = np.vstack([extra, V]), F + 40
     h = 0.01
-    op = meshlap.laplacian(V, F, h=h)
+    op = meshlap.laplacian(V, F, h=h, correction="none")
     with pytest.warns(UserWarning, match="unreferenced"):
-        op2 = meshlap.laplacian(V2, F2, h=h)
+        op2 = meshlap.laplacian(V2, F2, h=h, correction="none")
     lam, phi = spectral.eigs(op, 9, method="lobpcg")
     lam2, phi2 = spectral.eigs(op2, 9, method="lobpcg")
     assert np.abs(lam2 - lam).max() < 1e-9 * lam[-1]
@@ -159,7 +159,7 @@ def read_quads(path):
 def test_polygon_mesh_uses_fan_triangles():
     V, F = read_quads(DATA / "spot-quads.obj")
     assert F.shape[1] == 4
-    op = meshlap.laplacian(V, F)
+    op = meshlap.laplacian(V, F, correction="none")
     lam, phi = spectral.eigs(op, 12, method="lobpcg")
     ref, _ = spectral.eigs(op, 12, method="shift-invert", tol=1e-12)
     assert np.abs(lam - ref)[1:].max() / ref[-1] < 1e-10
@@ -168,7 +168,7 @@ def test_polygon_mesh_uses_fan_triangles():
 
 def test_heat_kernel_signature_on_the_sphere():
     V, F = shapes.sphere(2000, seed=5)
-    op = meshlap.laplacian(V, F, h=0.01)
+    op = meshlap.laplacian(V, F, h=0.01, correction="none")
     lam, phi = spectral.eigs(op, 25)
     t = np.array([0.5, 2.0])
     hks = spectral.heat_kernel_signature(t=t, eig=(lam, phi))
@@ -185,7 +185,7 @@ def test_heat_kernel_signature_on_the_sphere():
 
 def test_bad_arguments():
     V, F = shapes.sphere(300, seed=0)
-    op = meshlap.laplacian(V, F, h=0.05)
+    op = meshlap.laplacian(V, F, h=0.05, correction="none")
     for k in (0, 300, 2.5, True):
         with pytest.raises(meshlap.MeshError, match="k must"):
             spectral.eigs(op, k)
@@ -201,7 +201,7 @@ def test_bad_arguments():
 def test_bunny_50_eigenpairs():
     V, F = igl.read_triangle_mesh(str(DATA / "stanford-bunny.obj"))
     # a third of the automatic h (480 instead of 1,400 entries per row) keeps the test short
-    op = meshlap.laplacian(V, F, h=3e-6)
+    op = meshlap.laplacian(V, F, h=3e-6, correction="none")
     assert (op.mass == 0).sum() == 1113
     lam, phi = spectral.eigs(op, 50, tol=1e-5)
     check_eigenpairs(op, lam, phi, 1e-5)
@@ -210,8 +210,8 @@ def test_bunny_50_eigenpairs():
 
 def test_matrix_free_operator_gives_the_same_spectrum():
     V, F = shapes.sphere(1500, seed=6)
-    stored = meshlap.laplacian(V, F, h=0.01)
-    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True)
+    stored = meshlap.laplacian(V, F, h=0.01, correction="none")
+    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
     lam, _ = spectral.eigs(stored, 9, method="lobpcg")
     lam_free, phi_free = spectral.eigs(free, 9)  # auto: LOBPCG through op @ X
     assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
