@@ -36,9 +36,9 @@ def _build(args: argparse.Namespace, V: np.ndarray, F: Any) -> Any:
     from .operator import laplacian
 
     dtype = np.float32 if getattr(args, "float32", False) else np.float64
-    # the paper's operator (the "BSW" of the tables); the library default adds issue 12's corrections
+    # the library's default operator (the one notebooks and scripts get), unless --correction none
     return laplacian(V, F, h=args.h, tol=args.tol, dtype=dtype, progress=args.progress or None,
-                     correction="none")
+                     correction=args.correction)
 
 
 def _operator_from(args: argparse.Namespace) -> tuple[Any, np.ndarray | None, Any]:
@@ -217,6 +217,7 @@ def cmd_smooth(args: argparse.Namespace) -> int:
 def _laplacian(V: np.ndarray, F: Any, h: float, tol: float) -> Any:
     from .operator import laplacian
 
+    # smoothing is a filter at the scale of the edges: the paper's operator is the one wanted
     return laplacian(V, F, h=h, tol=tol, correction="none")
 
 
@@ -351,6 +352,9 @@ def _kernel_options(p: argparse.ArgumentParser, tol_default: float | None) -> No
                    help="kernel width h (exp(-d²/4h)); default (2·mean edge length)²")
     p.add_argument("--tol", type=float, default=tol_default,
                    help="kernel tolerance: weights below it are dropped (default 1e-8; 0 = exact)")
+    p.add_argument("--correction", choices=("richardson", "none"), default="richardson",
+                   help="richardson (default, as meshlap.laplacian): the O(h) bias removed; none: "
+                        "the paper's operator")
 
 
 def _up_option(p: argparse.ArgumentParser) -> None:
