@@ -106,7 +106,8 @@ def _box(P: np.ndarray) -> np.ndarray:
 
 
 # -- the global grid: the single-machine build's cell order --------------------------------
-def _global_grid(comm, V: np.ndarray, mass: np.ndarray, radius: float) -> tuple[np.ndarray, float, np.ndarray]:
+def _global_grid(comm, V: np.ndarray, mass: np.ndarray,
+                 radius: float) -> tuple[np.ndarray, float, np.ndarray]:
     """Origin, cell side and dims of the grid :func:`meshlap.kernel.build_grid` would build
     from all ranks' points together (the same floating-point operations, on the same values)."""
     MPI, _ = _mpi()
@@ -219,7 +220,8 @@ def _kd_split(comm, X: np.ndarray, weight: np.ndarray) -> np.ndarray:
         go_left = coord < split[np.maximum(node, 0)]
         r1 = np.where(mine & go_left, mid[np.maximum(node, 0)], r1)
         r0 = np.where(mine & ~go_left, mid[np.maximum(node, 0)], r0)
-        nodes = [c for a_, b_ in nodes for c in ((a_, (a_ + b_) // 2), ((a_ + b_) // 2, b_)) if c[1] - c[0] > 1]
+        children = [c for a_, b_ in nodes for c in ((a_, (a_ + b_) // 2), ((a_ + b_) // 2, b_))]
+        nodes = [c for c in children if c[1] - c[0] > 1]
     return r0
 
 
@@ -257,7 +259,8 @@ class DistributedLaplacian:
         self.n_vertices = comm.allreduce(len(V), op=MPI.SUM)
         if partition is not None:
             owner = np.asarray(partition, dtype=np.int64)
-            if owner.shape != (len(V),) or (len(owner) and (owner.min() < 0 or owner.max() >= comm.Get_size())):
+            bad = len(owner) and (owner.min() < 0 or owner.max() >= comm.Get_size())
+            if owner.shape != (len(V),) or bad:
                 raise MeshError(f"partition must give one rank in [0, {comm.Get_size()}) per local point")
             self._setup(V, mass, uid, owner)
         else:
@@ -289,8 +292,8 @@ class DistributedLaplacian:
             V, mass, uid = V[cells], mass[cells], uid[cells]
         n_own = len(V)
         self.n_local = n_own
-        self.offset = comm.exscan(n_own, op=MPI.SUM) if comm.Get_rank() > 0 else 0
-        self.offset = int(self.offset or 0)
+        off = comm.exscan(n_own, op=MPI.SUM)  # collective; None on rank 0
+        self.offset = int(off) if comm.Get_rank() > 0 else 0
         petsc_id = self.offset + np.arange(n_own, dtype=np.int64)
         # halo: the points with mass of every other rank within r of this rank's box
         boxes = np.array(comm.allgather(_box(V)))
@@ -596,8 +599,8 @@ def laplacian(
         raise MeshError(f"mass must hold one finite, non-negative value per point ({len(V)}); "
                         f"got shape {mass.shape}")
     if scattered:
-        start = comm.exscan(len(V), op=MPI.SUM) if comm.Get_rank() > 0 else 0
-        uid = int(start or 0) + np.arange(len(V), dtype=np.int64)
+        start = comm.exscan(len(V), op=MPI.SUM)  # collective; None on rank 0
+        uid = (int(start) if comm.Get_rank() > 0 else 0) + np.arange(len(V), dtype=np.int64)
         part = partition
     else:
         # every rank holds everything: each keeps a contiguous slice to start from
@@ -637,7 +640,7 @@ def heat_flow(op: DistributedLaplacian, f: Any, t: Any) -> np.ndarray:
     ...                  rtol=0, atol=1e-12))
     True
     """
-    from .heat import _check_times, _chebyshev_coefficients
+    from .heat import _chebyshev_coefficients, _check_times
 
     f = np.asarray(f, dtype=np.float64)
     times = _check_times(t)
