@@ -244,6 +244,9 @@ class DistributedLaplacian:
         Caller's indices of the own rows.
     n_vertices, n_local, n_halo : int
         Global rows, own rows, and halo points (with mass) this rank reads from others.
+    rebalanced : bool
+        The first (point-balanced) split left a rank with over 10% more entries than the
+        mean, and the points were split again by their counted entries.
     h, tol, radius : float
         Kernel width, tolerance and cut-off radius.
     """
@@ -257,6 +260,7 @@ class DistributedLaplacian:
         self.matrix_free = bool(matrix_free)
         self._lo, self._cell, self._dims = _global_grid(comm, V, mass, self.radius)
         self.n_vertices = comm.allreduce(len(V), op=MPI.SUM)
+        self.rebalanced = False
         if partition is not None:
             owner = np.asarray(partition, dtype=np.int64)
             bad = len(owner) and (owner.min() < 0 or owner.max() >= comm.Get_size())
@@ -268,7 +272,8 @@ class DistributedLaplacian:
             entries = self._counts.sum()
             busiest = comm.allreduce(entries, op=MPI.MAX)
             mean = comm.allreduce(entries, op=MPI.SUM) / comm.Get_size()
-            if busiest > _IMBALANCE * mean:
+            self.rebalanced = bool(busiest > _IMBALANCE * mean)
+            if self.rebalanced:
                 # re-split the points where they are now, weighted by their counted entries
                 Vn, mn, un, wn = self.V, self.mass, self.ids, self._counts.astype(np.float64)
                 self._setup(Vn, mn, un, _kd_split(comm, Vn, wn))

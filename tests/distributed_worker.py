@@ -109,6 +109,21 @@ class Checks:
             offdiag = (L0 - __import__("scipy").sparse.diags(L0.diagonal())).nnz
             self.report("r_apart", f"{same_entries(A, L0)} ({offdiag} off-diagonal) with lattice spacing r")
 
+    def balance(self):
+        """A sphere 50 times denser at one pole: the k-d split re-balances by counted entries."""
+        import meshlap
+        from meshlap import distributed
+
+        V, F = meshlap.shapes.sphere(3000, kind="nonuniform", seed=5)
+        op = distributed.laplacian(V, F, h=0.003, comm=self.comm)
+        entries = self.comm.gather(int(op._counts.sum()))
+        A = op.to_scipy()
+        if self.rank == 0:
+            detail = same_entries(A, meshlap.laplacian(V, F, h=0.003).L)
+            ratio = max(entries) / np.mean(entries)
+            assert ratio <= 1.1 and op.rebalanced, (entries, op.rebalanced)
+            self.report("balance", f"{detail}; entries per rank {entries} (max/mean {ratio:.3f})")
+
     # -- products ---------------------------------------------------------------------------
     def _sphere_ops(self, n=2500, h=0.006):
         import meshlap
@@ -214,4 +229,14 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    try:
+        main(sys.argv[1:])
+    except BaseException:
+        # a failed check on one rank must not leave the others waiting in a collective
+        import traceback
+
+        from mpi4py import MPI
+
+        traceback.print_exc()
+        sys.stdout.flush()
+        MPI.COMM_WORLD.Abort(1)

@@ -51,7 +51,20 @@ def mpirun(n: int, *checks: str, timeout: float = 600) -> list[str]:
 def test_matrix_equals_serial_exactly(n):
     """Gathered MPIAIJ == meshlap.laplacian(...).L bit for bit: a k-d split, slabs r/3 wide with
     one rank empty, and a lattice of spacing exactly r handed in by rank 0 alone."""
-    mpirun(n, "exact", "thin", "r_apart")
+    mpirun(n, "exact", "thin", "r_apart", "balance")
+
+
+def test_example_job():
+    """examples/distributed_job.py, the whole job, on 2 ranks (stored and matrix-free)."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    for extra in ([], ["--matrix-free"]):
+        cmd = [MPIEXEC, "--oversubscribe", "-n", "2", sys.executable,
+               str(HERE.parent / "examples" / "distributed_job.py"), "3000", *extra]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        assert "heat flow t = 0.25" in proc.stdout
+        assert ("first 9 eigenvalues" in proc.stdout) != bool(extra)
 
 
 def test_products_heat_and_curvature():
