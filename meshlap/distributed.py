@@ -753,13 +753,30 @@ class _ImplicitContext:
 
 
 def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: float | None = None,
-         maxiter: int = 500) -> tuple[np.ndarray, np.ndarray]:
+         maxiter: int = 500, solver: str = "auto") -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` with SLEPc (collective).
 
-    Krylov–Schur with shift-and-invert around a small negative shift, the shifted matrix
-    factored by MUMPS where PETSc has it (else CG with GAMG inside). As in
+    Krylov–Schur with shift-and-invert around a small negative shift σ. As in
     :func:`meshlap.spectral.eigs`, the problem lives on the points with mass and the
     eigenvectors are extended to zero-mass points by the kernel-weighted mean of their row.
+
+    Parameters
+    ----------
+    op : DistributedLaplacian
+        A stored operator.
+    k : int, default 20
+        Number of eigenpairs.
+    tol : float, default 1e-12
+        SLEPc's relative residual tolerance.
+    sigma : float, optional
+        Shift; default -1e-3 · 4π / area.
+    maxiter : int, default 500
+        Krylov–Schur restarts.
+    solver : {"auto", "mumps", "iterative"}
+        How ``-S - σM`` is inverted: ``"mumps"`` a parallel sparse Cholesky (exact, but its
+        fill grows fast with the row width and the mesh size), ``"iterative"`` CG with
+        PETSc's algebraic multigrid (GAMG) to a relative residual of 1e-13; ``"auto"``:
+        MUMPS where PETSc has it. Further settings come from PETSc options (``-st_...``).
 
     Returns
     -------
@@ -798,7 +815,11 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: fl
     st.setType(SLEPc.ST.Type.SINVERT)
     ksp = st.getKSP()
     pc = ksp.getPC()
-    if PETSc.Sys.hasExternalPackage("mumps"):
+    if solver not in ("auto", "mumps", "iterative"):
+        raise MeshError(f"solver must be 'auto', 'mumps' or 'iterative'; got {solver!r}")
+    if solver == "auto":
+        solver = "mumps" if PETSc.Sys.hasExternalPackage("mumps") else "iterative"
+    if solver == "mumps":
         ksp.setType("preonly")
         pc.setType("cholesky")
         pc.setFactorSolverType("mumps")

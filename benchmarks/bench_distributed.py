@@ -1,0 +1,156 @@
+"""Weak-scaling benchmark of meshlap.distributed (issue 14): a unit sphere with a fixed number
+of points per rank and a fixed number of entries per row, on 1 and 2 MPI ranks.
+
+    python benchmarks/bench_distributed.py             # runs mpiexec -n 1 and -n 2, updates RESULTS.md
+    python benchmarks/bench_distributed.py --quick     # 5,000 points per rank, prints only
+    mpiexec -n 2 python benchmarks/bench_distributed.py --rank-job 40000   # one job, JSON on stdout
+
+The sphere has n = P · (points per rank) Fibonacci points and h = c/n, so that a row holds
+the same number of entries whatever P (r² = 4h ln 1e8 and the area per point both scale as
+1/n). Each rank runs one numba thread (NUMBA_NUM_THREADS=1): the ranks are the parallelism.
+Per rank it records own rows, halo points (with mass, received from other ranks), stored
+entries, the halo bytes of one product (8 per halo value: PETSc's ghost scatter for the
+stored matrix receives the columns its rows reference, the shell receives the halo), and the
+time of: the build (partition, halo, count, fill, MPIAIJ assembly), one stored product
+(MatMult, best of 20), one matrix-free product (best of 3) and a Chebyshev heat flow.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+# h·n held fixed: r²·n/4 = 4·20·ln(1e8)/4 ≈ 370 entries per row on the unit sphere
+H_TIMES_N = 20.0
+
+
+def rank_job(per_rank: int) -> None:
+    from mpi4py import MPI
+
+    import meshlap
+    from meshlap import distributed
+
+    comm = MPI.COMM_WORLD
+    size, rank = comm.Get_size(), comm.Get_rank()
+    n = per_rank * size
+    h = H_TIMES_N / n
+    # every rank makes its own chunk of the points; masses from the whole mesh on rank 0
+    # would not be weak scaling, so each rank takes the sphere's uniform mass 4π/n
+    V, _ = meshlap.shapes.sphere(n, seed=0)
+    a, b = n * rank // size, n * (rank + 1) // size
+    V = V[a:b]
+    mass = np.full(len(V), 4 * np.pi / n)
+
+    def timed(fn, repeat):
+        best = np.inf
+        for _ in range(repeat):
+            comm.Barrier()
+            t0 = time.perf_counter()
+            out = fn()
+            comm.Barrier()
+            best = min(best, time.perf_counter() - t0)
+        return best, out
+
+    t_build, op = timed(lambda: distributed.laplacian(V, mass=mass, h=h, comm=comm, scattered=True), 1)
+    t_free_build, free = timed(lambda: distributed.laplacian(V, mass=mass, h=h, comm=comm, scattered=True,
+                                                             matrix_free=True), 1)
+    x, y = op.L.createVecs()
+    x.setArray(op.V[:, 0].copy())
+    t_mult, _ = timed(lambda: op.L.mult(x, y), 20)
+    xf, yf = free.L.createVecs()
+    xf.setArray(free.V[:, 0].copy())
+    t_free, _ = timed(lambda: free.L.mult(xf, yf), 3)
+    err = np.abs(y.getArray() + 2 * op.V[:, 0]).max()
+    t_heat, _ = timed(lambda: distributed.heat_flow(op, op.V[:, 2], 0.05), 1)
+    # the columns PETSc's ghost scatter fetches: the off-process block's columns
+    ghosts = _ghost_count(op)
+    info = {
+        "rank": rank, "ranks": size, "n": n, "h": h, "rows": op.n_local, "halo": op.n_halo,
+        "ghosts": ghosts, "nnz": int(op._counts.sum()), "t_build": t_build,
+        "t_free_build": t_free_build, "t_mult": t_mult, "t_free": t_free, "t_heat": t_heat,
+        "lap_err": float(err),
+    }
+    rows = comm.gather(info)
+    if rank == 0:
+        print(json.dumps(rows))
+
+
+def _ghost_count(op) -> int:
+    # distinct off-rank columns of the own rows: what MatMult's scatter receives
+    indptr, cols, _ = op.L.getValuesCSR()
+    lo, hi = op.offset, op.offset + op.n_local
+    return int(np.unique(cols[(cols < lo) | (cols >= hi)]).size)
+
+
+def run(ranks: int, per_rank: int) -> list[dict]:
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    cmd = ["mpiexec", "--oversubscribe", "-n", str(ranks), sys.executable, __file__, "--rank-job",
+           str(per_rank)]
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def table(results: list[list[dict]]) -> list[str]:
+    lines = ["| ranks | points | rank | own rows | halo points | entries | halo bytes / product | "
+             "build | stored product | matrix-free product | heat flow t=0.05 |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for res in results:
+        for r in res:
+            lines.append(
+                f"| {r['ranks']} | {r['n']:,} | {r['rank']} | {r['rows']:,} | {r['halo']:,} | "
+                f"{r['nnz'] / 1e6:.1f} M | {8 * r['ghosts'] / 1024:.0f} KiB | {r['t_build']:.2f} s | "
+                f"{1e3 * r['t_mult']:.1f} ms | {1e3 * r['t_free']:.0f} ms | {r['t_heat']:.2f} s |")
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--per-rank", type=int, default=40_000)
+    ap.add_argument("--rank-job", type=int)
+    args = ap.parse_args()
+    if args.rank_job:
+        rank_job(args.rank_job)
+        return
+    per_rank = 5_000 if args.quick else args.per_rank
+    run(1, 2000)  # warm numba's cache before timing anything
+    uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    results = [run(p, per_rank) for p in (1, 2)]
+    uptime_after = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    one, two = results
+    eff_mult = one[0]["t_mult"] / max(r["t_mult"] for r in two)
+    eff_free = one[0]["t_free"] / max(r["t_free"] for r in two)
+    eff_build = one[0]["t_build"] / max(r["t_build"] for r in two)
+    lines = [
+        f"`python benchmarks/bench_distributed.py` (per rank {per_rank:,} points, h = {H_TIMES_N:g}/n, "
+        "one numba thread per rank, Open MPI 4.1 / PETSc 3.18 from Debian).",
+        "",
+        f"Load: before `{uptime}`; after `{uptime_after}`. The machine has 2 cores, shared with other "
+        "jobs, so 2 ranks compete with them; the ratios are what count.",
+        "",
+        *table(results),
+        "",
+        f"Weak-scaling efficiency (1-rank time / slowest of 2 ranks, ideal 1.0): build {eff_build:.2f}, "
+        f"stored product {eff_mult:.2f}, matrix-free product {eff_free:.2f}. "
+        f"max |L x + 2x| = {max(r['lap_err'] for res in results for r in res):.3f} "
+        "(truncation and O(h) bias).",
+    ]
+    print("\n".join(lines))
+    if not args.quick:
+        sys.path.insert(0, str(HERE))
+        from results_file import write_section
+
+        write_section("Distributed (MPI) weak scaling", lines)
+
+
+if __name__ == "__main__":
+    main()
