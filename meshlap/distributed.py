@@ -184,10 +184,12 @@ def _kd_split(comm, X: np.ndarray, weight: np.ndarray) -> np.ndarray:
     r1 = np.full(n, size, dtype=np.int64)
     nodes = [(0, size)] if size > 1 else []
     while nodes:
-        key = {nd: i for i, nd in enumerate(nodes)}
+        # the points still in a node of two or more ranks are exactly this level's nodes,
+        # which their first rank tells apart
         nn = len(nodes)
-        node = np.array([key.get((int(a), int(b)), -1) for a, b in zip(r0, r1, strict=True)],
-                        dtype=np.int64) if n else np.zeros(0, np.int64)
+        lookup = np.full(size, -1, dtype=np.int64)
+        lookup[[a_ for a_, _ in nodes]] = np.arange(nn)
+        node = np.where(r1 - r0 > 1, lookup[r0], -1)
         mine = node >= 0
         lo = np.full((nn, 3), np.inf)
         hi = np.full((nn, 3), -np.inf)

@@ -105,9 +105,14 @@ class Checks:
         mine = slice(None) if self.rank == 0 else slice(0, 0)
         op = distributed.laplacian(V[mine], mass=mass[mine], h=h, tol=tol, comm=self.comm, scattered=True)
         A = op.to_scipy()
+        # and the untruncated operator (tol = 0: every rank's halo is every point with mass)
+        full = distributed.laplacian(V[mine], mass=mass[mine], h=h, tol=0, comm=self.comm, scattered=True)
+        B = full.to_scipy()
         if self.rank == 0:
             offdiag = (L0 - __import__("scipy").sparse.diags(L0.diagonal())).nnz
-            self.report("r_apart", f"{same_entries(A, L0)} ({offdiag} off-diagonal) with lattice spacing r")
+            dense = same_entries(B, serial_L(V, mass, h, 0.0))
+            self.report("r_apart", f"{same_entries(A, L0)} ({offdiag} off-diagonal) with lattice spacing r; "
+                        f"tol = 0: {dense}")
 
     def balance(self):
         """A sphere 50 times denser at one pole: the k-d split re-balances by counted entries."""
