@@ -439,7 +439,10 @@ class DistributedLaplacian:
         if X.shape[0] != self.n_local or X.ndim not in (1, 2):
             raise MeshError(f"X must have shape ({self.n_local},) or ({self.n_local}, k) on this rank; "
                             f"got {X.shape}")
-        X2 = X.reshape(self.n_local, -1)
+        X2 = X[:, None] if X.ndim == 1 else X
+        if self.matrix_free:
+            # one pass over the kernel for the whole block: the weights are the cost
+            return self.L.getPythonContext().apply_block(X2).reshape(X.shape)
         out = np.empty_like(X2)
         x, y = self.L.createVecs()
         for j in range(X2.shape[1]):
@@ -503,17 +506,32 @@ class _ShellContext:
         self.isfrom = PETSc.IS().createGeneral(op._ploc.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = None
 
-    def mult(self, mat, x, y) -> None:
+    def _gather(self, x) -> np.ndarray:
+        # x's values at own + halo points (a PETSc VecScatter: the halo exchange)
         MPI, PETSc = _mpi()
-        op = self.op
         if self.scatter is None:
             self.scatter = PETSc.Scatter().create(x, self.isfrom, self.xloc, None)
         self.scatter.scatter(x, self.xloc, addv=PETSc.InsertMode.INSERT_VALUES,
                              mode=PETSc.ScatterMode.FORWARD)
-        if op.n_local == 0:
-            return
-        out = kernel.apply(op._Vloc, op._grid, op.h, self.xloc.getArray(readonly=True), rows=op._rows)
-        y.setArray(out[: op.n_local])
+        return self.xloc.getArray(readonly=True)
+
+    def mult(self, mat, x, y) -> None:
+        op = self.op
+        f = self._gather(x)
+        if op.n_local:
+            y.setArray(kernel.apply(op._Vloc, op._grid, op.h, f, rows=op._rows)[: op.n_local])
+
+    def apply_block(self, X: np.ndarray) -> np.ndarray:
+        """L X for a local block: k halo exchanges, one kernel pass."""
+        op = self.op
+        x = op.L.createVecRight()
+        floc = np.empty((len(op._Vloc), X.shape[1]))
+        for j in range(X.shape[1]):
+            x.setArray(X[:, j])
+            floc[:, j] = self._gather(x)
+        if not op.n_local:
+            return np.zeros_like(X)
+        return kernel.apply(op._Vloc, op._grid, op.h, floc, rows=op._rows)[: op.n_local]
 
     def getDiagonal(self, mat, d) -> None:
         d.setArray(self.op.diagonal())
@@ -652,7 +670,7 @@ def heat_flow(op: DistributedLaplacian, f: Any, t: Any) -> np.ndarray:
     f = np.asarray(f, dtype=np.float64)
     times = _check_times(t)
     tt = np.atleast_1d(times)
-    F2 = f.reshape(op.n_local, -1)
+    F2 = f[:, None] if f.ndim == 1 else f
     out = np.zeros((len(tt), *F2.shape))
     rho = _spectral_radius(op)
     if rho == 0:
@@ -720,7 +738,7 @@ def implicit_heat(op: DistributedLaplacian, f: Any, tau: float, steps: int = 1, 
     ksp.getPC().setType(pc)
     ksp.setTolerances(rtol=rtol, atol=0.0, max_it=2000)
     ksp.setFromOptions()
-    U = f.reshape(op.n_local, -1).copy()
+    U = (f[:, None] if f.ndim == 1 else f).copy()
     b, x = A.createVecs()
     self_iterations = []
     for _ in range(int(steps)):

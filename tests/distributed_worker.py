@@ -84,9 +84,21 @@ class Checks:
         op = distributed.laplacian(V, F, h=h, comm=self.comm, partition=part)
         A = op.to_scipy()
         counts = self.comm.gather(op.n_local)
+        # the shell, heat flow and an implicit step on the same partition (one rank empty)
+        free = distributed.laplacian(V, F, h=h, comm=self.comm, partition=part, matrix_free=True)
+        Ys, Yf = op.gather(op.apply(op.local(V))), free.gather(free.apply(free.local(V)))
+        Us = op.gather(distributed.heat_flow(op, op.local(V[:, 0]), 0.1))
+        Uf = free.gather(distributed.heat_flow(free, free.local(V[:, 0]), 0.1))
+        Is = op.gather(distributed.implicit_heat(op, op.local(V[:, 0]), 0.1))
+        lam, _ = distributed.eigs(op, 6)
         if self.rank == 0:
+            lam0, _ = meshlap.spectral.eigs(meshlap.laplacian(V, F, h=h), 6)
+            assert np.abs(lam - lam0).max() <= 1e-8 * lam0[-1], (lam, lam0)
             detail = same_entries(A, meshlap.laplacian(V, F, h=h).L)
-            self.report("thin", f"{detail}; rows per rank {counts}, slab width r/3 = {r / 3:.3g}")
+            e = max(relerr(Yf, Ys), relerr(Uf, Us))
+            assert e <= 1e-12 and relerr(Is, V[:, 0] / 1.2) < 0.01, (e, relerr(Is, V[:, 0] / 1.2))
+            self.report("thin", f"{detail}; rows per rank {counts}, slab width r/3 = {r / 3:.3g}; "
+                        f"shell vs stored {e:.1e}")
 
     def r_apart(self):
         """A lattice with spacing exactly r (the kernel's d² <= r² decided at the tie), a
