@@ -21,7 +21,7 @@ import pytest
 HERE = Path(__file__).parent
 MISSING = [m for m in ("mpi4py", "petsc4py", "slepc4py") if importlib.util.find_spec(m) is None]
 MPIEXEC = shutil.which("mpiexec")
-pytestmark = pytest.mark.skipif(
+needs_mpi = pytest.mark.skipif(
     bool(MISSING) or MPIEXEC is None,
     reason=f"MPI stack absent ({', '.join(MISSING + ([] if MPIEXEC else ['mpiexec']))}); "
     "install it with .ci/install-mpi",
@@ -47,6 +47,7 @@ def mpirun(n: int, *checks: str, timeout: float = 600) -> list[str]:
     return ok
 
 
+@needs_mpi
 @pytest.mark.parametrize("n", [2, 3])
 def test_matrix_equals_serial_exactly(n):
     """Gathered MPIAIJ == meshlap.laplacian(...).L bit for bit: a k-d split, slabs r/3 wide with
@@ -54,6 +55,7 @@ def test_matrix_equals_serial_exactly(n):
     mpirun(n, "exact", "thin", "r_apart", "balance")
 
 
+@needs_mpi
 def test_example_job():
     """examples/distributed_job.py, the whole job, on 2 ranks (stored and matrix-free)."""
     env = dict(os.environ, NUMBA_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
@@ -67,17 +69,20 @@ def test_example_job():
         assert ("first 9 eigenvalues" in proc.stdout) != bool(extra)
 
 
+@needs_mpi
 def test_products_heat_and_curvature():
     """Apply, Chebyshev heat flow and mean curvature to 1e-12 of the serial code; the matrix-free
     shell to 1e-12 of the stored matrix; backward Euler (PETSc CG) to 1e-8."""
     mpirun(2, "apply", "implicit")
 
 
+@needs_mpi
 def test_eigenpairs_small():
     """SLEPc eigenvalues of a 2,500-vertex sphere to 1e-8 of spectral.eigs."""
     mpirun(3, "eigs_small")
 
 
+@needs_mpi
 @pytest.mark.slow
 def test_eigenpairs_sphere_and_bunny():
     """First 20 eigenvalues of a 16,000-vertex sphere and of the bunny (1,113 zero-mass
@@ -85,6 +90,7 @@ def test_eigenpairs_sphere_and_bunny():
     mpirun(2, "eigs_sphere", "eigs_bunny")
 
 
+@needs_mpi
 def test_global_grid_matches_kernel():
     """The distributed visiting order rests on reproducing kernel.build_grid's lo/cell/dims."""
     from mpi4py import MPI
@@ -100,6 +106,7 @@ def test_global_grid_matches_kernel():
         assert np.array_equal(lo, g.lo) and cell == g.cell and np.array_equal(dims, g.dims)
 
 
+@needs_mpi
 def test_clear_errors():
     from mpi4py import MPI
 
@@ -115,3 +122,18 @@ def test_clear_errors():
         distributed.laplacian(V, mass=np.zeros(100), h=0.01, comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="partition"):
         distributed.laplacian(V, F, h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
+
+
+def test_rest_of_meshlap_never_imports_it():
+    code = ("import sys, meshlap, meshlap.cli, meshlap.heat, meshlap.spectral; "
+            "mods = ('meshlap.distributed', 'mpi4py', 'petsc4py', 'slepc4py'); "
+            "bad = [m for m in mods if m in sys.modules]; assert not bad, bad")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=HERE.parent)
+
+
+def test_missing_stack_names_the_install(monkeypatch):
+    from meshlap import distributed
+
+    monkeypatch.setitem(sys.modules, "petsc4py", None)  # import fails as if absent
+    with pytest.raises(ImportError, match="install-mpi"):
+        distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), h=0.1)
