@@ -137,3 +137,27 @@ def test_missing_stack_names_the_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "petsc4py", None)  # import fails as if absent
     with pytest.raises(ImportError, match="install-mpi"):
         distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), h=0.1)
+
+
+def test_kernel_row_subsets_match_full_build():
+    """kernel.fill_csr(rows=...) and kernel.apply(rows=...), which each rank uses for its own
+    rows, give exactly the full build's rows."""
+    from meshlap import kernel, shapes
+
+    V, _ = shapes.sphere(800, seed=0)
+    mass = np.random.default_rng(0).random(len(V)) * (np.arange(len(V)) % 7 > 0)
+    h = 0.01
+    grid = kernel.build_grid(V, mass, kernel.cutoff_radius(h, 1e-8))
+    counts = kernel.count_entries(V, grid)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    ind, dat = kernel.fill_csr(V, grid, h, indptr, np.int64, np.float64)
+    rows = np.arange(0, len(V), 3)
+    sub = np.zeros(len(V), np.int64)
+    sub[rows] = kernel.count_entries(V, grid, rows=rows)
+    sub_ptr = np.concatenate([[0], np.cumsum(sub)])
+    ind_s, dat_s = kernel.fill_csr(V, grid, h, sub_ptr, np.int64, np.float64, rows=rows)
+    for w in rows:
+        a, b = slice(indptr[w], indptr[w + 1]), slice(sub_ptr[w], sub_ptr[w + 1])
+        assert np.array_equal(ind[a], ind_s[b]) and np.array_equal(dat[a], dat_s[b])
+    f = np.column_stack([V[:, 0], np.sin(3 * V[:, 1])])
+    assert np.array_equal(kernel.apply(V, grid, h, f, rows=rows)[rows], kernel.apply(V, grid, h, f)[rows])
