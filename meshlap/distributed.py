@@ -307,10 +307,10 @@ class DistributedLaplacian:
         margin = self.radius * (1.0 + _MARGIN)
         src = np.flatnonzero(mass > 0)
         dest, rows = [], []
+        P = V[src]
         for q in range(comm.Get_size()):
             if q == comm.Get_rank() or not (boxes[q, :3] <= boxes[q, 3:]).all():
                 continue
-            P = V[src]
             inside = np.all((P >= boxes[q, :3] - margin) & (P <= boxes[q, 3:] + margin), axis=1)
             sel = src[inside]
             rows.append(sel)
@@ -356,7 +356,9 @@ class DistributedLaplacian:
             counts[rows] = kernel.count_entries(self._Vloc, self._grid, rows=rows)
         indptr = np.zeros(n_loc + 1, dtype=np.int64)
         np.cumsum(counts, out=indptr[1:])
-        indices, data = kernel.fill_csr(self._Vloc, self._grid, self.h, indptr, np.int64, np.float64,
+        # local column indices fit in int32 (n_loc < 2³¹): 12 bytes per entry, as PETSc's
+        index_dtype = np.int32 if n_loc < np.iinfo(np.int32).max else np.int64
+        indices, data = kernel.fill_csr(self._Vloc, self._grid, self.h, indptr, index_dtype, np.float64,
                                         rows=rows)
         visit = np.full(n_loc, np.iinfo(np.int64).max, dtype=np.int64)
         src = np.flatnonzero(self._mloc > 0)
@@ -371,9 +373,11 @@ class DistributedLaplacian:
         N, n = self.n_vertices, self.n_local
         if n:
             indptr, indices, data = self._local_csr()
-            A = sp.csr_matrix((data, self._ploc[indices], indptr), shape=(n, N))
-            A.sort_indices()  # PETSc wants sorted columns
-            csr = (A.indptr.astype(PETSc.IntType), A.indices.astype(PETSc.IntType), A.data)
+            cols = self._ploc.astype(PETSc.IntType)[indices]
+            del indices
+            A = sp.csr_matrix((data, cols, indptr.astype(PETSc.IntType)), shape=(n, N), copy=False)
+            A.sort_indices()  # PETSc wants sorted columns; in place
+            csr = (A.indptr, A.indices, A.data)
         else:
             csr = (np.zeros(1, PETSc.IntType), np.zeros(0, PETSc.IntType), np.zeros(0))
         L = PETSc.Mat().createAIJ(size=((n, N), (n, N)), csr=csr, comm=self.comm)
