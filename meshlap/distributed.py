@@ -701,6 +701,15 @@ def mean_curvature_normal(op: DistributedLaplacian) -> np.ndarray:
     """The mean curvature normal H·n = -½ L X on the own rows, (n_local, 3) (collective).
 
     See :func:`meshlap.curvature.mean_curvature_normal`.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import distributed
+    >>> V, F = meshlap.shapes.sphere(2000, seed=0)
+    >>> op = distributed.laplacian(V, F)
+    >>> bool(np.allclose(distributed.mean_curvature_normal(op), op.V, atol=0.05))  # H n = x
+    True
     """
     return -0.5 * op.apply(op.V)
 
@@ -716,6 +725,16 @@ def implicit_heat(op: DistributedLaplacian, f: Any, tau: float, steps: int = 1, 
     ("gamg", "jacobi", ...; "jacobi" for a matrix-free operator).
 
     Returns local values shaped like ``f``.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import distributed
+    >>> V, F = meshlap.shapes.sphere(1500, seed=0)
+    >>> op = distributed.laplacian(V, F, h=0.01)
+    >>> u = op.gather(distributed.implicit_heat(op, op.local(V[:, 0]), tau=0.1))
+    >>> bool(abs(np.linalg.norm(u) / np.linalg.norm(V[:, 0]) - 1 / 1.2) < 0.005)   # 1/(1 + τ·2)
+    True
     """
     MPI, PETSc = _mpi()
     tau = float(tau)
@@ -809,6 +828,15 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: fl
     phi : (n_local, k) ndarray
         This rank's rows of the M-orthonormal eigenvectors, signs fixed as in
         :func:`meshlap.spectral.eigs` (largest-magnitude entry positive).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import distributed
+    >>> V, F = meshlap.shapes.sphere(2000, seed=0)
+    >>> lam, phi = distributed.eigs(distributed.laplacian(V, F, h=0.005), 9)
+    >>> np.round(lam, 1) + 0.0     # l(l+1) = 0, 2, 6 with multiplicities 1, 3, 5
+    array([0. , 2. , 2. , 2. , 5.9, 5.9, 5.9, 5.9, 5.9])
     """
     MPI, PETSc = _mpi()
     SLEPc = _slepc()
