@@ -175,6 +175,11 @@ def main() -> None:
         "busy machine has descheduled. "
         f"max |L x + 2x| = {max(r['lap_err'] for res in results for r in res):.3f} "
         "(truncation and O(h) bias).",
+        "",
+        f"Per stored entry and core (1 rank): build {1e9 * one[0]['t_build'] / one[0]['nnz']:.0f} ns, "
+        f"stored product {1e9 * one[0]['t_mult_local'] / one[0]['nnz']:.2f} ns, matrix-free product "
+        f"{1e9 * one[0]['t_free_local'] / one[0]['nnz']:.1f} ns; peak memory "
+        f"{one[0]['rss'] / one[0]['nnz']:.0f} B per entry (both operators and the runtime).",
     ]
     print("\n".join(lines))
     if not args.quick:
