@@ -50,6 +50,9 @@ _INSTALL = ("meshlap.distributed needs mpi4py, petsc4py and slepc4py: `pip insta
 _MARGIN = 1e-6
 # re-split when the busiest rank holds this much more than the mean of the entries
 _IMBALANCE = 1.10
+# rows are filled and handed to PETSc in blocks of about this many entries, so that the
+# build's peak stays near the matrix PETSc holds (12 bytes per entry) plus one block
+_BLOCK_ENTRIES = 1 << 22
 
 
 def _mpi():
@@ -345,42 +348,53 @@ class DistributedLaplacian:
         self._counts = counts[:n_own]
 
     # -- the stored matrix ---------------------------------------------------------------
-    def _local_csr(self, rows: np.ndarray | None = None):
-        """Own rows (all, or ``rows``) as CSR with local column indices, in serial order."""
+    def _row_blocks(self) -> list[np.ndarray]:
+        # the own rows in grid order, cut into blocks of about _BLOCK_ENTRIES entries
+        ends = np.cumsum(self._counts[self._rows]) if self.n_local else np.zeros(0, np.int64)
+        cuts = np.searchsorted(ends, np.arange(_BLOCK_ENTRIES, ends[-1] if len(ends) else 0,
+                                               _BLOCK_ENTRIES))
+        return [b for b in np.split(self._rows, cuts) if len(b)]
+
+    def _local_csr(self, rows: np.ndarray):
+        """Own rows ``rows`` as CSR over all local points (other rows empty) with local column
+        indices, each row in the single-machine order with its diagonal summed in that order."""
         n_loc = len(self._Vloc)
-        rows = self._rows if rows is None else rows
         counts = np.zeros(n_loc, dtype=np.int64)
-        if rows is self._rows:
-            counts[: self.n_local] = self._counts
-        else:
-            counts[rows] = kernel.count_entries(self._Vloc, self._grid, rows=rows)
+        counts[rows] = self._counts[rows]
         indptr = np.zeros(n_loc + 1, dtype=np.int64)
         np.cumsum(counts, out=indptr[1:])
         # local column indices fit in int32 (n_loc < 2³¹): 12 bytes per entry, as PETSc's
         index_dtype = np.int32 if n_loc < np.iinfo(np.int32).max else np.int64
         indices, data = kernel.fill_csr(self._Vloc, self._grid, self.h, indptr, index_dtype, np.float64,
                                         rows=rows)
-        visit = np.full(n_loc, np.iinfo(np.int64).max, dtype=np.int64)
-        src = np.flatnonzero(self._mloc > 0)
-        visit[src] = _visit_rank(self._Vloc[src], self._uloc[src], self._lo, self._cell, self._dims)
-        _canonical_rows(indptr, indices, data, visit, self.n_local)
+        if getattr(self, "_visit", None) is None:
+            visit = np.full(n_loc, np.iinfo(np.int64).max, dtype=np.int64)
+            src = np.flatnonzero(self._mloc > 0)
+            visit[src] = _visit_rank(self._Vloc[src], self._uloc[src], self._lo, self._cell, self._dims)
+            self._visit = visit
+        _canonical_rows(indptr, indices, data, self._visit, self.n_local)
         return indptr[: self.n_local + 1], indices, data
 
     def _assemble(self):
         MPI, PETSc = _mpi()
-        import scipy.sparse as sp
-
         N, n = self.n_vertices, self.n_local
+        # exact preallocation: a row's entries in own columns are its neighbours among the
+        # own points (the diagonal included), counted with the same kernel
+        d_nnz = np.zeros(n, dtype=np.int64)
         if n:
-            indptr, indices, data = self._local_csr()
-            cols = self._ploc.astype(PETSc.IntType)[indices]
-            del indices
-            A = sp.csr_matrix((data, cols, indptr.astype(PETSc.IntType)), shape=(n, N), copy=False)
-            A.sort_indices()  # PETSc wants sorted columns; in place
-            csr = (A.indptr, A.indices, A.data)
-        else:
-            csr = (np.zeros(1, PETSc.IntType), np.zeros(0, PETSc.IntType), np.zeros(0))
-        L = PETSc.Mat().createAIJ(size=((n, N), (n, N)), csr=csr, comm=self.comm)
+            d_nnz = kernel.count_entries(self.V, kernel.build_grid(self.V, self.mass, self.radius))
+        o_nnz = self._counts - d_nnz
+        L = PETSc.Mat().create(comm=self.comm)
+        L.setSizes(((n, N), (n, N)))
+        L.setType(PETSc.Mat.Type.MPIAIJ)
+        L.setPreallocationNNZ((d_nnz.astype(PETSc.IntType), o_nnz.astype(PETSc.IntType)))
+        L.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        ploc = self._ploc.astype(PETSc.IntType)
+        self._visit = None
+        for rows in self._row_blocks():  # own rows only: nothing for PETSc to send
+            indptr, indices, data = self._local_csr(rows)
+            L.setValuesCSR(indptr.astype(PETSc.IntType), ploc[indices], data)
+        self._visit = None
         L.assemble()
         return L
 
@@ -399,11 +413,10 @@ class DistributedLaplacian:
             return self.L.getDiagonal().getArray().copy()
         if not hasattr(self, "_diag"):
             diag = np.zeros(self.n_local)
-            block = 20_000
-            for a in range(0, len(self._rows), block):
-                rows = self._rows[a:a + block]
+            for rows in self._row_blocks():
                 indptr, _, data = self._local_csr(rows)
                 diag[rows] = data[indptr[rows]]
+            self._visit = None
             self._diag = diag
         return self._diag
 
