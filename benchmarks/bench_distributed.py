@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import json
+import math
 import os
 import resource
 import subprocess
@@ -156,6 +157,42 @@ def table(results: list[list[dict]]) -> list[str]:
     return lines
 
 
+# the nodes of the projection (docs/distributed.md): memory for the operator, cores, memory
+# bandwidth and link speed
+NODE_MEMORY, NODE_CORES, NODE_BANDWIDTH, LINK = 200e9, 64, 200e9, 12.5e9
+
+
+def projection(one: dict) -> list[str]:
+    """The measured per-entry and per-point costs of the 1-rank run, scaled to 10⁸ and 10⁹."""
+    E = one["nnz"] / one["rows"]
+    held, peak = one["kept"] / one["nnz"], one["build_peak"] / one["nnz"]
+    free_point = one["free_kept"] / one["rows"]
+    free_ns, build_ns = one["t_free_local"] / one["nnz"], one["t_build"] / one["nnz"]
+    lines = [f"Projection (E = {E:.0f} entries per row; per entry {held:.1f} B held, {peak:.1f} B at the "
+             f"build's peak, build {1e9 * build_ns:.0f} ns and matrix-free product {1e9 * free_ns:.1f} ns "
+             f"per core; matrix-free {free_point:.0f} B per point; nodes with {NODE_MEMORY / 1e9:.0f} GB "
+             f"for the operator, {NODE_CORES} cores, {NODE_BANDWIDTH / 1e9:.0f} GB/s, "
+             f"{LINK * 8 / 1e9:.0f} Gbit/s links):", "",
+             "| points | stored entries | stored bytes | nodes (build peak) | points per rank | "
+             "halo per rank | halo per node, time on the link | stored product (bandwidth) | build | "
+             "matrix-free: memory, product on the same nodes |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for n in (1e8, 1e9):
+        entries = n * E
+        nodes = math.ceil(entries * peak / NODE_MEMORY)
+        p = n / (nodes * NODE_CORES)
+        halo = 4 * math.sqrt(E * p / math.pi)
+        halo_node = 4 * math.sqrt(E * n / nodes / math.pi)
+        t_stored = entries / nodes * held / NODE_BANDWIDTH
+        t_build = entries * build_ns / (nodes * NODE_CORES)
+        t_free = entries * free_ns / (nodes * NODE_CORES)
+        lines.append(
+            f"| 10^{round(math.log10(n))} | {entries:.2g} | {entries * held / 1e12:.2f} TB | {nodes} | "
+            f"{p:,.0f} | {halo:,.0f} points, {8 * halo / 1e3:.0f} KB | {halo_node:,.0f} points, "
+            f"{8 * halo_node / LINK * 1e3:.2f} ms | {t_stored:.2f} s | {t_build:.0f} s | "
+            f"{n * free_point / 1e9:.0f} GB, {t_free:.1f} s |")
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
@@ -201,6 +238,7 @@ def main() -> None:
         f"after the build (after malloc_trim), {one[0]['build_peak'] / one[0]['nnz']:.1f} B at its peak; "
         f"the matrix-free operator holds {one[0]['free_kept'] / one[0]['rows']:.0f} B per point.",
     ]
+    lines += ["", *projection(one[0])]
     print("\n".join(lines))
     if not args.quick:
         sys.path.insert(0, str(HERE))
