@@ -10,8 +10,9 @@ figures that decide scaling.
 
 The data flow, in order:
 
-1. Each rank passes its chunk of the points and masses (the global vertex numbering is the
-   chunks in rank order), or every rank passes the whole set (``scattered=False``).
+1. Each rank passes its chunk of the points with masses or a share of the faces (the global
+   vertex numbering is the chunks in rank order), or every rank passes the whole set
+   (``scattered=False``).
 2. A recursive coordinate bisection (k-d split) assigns points to ranks, balanced by the
    rows' entry counts: a first split balances points, a second one (when the entries differ
    by more than 10%) the counted entries of the first.
@@ -170,6 +171,39 @@ def _canonical_rows(indptr, indices, data, visit, n_rows):  # pragma: no cover -
         indices[first:first + cnt] = idx
         data[first:first + cnt] = val
         data[start] = -kernel._sum(data, first, cnt)
+
+
+# -- masses from faces spread over the ranks ------------------------------------------------
+def _scattered_mass(comm, V: np.ndarray, F: Any) -> np.ndarray:
+    """m_p = Σ_{t∋p} Area(t)/#t for this rank's chunk of points, from the faces each rank holds
+    (global vertex indices; any chunking, any face sizes).
+
+    Each rank fetches the corners of its faces from their owners, computes the areas, and
+    sends every corner's share to the corner's owner, which adds them up. When the faces are
+    chunked in rank order, each vertex adds its shares in face order, the single-machine
+    order, so the masses are the single-machine ones to the bit.
+    """
+    from .mass import _face_areas
+    from .validation import Polygons
+
+    rank = comm.Get_rank()
+    ends = np.cumsum(comm.allgather(len(V)))
+    start = int(ends[rank] - len(V))
+    F = np.asarray(F) if not isinstance(F, (list, Polygons)) else F
+    empty = isinstance(F, np.ndarray) and F.size == 0
+    faces = Polygons(np.zeros(0, np.int64), np.zeros(1, np.int64)) if empty else check_faces(F, int(ends[-1]))
+    ids = faces.indices
+    need = np.unique(ids)
+    owner = np.searchsorted(ends, need, side="right")
+    asked, src = _exchange(comm, owner, need, np.full(len(need), rank, dtype=np.int64))
+    coords, got = _exchange(comm, src, V[asked - start], asked)
+    Vn = np.empty((len(need), 3))
+    Vn[np.searchsorted(need, got)] = coords
+    local = Polygons(np.searchsorted(need, ids).astype(np.int64), faces.offsets)
+    areas = _face_areas(Vn, local) if faces.n_faces else np.zeros(0)
+    share = np.repeat(areas / faces.sizes, faces.sizes)
+    r_ids, r_share = _exchange(comm, np.searchsorted(ends, ids, side="right"), ids, share)
+    return np.bincount(r_ids - start, weights=r_share, minlength=len(V)).astype(np.float64)
 
 
 # -- partition -----------------------------------------------------------------------------
@@ -574,8 +608,9 @@ def laplacian(
     V : (n, 3) array_like
         Points: all of them on every rank (default), or this rank's chunk (``scattered``).
     F : faces, optional
-        Faces of the whole mesh (every rank the same, ``scattered=False`` only): masses
-        m_p = Σ Area(t)/#t and, without ``h``, the default h = (2·mean edge)².
+        Faces for the masses m_p = Σ Area(t)/#t: those of the whole mesh (every rank the
+        same), which also give the default h = (2·mean edge)²; or, with ``scattered``, any
+        share of the faces per rank, in global vertex indices (then ``h`` is required).
     mass : (n,) array_like, optional
         Point masses (for point clouds, curves, volumes or precomputed meshes), aligned
         with ``V``; zero-mass points get rows but contribute to none.
@@ -620,10 +655,11 @@ def laplacian(
         V = check_vertices(V)
     else:
         V = np.zeros((0, 3))
+    if F is not None and scattered:
+        if mass is None:
+            mass = _scattered_mass(comm, V, F)
+        F = None
     if F is not None:
-        if scattered:
-            raise MeshError("F needs the whole mesh on every rank (scattered=False); for scattered "
-                            "input compute the masses first and pass mass=")
         from .mass import _face_areas, _mean_edge_length, _vertex_mass
 
         faces = check_faces(F, len(V))
@@ -634,7 +670,8 @@ def laplacian(
     if mass is None:
         raise MeshError("pass F (faces) or mass (one mass per point)")
     if h is None:
-        raise MeshError("h is required without faces (the default h comes from the mean edge length)")
+        raise MeshError("h is required without faces and with scattered faces (the default h "
+                        "comes from the mean edge length of the whole mesh)")
     h = check_h(h)
     mass = np.asarray(mass, dtype=np.float64)
     if mass.shape != (len(V),) or not np.isfinite(mass).all() or (mass < 0).any():
