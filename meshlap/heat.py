@@ -129,6 +129,17 @@ def heat_flow(
     return out[0] if times.ndim == 0 else out
 
 
+def _chebyshev_coefficients(rho: float, times: np.ndarray) -> np.ndarray:
+    """(K + 1, T) coefficients c_k(t) with exp(tx) = Σ c_k(t) T_k(2x/ρ + 1) on x ∈ [-ρ, 0]."""
+    # exp(t x) on x = (rho/2)(y - 1), y in [-1, 1]: e^{-a} e^{a y} = ive(0, a) + 2 Σ ive(k, a) T_k(y)
+    a = 0.5 * rho * times
+    # ive(k, a) falls below 1e-16 once k² > 2a·37 (Gaussian tail of the Bessel coefficients)
+    K = int(math.ceil(math.sqrt(2.0 * 37.0 * float(a.max())))) + 10
+    coef = ive(np.arange(K + 1)[:, None], a[None, :])  # (K + 1, T)
+    coef[1:] *= 2.0
+    return coef
+
+
 def _chebyshev_heat(op: Any, f: np.ndarray, times: np.ndarray) -> np.ndarray:
     """exp(tL) f for every t in ``times`` from one Chebyshev recurrence in L."""
     L = sp.csr_matrix(op.L, dtype=np.float64)
@@ -137,12 +148,8 @@ def _chebyshev_heat(op: Any, f: np.ndarray, times: np.ndarray) -> np.ndarray:
     if rho == 0:
         out[:] = f
         return out
-    # exp(t x) on x = (rho/2)(y - 1), y in [-1, 1]: e^{-a} e^{a y} = ive(0, a) + 2 Σ ive(k, a) T_k(y)
-    a = 0.5 * rho * times
-    # ive(k, a) falls below 1e-16 once k² > 2a·37 (Gaussian tail of the Bessel coefficients)
-    K = int(math.ceil(math.sqrt(2.0 * 37.0 * float(a.max())))) + 10
-    coef = ive(np.arange(K + 1)[:, None], a[None, :])  # (K + 1, T)
-    coef[1:] *= 2.0
+    coef = _chebyshev_coefficients(rho, times)
+    K = len(coef) - 1
 
     def Y(x):  # the spectrum of L mapped onto [-1, 1]
         return (2.0 / rho) * apply_block(op, x) + x

@@ -544,15 +544,21 @@ def count_entries(V: np.ndarray, grid: Grid, rows: np.ndarray | None = None,
 
 
 def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtype, value_dtype,
-             progress: Callable[[float], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`."""
+             progress: Callable[[float], None] | None = None,
+             rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`.
+
+    ``rows`` (default: all) fills only those vertices' rows; ``indptr`` is still indexed by
+    vertex, and the other rows must be empty in it (a rank's own rows among its halo).
+    """
     nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=value_dtype)
     coef = 1.0 / (4.0 * math.pi * h * h)
     status = np.zeros(1, dtype=np.int64)
+    order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     for a, b in _row_blocks(grid, nnz / max(len(V), 1), progress):
-        _fill_rows(grid.tgt_order[a:b], V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
+        _fill_rows(order[a:b], V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
                    grid.self_slot, *_geometry(grid), 1.0 / (4.0 * h), coef, indptr, indices, data,
                    status)
         if progress is not None:
@@ -563,8 +569,12 @@ def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtyp
     return indices, data
 
 
-def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray) -> np.ndarray:
+def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray,
+          rows: np.ndarray | None = None) -> np.ndarray:
     """L @ f without storing L; ``f`` of shape (n,) or (n, k).
+
+    ``rows`` (default: all) computes only those rows; the other rows of the result are
+    undefined.
 
     Examples
     --------
@@ -578,7 +588,8 @@ def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray) -> np.ndarray:
     f2 = np.ascontiguousarray(f.reshape(len(f), -1), dtype=np.float64)
     fs = np.ascontiguousarray(f2[grid.src_index].T)
     out = np.empty_like(f2)
-    _apply_rows(grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.self_slot,
+    order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
+    _apply_rows(order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.self_slot,
                 *_geometry(grid), 1.0 / (4.0 * h), 1.0 / (4.0 * math.pi * h * h), fs, f2, out)
     return out[:, 0] if vec else out
 

@@ -23,8 +23,9 @@ def run_example(name, args, monkeypatch, capsys):
 
 
 def test_every_example_is_tested():
+    # distributed_job.py runs under mpiexec in tests/test_distributed.py
     assert set(SCRIPTS) == {"conventions.py", "eigenfunctions.py", "noisy_sphere.py", "quickstart.py",
-                            "save_and_reload.py"}
+                            "save_and_reload.py", "distributed_job.py"}
 
 
 def test_quickstart(monkeypatch, capsys, tmp_path):

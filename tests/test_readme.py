@@ -1,5 +1,6 @@
 """The README's Python examples run as written (from the repository root, as a user would)."""
 
+import importlib.util
 import re
 from pathlib import Path
 
@@ -17,6 +18,8 @@ def _params():
             marks.append(pytest.mark.skip(reason="needs the user's own trimesh object"))
         if "sphere(16000" in code:
             marks.append(pytest.mark.slow)
+        if "meshlap.distributed" in code and importlib.util.find_spec("petsc4py") is None:
+            marks.append(pytest.mark.skip(reason="petsc4py absent: install it with .ci/install-mpi"))
         yield pytest.param(code, id=f"block{i}-{first[:30]}", marks=marks)
 
 

@@ -1,0 +1,163 @@
+"""meshlap.distributed under mpiexec: exact equality with the single-machine matrix, products,
+heat flow, implicit steps and eigenpairs on 2 and 3 ranks.
+
+The checks themselves live in tests/distributed_worker.py, run by `mpiexec --oversubscribe`
+as a subprocess (one MPI job per test); they are skipped, with the reason, only where
+mpiexec, mpi4py, petsc4py or slepc4py are missing (install: .ci/install-mpi).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).parent
+MISSING = [m for m in ("mpi4py", "petsc4py", "slepc4py") if importlib.util.find_spec(m) is None]
+MPIEXEC = shutil.which("mpiexec")
+needs_mpi = pytest.mark.skipif(
+    bool(MISSING) or MPIEXEC is None,
+    reason=f"MPI stack absent ({', '.join(MISSING + ([] if MPIEXEC else ['mpiexec']))}); "
+    "install it with .ci/install-mpi",
+)
+
+
+def mpirun(n: int, *checks: str, timeout: float = 600) -> list[str]:
+    """Run the named worker checks on n ranks; return rank 0's "ok" lines."""
+    env = dict(os.environ)
+    # one numba thread per rank (the ranks share the cores), and Open MPI as root in CI
+    env.update(NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
+               OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = [MPIEXEC, "--oversubscribe", "-n", str(n), sys.executable, str(HERE / "distributed_worker.py"),
+           *checks]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env, cwd=HERE.parent)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, f"mpiexec -n {n} {' '.join(checks)} failed:\n{out[-6000:]}"
+    ok = [line for line in proc.stdout.splitlines() if line.startswith("ok ")]
+    assert [line.split(":")[0][3:] for line in ok] == list(checks), out[-6000:]
+    for line in ok:
+        print(f"[{n} ranks] {line}")
+    return ok
+
+
+@needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
+def test_matrix_equals_serial_exactly(n):
+    """Gathered MPIAIJ == meshlap.laplacian(...).L bit for bit: a k-d split, slabs r/3 wide with
+    one rank empty, and a lattice of spacing exactly r handed in by rank 0 alone."""
+    mpirun(n, "exact", "thin", "r_apart", "balance")
+
+
+@needs_mpi
+def test_example_job():
+    """examples/distributed_job.py, the whole job, on 2 ranks (stored and matrix-free)."""
+    env = dict(os.environ, NUMBA_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    for extra in ([], ["--matrix-free"]):
+        cmd = [MPIEXEC, "--oversubscribe", "-n", "2", sys.executable,
+               str(HERE.parent / "examples" / "distributed_job.py"), "3000", *extra]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        assert "heat flow t = 0.25" in proc.stdout
+        assert ("first 9 eigenvalues" in proc.stdout) != bool(extra)
+
+
+@needs_mpi
+def test_products_heat_and_curvature():
+    """Apply, Chebyshev heat flow and mean curvature to 1e-12 of the serial code; the matrix-free
+    shell to 1e-12 of the stored matrix; backward Euler (PETSc CG) to 1e-8."""
+    mpirun(2, "apply", "implicit")
+
+
+@needs_mpi
+def test_eigenpairs_small():
+    """SLEPc eigenvalues of a 2,500-vertex sphere to 1e-8 of spectral.eigs."""
+    mpirun(3, "eigs_small")
+
+
+@needs_mpi
+@pytest.mark.slow
+def test_eigenpairs_sphere_and_bunny():
+    """First 20 eigenvalues of a 16,000-vertex sphere and of the bunny (1,113 zero-mass
+    vertices) to 1e-8 relative of spectral.eigs, on 2 ranks; both matrices bit for bit."""
+    mpirun(2, "eigs_sphere", "eigs_bunny")
+
+
+@needs_mpi
+def test_global_grid_matches_kernel():
+    """The distributed visiting order rests on reproducing kernel.build_grid's lo/cell/dims."""
+    from mpi4py import MPI
+
+    from meshlap import distributed, kernel
+
+    rng = np.random.default_rng(0)
+    for n, radius in [(50, 0.3), (2000, 0.01), (10, 1e-6), (300, np.inf)]:
+        V = rng.standard_normal((n, 3))
+        mass = rng.random(n) * (rng.random(n) > 0.2)
+        g = kernel.build_grid(V, mass, radius)
+        lo, cell, dims = distributed._global_grid(MPI.COMM_SELF, V, mass, radius)
+        assert np.array_equal(lo, g.lo) and cell == g.cell and np.array_equal(dims, g.dims)
+
+
+@needs_mpi
+def test_clear_errors():
+    from mpi4py import MPI
+
+    import meshlap
+    from meshlap import distributed
+
+    V, F = meshlap.shapes.sphere(100, seed=0)
+    with pytest.raises(meshlap.MeshError, match="pass F"):
+        distributed.laplacian(V, h=0.01, comm=MPI.COMM_SELF)
+    with pytest.raises(meshlap.MeshError, match="h is required"):
+        distributed.laplacian(V, mass=np.ones(100), comm=MPI.COMM_SELF)
+    with pytest.raises(meshlap.MeshError, match="zero mass"):
+        distributed.laplacian(V, mass=np.zeros(100), h=0.01, comm=MPI.COMM_SELF)
+    with pytest.raises(meshlap.MeshError, match="partition"):
+        distributed.laplacian(V, F, h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
+
+
+def test_rest_of_meshlap_never_imports_it():
+    code = ("import sys, meshlap, meshlap.cli, meshlap.heat, meshlap.spectral; "
+            "mods = ('meshlap.distributed', 'mpi4py', 'petsc4py', 'slepc4py'); "
+            "bad = [m for m in mods if m in sys.modules]; assert not bad, bad")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=HERE.parent)
+
+
+def test_missing_stack_names_the_install(monkeypatch):
+    from meshlap import distributed
+
+    monkeypatch.setitem(sys.modules, "petsc4py", None)  # import fails as if absent
+    with pytest.raises(ImportError, match="install-mpi"):
+        distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), h=0.1)
+
+
+def test_kernel_row_subsets_match_full_build():
+    """kernel.fill_csr(rows=...) and kernel.apply(rows=...), which each rank uses for its own
+    rows, give exactly the full build's rows."""
+    from meshlap import kernel, shapes
+
+    V, _ = shapes.sphere(800, seed=0)
+    mass = np.random.default_rng(0).random(len(V)) * (np.arange(len(V)) % 7 > 0)
+    h = 0.01
+    grid = kernel.build_grid(V, mass, kernel.cutoff_radius(h, 1e-8))
+    counts = kernel.count_entries(V, grid)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    ind, dat = kernel.fill_csr(V, grid, h, indptr, np.int64, np.float64)
+    rows = np.arange(0, len(V), 3)
+    sub = np.zeros(len(V), np.int64)
+    sub[rows] = kernel.count_entries(V, grid, rows=rows)
+    sub_ptr = np.concatenate([[0], np.cumsum(sub)])
+    ind_s, dat_s = kernel.fill_csr(V, grid, h, sub_ptr, np.int64, np.float64, rows=rows)
+    for w in rows:
+        a, b = slice(indptr[w], indptr[w + 1]), slice(sub_ptr[w], sub_ptr[w + 1])
+        assert np.array_equal(ind[a], ind_s[b]) and np.array_equal(dat[a], dat_s[b])
+    f = np.column_stack([V[:, 0], np.sin(3 * V[:, 1])])
+    assert np.array_equal(kernel.apply(V, grid, h, f, rows=rows)[rows], kernel.apply(V, grid, h, f)[rows])
