@@ -32,9 +32,10 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from . import kernel
+from ._jit import jit
 from .operator import DEFAULT_TOL
 from .validation import MeshError, check_faces, check_h, check_k, check_tol, check_vertices
 
@@ -155,7 +156,7 @@ def _visit_rank(P: np.ndarray, uid: np.ndarray, lo: np.ndarray, cell: float, dim
     return rank
 
 
-@njit(cache=True, parallel=True)
+@jit(parallel=True)
 def _canonical_rows(indptr, indices, data, visit, n_rows):  # pragma: no cover - compiled
     # Reorder each row's off-diagonal entries to the serial visiting order and sum the
     # diagonal in that order, with the serial kernel's own summation.
