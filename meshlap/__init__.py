@@ -20,7 +20,8 @@ from .operator import (
     mesh_laplacian,
     truncation_bound,
 )
-from .validation import MeshError, MeshWarning, Polygons
+from .geometry import Geometry, Polygons
+from .validation import MeshError, MeshWarning
 
 __version__ = "0.1.0"
 

@@ -21,7 +21,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .baselines import SparseLaplacian
-from .validation import MeshError, Polygons, check_faces, check_vertices
+from .geometry import Polygons
+from .validation import MeshError, check_faces, check_vertices
 
 __all__ = [
     "MESH_FORMATS",

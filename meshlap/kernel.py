@@ -35,7 +35,7 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-__all__ = ["cutoff_radius", "Grid", "build_grid", "count_entries", "fill_csr", "apply"]
+__all__ = ["cutoff_radius", "normalization", "Grid", "build_grid", "count_entries", "fill_csr", "apply"]
 
 # Cells per cut-off radius. Finer columns hug the disc of radius r better (candidates per
 # accepted neighbour on a surface: 1.86 with 2, 1.56 with 3, 1.40 with 4) but cost more
@@ -62,6 +62,21 @@ def cutoff_radius(h: float, tol: float) -> float:
     if tol == 0:
         return math.inf
     return math.sqrt(4.0 * h * math.log(1.0 / tol))
+
+
+def normalization(h: float, dim: int = 2) -> float:
+    """The kernel's factor 1/(h (4πh)^{k/2}) for intrinsic dimension k (1/(4πh²) on surfaces).
+
+    Belkin, Sun and Wang, "Constructing Laplace operator from point clouds in R^d" (SODA 2009):
+    with it, Σ_p m_p exp(-|p-w|²/4h) (f(p) - f(w)) tends to Δf(w) on a k-manifold.
+
+    Examples
+    --------
+    >>> import math
+    >>> normalization(0.01, 2) == 1 / (4 * math.pi * 0.01**2)
+    True
+    """
+    return 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
 
 
 @dataclass
@@ -542,12 +557,14 @@ def count_entries(V: np.ndarray, grid: Grid, rows: np.ndarray | None = None,
 
 
 def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtype, value_dtype,
-             progress: Callable[[float], None] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`."""
+             progress: Callable[[float], None] | None = None,
+             dim: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`;
+    ``dim`` is the intrinsic dimension k of :func:`normalization`."""
     nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=value_dtype)
-    coef = 1.0 / (4.0 * math.pi * h * h)
+    coef = normalization(h, dim)
     status = np.zeros(1, dtype=np.int64)
     for a, b in _row_blocks(grid, nnz / max(len(V), 1), progress):
         _fill_rows(grid.tgt_order[a:b], V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
@@ -561,8 +578,8 @@ def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtyp
     return indices, data
 
 
-def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray) -> np.ndarray:
-    """L @ f without storing L; ``f`` of shape (n,) or (n, k).
+def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray, dim: int = 2) -> np.ndarray:
+    """L @ f without storing L; ``f`` of shape (n,) or (n, q); ``dim`` as in :func:`fill_csr`.
 
     Examples
     --------
@@ -577,5 +594,5 @@ def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray) -> np.ndarray:
     fs = np.ascontiguousarray(f2[grid.src_index].T)
     out = np.empty_like(f2)
     _apply_rows(grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.self_slot,
-                *_geometry(grid), 1.0 / (4.0 * h), 1.0 / (4.0 * math.pi * h * h), fs, f2, out)
+                *_geometry(grid), 1.0 / (4.0 * h), normalization(h, dim), fs, f2, out)
     return out[:, 0] if vec else out

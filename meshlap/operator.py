@@ -20,10 +20,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
-from . import kernel
-from .mass import _face_areas, _mean_edge_length, _vertex_mass
+from . import geometry, kernel, pairs
+from .geometry import Geometry
+from .mass import _mean_edge_length
 from .progress import ProgressLike, make_progress
-from .topology import warn_if_messy
 from .validation import (
     MeshError,
     check_faces,
@@ -69,8 +69,8 @@ def available_memory() -> int:
         return 8 << 30
 
 
-def default_h(V: Any, F: Any) -> float:
-    """The automatic kernel width: h = (2 ē)², ē the mean edge length of the faces.
+def default_h(V: Any, F: Any, k: int | None = None) -> float:
+    """The automatic kernel width: h = (2 ē)², ē the mean edge length of the cells.
 
     The Gaussian's standard deviation sqrt(2h) then spans about 2.8 mean edges, so each row
     averages over a few rings of neighbours (hundreds of vertices with ``tol = 1e-8``).
@@ -83,6 +83,8 @@ def default_h(V: Any, F: Any) -> float:
     >>> round(default_h(V, [[0, 1, 2]]), 4)
     5.1808
     """
+    if k in (1, 3) or geometry.cell_columns(F) == 2:
+        return geometry.from_mesh(V, F, k).default_h
     V = check_vertices(V)
     faces = check_faces(F, len(V))
     return (2.0 * _mean_edge_length(V, faces)) ** 2
@@ -136,14 +138,16 @@ class MeshLaplacian(_LumpedLaplacian):
 
     Parameters
     ----------
-    V : (n, 3) or (n, 2) array_like
-        Vertex positions.
-    F : (m, k) array_like, or list of sequences
-        Faces of any size (triangles, quads, mixed polygons). Each face gives Area(t)/#t
-        to each of its #t corners.
+    V : (n, d) array_like, or Geometry
+        Vertex positions, or a :class:`~meshlap.geometry.Geometry` (then ``F`` is None):
+        positions, masses and intrinsic dimension from any source, e.g. a point cloud.
+    F : (m, c) array_like, or list of sequences
+        Cells: faces of any size (triangles, quads, mixed polygons), each giving
+        Area(t)/#t to each of its #t corners; (m, 2) edges of a curve; tetrahedra with
+        ``k=3`` (see :func:`meshlap.geometry.from_mesh`).
     h : float, optional
         Kernel width; the Gaussian is exp(-d²/4h). An explicit value always wins; without
-        one, :func:`default_h` chooses h = (2 ē)² from the mean edge length ē.
+        one, h = (2 ē)² from the mean edge length ē (the geometry's spacing).
     tol : float, default 1e-8
         Kernel tolerance: weights exp(-d²/4h) < tol are dropped, which cuts the sums off at
         r = sqrt(4h ln(1/tol)). For every vertex w the truncated operator differs from the
@@ -161,6 +165,9 @@ class MeshLaplacian(_LumpedLaplacian):
         that would exceed it raises :class:`OperatorTooLargeError` before allocating.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
+    k : {1, 2, 3}, optional
+        Intrinsic dimension of the mesh, inferred from ``F`` when not given; the kernel's
+        normalization is 1/(h (4πh)^{k/2}) (1/(4πh²) on surfaces).
 
     Attributes
     ----------
@@ -171,7 +178,11 @@ class MeshLaplacian(_LumpedLaplacian):
     S : scipy.sparse.csr_matrix
         ``M @ L``, symmetric, negative semidefinite.
     mass : (n,) ndarray
-        Vertex masses m_p = Σ_{t∋p} Area(t)/#t.
+        Vertex masses m_p = Σ_{t∋p} Area(t)/#t (length, volume shares for curves, volumes).
+    geometry : Geometry
+        What the kernel was built from; ``dim`` is its intrinsic dimension k.
+    faces : Polygons or None
+        The faces of a surface mesh; None for curves, volumes and point clouds.
     h, tol, radius : float
         Kernel width, tolerance and the cut-off radius that follows from them.
 
@@ -188,7 +199,7 @@ class MeshLaplacian(_LumpedLaplacian):
     def __init__(
         self,
         V: Any,
-        F: Any,
+        F: Any = None,
         h: float | None = None,
         tol: float = DEFAULT_TOL,
         *,
@@ -197,9 +208,24 @@ class MeshLaplacian(_LumpedLaplacian):
         matrix_free: bool = False,
         max_memory: int | None = None,
         progress: ProgressLike = None,
+        k: int | None = None,
     ) -> None:
-        self.V = check_vertices(V)
-        self.faces = check_faces(F, len(self.V))
+        if isinstance(V, Geometry):
+            if F is not None or k not in (None, V.dim):
+                raise MeshError("pass either a Geometry alone or vertices V with cells F")
+            geo = V
+        else:
+            if F is None:
+                raise MeshError("F must be an (m, k) index array of faces, edges or tetrahedra, or a "
+                                "list of polygons; got None (for points alone use "
+                                "meshlap.point_cloud_laplacian)")
+            geo = geometry.from_mesh(V, F, k)
+        self.geometry = geo
+        self.dim = geo.dim
+        self.faces = geo.faces
+        P = geo.points
+        # the grid kernel bins three coordinates: lower dimensions get zeros
+        self.V = P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
         self.tol = 0.0 if exact else check_tol(tol)
         self.exact = self.tol == 0.0
         try:
@@ -208,22 +234,23 @@ class MeshLaplacian(_LumpedLaplacian):
             raise MeshError(f"dtype must be float64 or float32; got {dtype!r}") from exc
         if self.dtype not in (np.float64, np.float32):
             raise MeshError(f"dtype must be float64 or float32; got {self.dtype}")
-        areas = _face_areas(self.V, self.faces)
-        self.mass = _vertex_mass(self.V, self.faces, areas)
-        if not self.mass.any():
-            raise MeshError("every face has zero area: the mesh has no surface to integrate over")
-        mean_edge = _mean_edge_length(self.V, self.faces)
-        warn_if_messy(self.V, self.faces, areas, mean_edge)
+        self.mass = geo.mass
         self.h_auto = h is None
-        self.h = (check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
-                  if h is None else check_h(h))
+        self.h = (check_h(geo.default_h, "the automatic h = (2·spacing)²") if h is None else check_h(h))
         self.radius = kernel.cutoff_radius(self.h, self.tol)
         self.matrix_free = bool(matrix_free)
         self.max_memory = (int(available_memory() * 0.8) if max_memory is None
                            else int(check_positive(max_memory, "max_memory")))
-        self._grid = kernel.build_grid(self.V, self.mass, self.radius)
         self._L: sp.csr_matrix | None = None
         self._S: sp.csr_matrix | None = None
+        if self.V.shape[1] > 3:
+            if self.matrix_free:
+                raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "
+                                f"{self.V.shape[1]}")
+            self._grid = None
+            self._L = pairs.assemble(self.V, self.mass, self.h, self.radius, self.dim, self.dtype)
+            return
+        self._grid = kernel.build_grid(self.V, self.mass, self.radius)
         if not self.matrix_free:
             self._L = self._assemble(make_progress(progress))
 
@@ -293,7 +320,7 @@ class MeshLaplacian(_LumpedLaplacian):
                 stacklevel=3,
             )
         indices, data = kernel.fill_csr(self.V, self._grid, self.h, indptr, index_dtype,
-                                        self.dtype, progress=fill_cb)
+                                        self.dtype, progress=fill_cb, dim=self.dim)
         if report is not None:
             report(1.0, "done")
         return _csr(data, indices, indptr, n)
@@ -338,7 +365,7 @@ class MeshLaplacian(_LumpedLaplacian):
     def __matmul__(self, f: Any) -> np.ndarray:
         f = check_function(f, self.n_vertices)
         if self._L is None:
-            return kernel.apply(self.V, self._grid, self.h, f)
+            return kernel.apply(self.V, self._grid, self.h, f, self.dim)
         return np.asarray(self._L @ f)
 
     def matvec(self, f: Any) -> np.ndarray:
@@ -349,20 +376,24 @@ class MeshLaplacian(_LumpedLaplacian):
         """L as a :class:`scipy.sparse.linalg.LinearOperator` (matrix-free when not stored)."""
         if self._L is not None:
             return sp.linalg.aslinearoperator(self._L)
-        V, grid, h = self.V, self._grid, self.h
+        V, grid, h, k = self.V, self._grid, self.h, self.dim
         return LinearOperator(
             self.shape,
-            matvec=lambda x: kernel.apply(V, grid, h, np.asarray(x, np.float64).reshape(-1)),
-            matmat=lambda X: kernel.apply(V, grid, h, np.asarray(X, np.float64)),
+            matvec=lambda x: kernel.apply(V, grid, h, np.asarray(x, np.float64).reshape(-1), k),
+            matmat=lambda X: kernel.apply(V, grid, h, np.asarray(X, np.float64), k),
             dtype=np.float64,
         )
 
     # -- display ------------------------------------------------------------------------
     def _summary(self) -> list[tuple[str, str]]:
-        h_note = " (auto: (2·mean edge)²)" if self.h_auto else ""
-        rows = [
-            ("vertices", f"{self.n_vertices:,}"),
-            ("faces", f"{self.faces.n_faces:,}"),
+        geo = self.geometry
+        h_note = f" (auto: (2·{'spacing' if geo.faces is None else 'mean edge'})²)" if self.h_auto else ""
+        rows = [("vertices", f"{self.n_vertices:,}")]
+        if geo.faces is not None:
+            rows.append(("faces", f"{self.faces.n_faces:,}"))
+        else:
+            rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}"))
+        rows += [
             ("h", f"{self.h:.6g}{h_note}"),
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
@@ -388,7 +419,7 @@ class MeshLaplacian(_LumpedLaplacian):
 
 def laplacian(
     V: Any,
-    F: Any,
+    F: Any = None,
     h: float | None = None,
     tol: float = DEFAULT_TOL,
     **kwargs: Any,
@@ -397,16 +428,16 @@ def laplacian(
 
     Parameters
     ----------
-    V : (n, 3) array_like
-        Vertex positions.
-    F : (m, k) array_like or list of sequences
-        Faces of any size.
+    V : (n, d) array_like, or Geometry
+        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None).
+    F : (m, c) array_like or list of sequences
+        Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float, optional
         Kernel width (exp(-d²/4h)); default :func:`default_h`.
     tol : float, default 1e-8
         Kernel tolerance; 0 for the untruncated operator.
     **kwargs
-        ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress``: see
+        ``k``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress``: see
         :class:`MeshLaplacian`.
 
     Returns
@@ -425,7 +456,7 @@ def laplacian(
     return MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
 
 
-def mesh_laplacian(V: Any, F: Any, h: float | None = None, tol: float = DEFAULT_TOL,
+def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = DEFAULT_TOL,
                    **kwargs: Any) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """The pair ``(L, M)``: the Belkin–Sun–Wang Laplacian and its lumped mass matrix.
 
@@ -446,7 +477,7 @@ def mesh_laplacian(V: Any, F: Any, h: float | None = None, tol: float = DEFAULT_
 
 
 def truncation_bound(op: MeshLaplacian, f: np.ndarray) -> np.ndarray:
-    """Per-vertex bound on |L_exact f - L_tol f| = tol·A·max_p|f(p)-f(w)| / (4πh²)."""
+    """Per-vertex bound on |L_exact f - L_tol f| = tol·A·max_p|f(p)-f(w)| / (h (4πh)^{k/2})."""
     f = check_function(f, op.n_vertices)
     spread = np.maximum(np.abs(f.max(axis=0) - f), np.abs(f - f.min(axis=0)))
-    return op.tol * op.mass.sum() * spread / (4.0 * math.pi * op.h**2)
+    return op.tol * op.mass.sum() * spread * kernel.normalization(op.h, op.dim)
