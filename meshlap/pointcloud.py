@@ -57,7 +57,7 @@ __all__ = ["point_cloud_geometry", "point_cloud_laplacian", "point_masses"]
 
 # First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
 # does not secure, up to _MAX_NEIGHBORS.
-_NEIGHBORS = {1: 8, 2: 16, 3: 40}
+_NEIGHBORS = {1: 8, 2: 16, 3: 32}
 _MAX_NEIGHBORS = 256
 # A neighbourhood whose k-th principal variance is below this fraction of the first has no
 # k-dimensional extent.
@@ -189,14 +189,14 @@ def _star2(U, K, tri):
 
 
 @njit(cache=True, parallel=True)
-def _masses2(P, nbr, counts, rows, out_star, out_vor, status, flat, tri):
+def _masses2(P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
     d = P.shape[1]
     for r in prange(len(rows)):
         p = rows[r]
         K = counts[r]
         T = np.empty((2, d))
         U = np.empty((K, 2))
-        flat[r] = _tangent(P, p, nbr[r, :K], 2, T)
+        flat[r] = _tangent(P, p, nbr[r, :kt], 2, T)
         if flat[r] < _FLAT:
             status[r] = _DEGENERATE
             continue
@@ -206,14 +206,14 @@ def _masses2(P, nbr, counts, rows, out_star, out_vor, status, flat, tri):
 
 # -- k = 1: half the gap to the nearest neighbours on each side ---------------------------------
 @njit(cache=True, parallel=True)
-def _masses1(P, nbr, counts, rows, out, status, ends):
+def _masses1(P, nbr, counts, kt, rows, out, status, ends):
     d = P.shape[1]
     for r in prange(len(rows)):
         p = rows[r]
         K = counts[r]
         T = np.empty((1, d))
         U = np.empty((K, 1))
-        if _tangent(P, p, nbr[r, :K], 1, T) <= 0.0:
+        if _tangent(P, p, nbr[r, :kt], 1, T) <= 0.0:
             status[r] = _DEGENERATE
             continue
         _project(P, p, nbr[r, :K], T, U)
@@ -234,7 +234,83 @@ def _masses1(P, nbr, counts, rows, out, status, ends):
         status[r] = _INSECURE if one_side else _OK
 
 
-# -- k >= 3: scipy's Delaunay of each projected neighbourhood -------------------------------------
+# -- k = 3: the Delaunay tetrahedra around the origin from the Voronoi cell's vertices ---------------
+@njit(cache=True)
+def _star3(U, K):
+    # Each vertex of the origin's Voronoi cell is where three bisector planes u·x = |u|²/2
+    # meet without violating any other; it is the circumcentre of the Delaunay tetrahedron
+    # (origin, u_a, u_b, u_c). Returns (Σ volumes / 4, status, open): the solid angles of the
+    # tetrahedra at the origin add up to 4π when its star is closed; more than that means
+    # cospherical neighbours (a vertex on four planes), which the caller resolves by Qhull.
+    far = 0.0
+    for j in range(K):
+        far = max(far, math.sqrt(U[j, 0] ** 2 + U[j, 1] ** 2 + U[j, 2] ** 2))
+    vol = 0.0
+    omega = 0.0
+    reach = 0.0
+    for a in range(K):
+        ax, ay, az = U[a, 0], U[a, 1], U[a, 2]
+        ba = 0.5 * (ax * ax + ay * ay + az * az)
+        for b in range(a + 1, K):
+            bx, by, bz = U[b, 0], U[b, 1], U[b, 2]
+            bb = 0.5 * (bx * bx + by * by + bz * bz)
+            for c in range(b + 1, K):
+                cx, cy, cz = U[c, 0], U[c, 1], U[c, 2]
+                bc = 0.5 * (cx * cx + cy * cy + cz * cz)
+                # the cross products give the solution by Cramer's rule
+                x1, y1, z1 = by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx
+                x2, y2, z2 = cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax
+                x3, y3, z3 = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+                det = ax * x1 + ay * y1 + az * z1
+                if abs(det) <= 1e-12 * (ba * bb * bc) ** 0.5 * 8.0:
+                    continue
+                vx = (ba * x1 + bb * x2 + bc * x3) / det
+                vy = (ba * y1 + bb * y2 + bc * y3) / det
+                vz = (ba * z1 + bb * z2 + bc * z3) / det
+                ok = True
+                for j in range(K):
+                    if j == a or j == b or j == c:
+                        continue
+                    uj2 = U[j, 0] ** 2 + U[j, 1] ** 2 + U[j, 2] ** 2
+                    if U[j, 0] * vx + U[j, 1] * vy + U[j, 2] * vz > 0.5 * uj2 * (1.0 + 1e-10):
+                        ok = False
+                        break
+                if not ok:
+                    continue
+                vol += abs(det) / 6.0
+                reach = max(reach, math.sqrt(vx * vx + vy * vy + vz * vz))
+                # solid angle at the origin (Van Oosterom and Strackee)
+                la = math.sqrt(2.0 * ba)
+                lb = math.sqrt(2.0 * bb)
+                lc = math.sqrt(2.0 * bc)
+                dab = ax * bx + ay * by + az * bz
+                dac = ax * cx + ay * cy + az * cz
+                dbc = bx * cx + by * cy + bz * cz
+                omega += 2.0 * math.atan2(abs(det), la * lb * lc + dab * lc + dac * lb + dbc * la)
+    full = 4.0 * math.pi
+    if omega > full * (1.0 + 1e-6):
+        return vol / 4.0, _DEGENERATE, False
+    closed = omega > full * (1.0 - 1e-6)
+    status = _OK if (closed and 2.0 * reach < far) else _INSECURE
+    return vol / 4.0, status, not closed
+
+
+@njit(cache=True, parallel=True)
+def _masses3(P, nbr, counts, kt, rows, out, status, hull):
+    d = P.shape[1]
+    for r in prange(len(rows)):
+        p = rows[r]
+        K = counts[r]
+        T = np.empty((3, d))
+        U = np.empty((K, 3))
+        if _tangent(P, p, nbr[r, :kt], 3, T) < _FLAT:
+            status[r] = _DEGENERATE
+            continue
+        _project(P, p, nbr[r, :K], T, U)
+        out[r], status[r], hull[r] = _star3(U, K)
+
+
+# -- k >= 4 (and cospherical k = 3 neighbourhoods): Qhull's Delaunay of each neighbourhood -------
 def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
     X = np.vstack([np.zeros((1, k)), U])
     try:
@@ -263,7 +339,7 @@ def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
     return float(vol.sum()) / (k + 1), status, hull
 
 
-def _masses_k(P: np.ndarray, nbr: np.ndarray, counts: np.ndarray, rows: np.ndarray, k: int):
+def _masses_k(P: np.ndarray, nbr: np.ndarray, counts: np.ndarray, kt: int, rows: np.ndarray, k: int):
     n = len(rows)
     out = np.zeros(n)
     status = np.zeros(n, dtype=np.int64)
@@ -272,7 +348,7 @@ def _masses_k(P: np.ndarray, nbr: np.ndarray, counts: np.ndarray, rows: np.ndarr
     for r, p in enumerate(rows):
         K = counts[r]
         nb = nbr[r, :K]
-        if _tangent(P, p, nb, k, T) < _FLAT:
+        if _tangent(P, p, nb[:kt], k, T) < _FLAT:
             status[r] = _DEGENERATE
             continue
         U = (P[nb] - P[p]) @ T.T
@@ -319,7 +395,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     k : int, default 2
         Intrinsic dimension of the sampled manifold.
     neighbors : int, optional
-        First neighbourhood size K (8, 16, 40 for k = 1, 2, 3); it grows where the star
+        First neighbourhood size K (8, 16, 32 for k = 1, 2, 3), also the one that gives the
+        tangent space; it grows (up to 256) where the local Delaunay star
         needs more neighbours.
     merge_tol : float, default 1e-6
         Points closer than ``merge_tol`` times the median nearest-neighbour distance are one.
@@ -364,6 +441,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     nu = len(Q)
     tree = KDTree(Q)
     K = min(neighbors or _NEIGHBORS.get(k, 20 * k), nu - 1)
+    # the tangent space comes from the first neighbourhood, however far the star search grows
+    kt = K
     if K < k + 1:
         raise MeshError(f"neighbors must be at least k + 1 = {k + 1}; got {K}")
     mass = np.zeros(nu)
@@ -387,13 +466,13 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         counts = np.full(len(todo), K, dtype=np.int64)
         if k == 1:
             m, st, ends = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
-            _masses1(Q, nbr, counts, todo, m, st, ends)
+            _masses1(Q, nbr, counts, kt, todo, m, st, ends)
             open_cell[todo] = ends
         elif k == 2:
             m, vor, st, flat = (np.zeros(len(todo)), np.zeros(len(todo)),
                                 np.zeros(len(todo), np.int64), np.zeros(len(todo)))
             tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
-            _masses2(Q, nbr, counts, todo, m, vor, st, flat, tri)
+            _masses2(Q, nbr, counts, kt, todo, m, vor, st, flat, tri)
             open_cell[todo] = ~np.isfinite(vor)
             # each triangle of the local stars once, from its corner of smallest index
             r, slot = np.nonzero(tri[:, :, 0] >= 0)
@@ -402,8 +481,16 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
             own = (todo[r] < a) & (todo[r] < b)
             last[todo] = it
             star_parts.append((it, np.column_stack([todo[r], a, b])[own]))
+        elif k == 3:
+            m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
+            _masses3(Q, nbr, counts, kt, todo, m, st, hull)
+            # cospherical neighbours: Qhull (with its joggle) decides the star
+            tie = np.flatnonzero(st == _DEGENERATE)
+            if len(tie):
+                m[tie], st[tie], hull[tie] = _masses_k(Q, nbr[tie], counts[tie], kt, todo[tie], k)
+            open_cell[todo] = hull
         else:
-            m, st, hull = _masses_k(Q, nbr, counts, todo, k)
+            m, st, hull = _masses_k(Q, nbr, counts, kt, todo, k)
             open_cell[todo] = hull
         mass[todo], status[todo] = m, st
         if K >= min(_MAX_NEIGHBORS, nu - 1):
