@@ -1,9 +1,9 @@
 """The heat-kernel operator in any ambient dimension, from a k-d tree's list of close pairs.
 
 The cell grid of :mod:`meshlap.kernel` bins three coordinates; points in R^d with d > 3 (the
-flat torus in R⁴, S³ ⊂ R⁴) take this path instead: scipy's ``cKDTree.query_pairs`` finds
-every pair closer than the cut-off radius once, and both orientations are written straight
-into the CSR arrays, so S = M L is symmetric to the last bit as on the grid path.
+flat torus in R⁴, S³ ⊂ R⁴) take this path instead: scipy's ``cKDTree.query_pairs`` lists every
+pair within the cut-off radius once, and both orientations of a pair pass the same exact
+distance test, so S = M L is symmetric to the last bit as on the grid path.
 """
 
 from __future__ import annotations
@@ -43,13 +43,20 @@ def assemble(X: np.ndarray, mass: np.ndarray, h: float, radius: float, dim: int,
     n = len(X)
     if not np.isfinite(radius):
         radius = 2.0 * float(np.ptp(X, axis=0).max()) + 1.0
-    pairs = cKDTree(X).query_pairs(radius, output_type="ndarray")
-    i = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    j = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    d2 = np.einsum("ij,ij->i", X[i] - X[j], X[i] - X[j])
-    keep = mass[j] > 0
+    i, j = _close_pairs(X, radius)
+    d2 = np.zeros(len(i))
+    for c in range(X.shape[1]):  # column by column: fast and the same rounding for (i, j) and (j, i)
+        d2 += (X[i, c] - X[j, c]) ** 2
+    # the exact test on both orientations alike keeps S symmetric to the last bit
+    keep = (d2 <= radius * radius) & (mass[j] > 0)
     i, j, d2 = i[keep], j[keep], d2[keep]
     w = normalization(h, dim) * mass[j] * np.exp(-d2 / (4.0 * h))
     off = sp.csr_matrix((w, (i, j)), shape=(n, n))
     L = off - sp.diags(np.asarray(off.sum(axis=1)).ravel())
     return sp.csr_matrix(L, dtype=dtype)
+
+
+def _close_pairs(X: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    # both orientations of every pair within the radius
+    pairs = cKDTree(X).query_pairs(radius * (1.0 + 1e-7), output_type="ndarray")
+    return np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
