@@ -140,7 +140,8 @@ def _star2(U, K, tri):
     far = 0.0
     for j in range(K):
         far = max(far, math.hypot(U[j, 0], U[j, 1]))
-    box = 4.0 * far + 1e-300
+    # far enough that the circumcentres of the thin triangles along an open boundary are kept
+    box = 1e3 * far + 1e-300
     cap = K + 5
     px = np.empty(cap)
     py = np.empty(cap)
@@ -463,6 +464,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         not_self = idx != todo[:, None]
         order = np.argsort(~not_self, axis=1, kind="stable")
         nbr = np.ascontiguousarray(np.take_along_axis(idx, order, axis=1)[:, :K])
+        if it == 0:
+            first_nbr = nbr
         counts = np.full(len(todo), K, dtype=np.int64)
         if k == 1:
             m, st, ends = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
@@ -507,10 +510,17 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                         f"{'collinear' if k == 2 else 'degenerate'}); is k={k} the right dimension?")
     if degenerate.any():
         good = np.where(degenerate | outlier, np.nan, mass)
-        fill = np.nanmedian(good[idx[:, 1:]], axis=1)
-        mass[degenerate] = np.where(np.isfinite(fill[degenerate]), fill[degenerate], np.nanmedian(good))
+        with warnings.catch_warnings():  # rows without a good neighbour: the global median
+            warnings.simplefilter("ignore", RuntimeWarning)
+            fill = np.nanmedian(good[idx[degenerate, 1:]], axis=1)
+        mass[degenerate] = np.where(np.isfinite(fill), fill, np.nanmedian(good))
     mass[outlier] = 0.0
-    insecure = int(((status == _INSECURE) & ~outlier & ~open_cell).sum())
+    # next to an open cell, a star that stays insecure is the local one by design: the global
+    # Delaunay triangulation would add long slivers across the boundary
+    near_open = open_cell.copy()
+    for _ in range(4):  # four rings of neighbours
+        near_open |= near_open[first_nbr].any(axis=1)
+    insecure = int(((status == _INSECURE) & ~outlier & ~near_open).sum())
     problems = []
     if n_dup:
         problems.append(f"{n_dup} duplicate or near-coincident point(s) (within {merge_tol:g} of the "
