@@ -263,6 +263,8 @@ class MeshLaplacian(_LumpedLaplacian):
         # Mean and standard error of the row counts of `sample` rows drawn with replacement:
         # O(sample) memory and O(sample * row length) time, even when the matrix is dense.
         n = self.n_vertices
+        if self._grid is None:  # points in more than 3 dimensions: L is already stored
+            return float(self.nnz), 0.0
         if n <= sample:
             return float(kernel.count_entries(self.V, self._grid).sum()), 0.0
         rows = np.random.default_rng(seed).integers(0, n, size=sample)
