@@ -53,7 +53,8 @@ from .geometry import Geometry, check_points
 from .operator import DEFAULT_TOL, MeshLaplacian
 from .validation import MeshError, MeshWarning
 
-__all__ = ["point_cloud_geometry", "point_cloud_laplacian", "point_masses", "project_to_tangent"]
+__all__ = ["point_cloud_geometry", "point_cloud_laplacian", "point_cloud_matrices", "point_masses",
+           "project_to_tangent"]
 
 # First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
 # does not secure, up to _MAX_NEIGHBORS.
@@ -665,3 +666,21 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     geo = point_cloud_geometry(P, k, denoise=denoise, neighbors=neighbors, merge_tol=merge_tol,
                                outlier_ratio=outlier_ratio)
     return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)
+
+
+def point_cloud_matrices(P: Any, h: float | None = None, k: int = 2, **kwargs: Any
+                         ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The pair ``(L, M)`` of :func:`point_cloud_laplacian`, for code written for robust-laplacian.
+
+    Note the sign: L is negative semidefinite (L ≈ +Δ); robust-laplacian's L is the positive
+    weak form, which corresponds to ``-M @ L`` here.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> L, M = point_cloud_matrices(meshlap.samples.sphere_points(1000), h=0.02)
+    >>> L.shape, bool(abs(M.diagonal().sum() - 4 * 3.1416) < 0.2)     # the sphere's area
+    ((1000, 1000), True)
+    """
+    op = point_cloud_laplacian(P, h=h, k=k, **kwargs)
+    return op.L, op.M
