@@ -73,9 +73,11 @@ def normalization(h: float, dim: int = 2) -> float:
     Examples
     --------
     >>> import math
-    >>> normalization(0.01, 2) == 1 / (4 * math.pi * 0.01**2)
+    >>> normalization(0.01, 1) == 1 / (0.01 * math.sqrt(4 * math.pi * 0.01))
     True
     """
+    if dim == 2:  # the surface case, rounded exactly as before
+        return 1.0 / (4.0 * math.pi * h * h)
     return 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
 
 
