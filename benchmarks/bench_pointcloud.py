@@ -121,7 +121,8 @@ def _r4_rows() -> list[str]:
 
 
 def accuracy() -> None:
-    lines = ["Command: `python benchmarks/bench_pointcloud.py --accuracy` (errors; the S³ build times ran beside other work and are only indicative).", "",
+    lines = ["Command: `python benchmarks/bench_pointcloud.py --accuracy` (errors; the S³ build times "
+             "ran beside other work and are only indicative).", "",
              "Unit sphere point clouds (seed 1); ours: first 16 eigenvalues' max relative error at the h "
              "given, E2 = ‖L x² − Δx²‖/‖Δx²‖ point-wise; "
              "robust-laplacian 1.x with its defaults, same points:",
