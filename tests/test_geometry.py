@@ -111,3 +111,23 @@ def test_geometry_input_and_repr():
     assert "polyline, k=1 in R^2" in repr(op)
     with pytest.raises(meshlap.MeshError, match="Geometry alone"):
         meshlap.MeshLaplacian(g, E)
+
+
+@pytest.mark.parametrize("which", ["curve", "volume", "surface in R^4"])
+def test_symmetric_psd_and_heat_for_every_k(which):
+    if which == "curve":
+        V, C, theta = samples.circle(300, d=3)
+        op, f, decay = meshlap.laplacian(V, C), np.sin(theta), math.exp(-0.1)  # Δ sin θ = -sin θ
+    elif which == "volume":
+        V, C = samples.cube_tetrahedra(6)
+        op, f, decay = meshlap.laplacian(V, C, k=3, h=0.01), None, None
+    else:
+        W, C = shapes.sphere(600, seed=0)
+        V = np.column_stack([W, np.zeros(len(W))])
+        op, f, decay = meshlap.laplacian(V, C, h=0.01), W[:, 0], math.exp(-0.2)
+    S = op.S.toarray()
+    assert np.abs(S - S.T).max() < 1e-14 * np.abs(S).max()
+    assert np.linalg.eigvalsh(-S).min() > -1e-10 * np.abs(S).max()
+    if f is not None:
+        u = meshlap.heat.heat_flow(op, f, 0.1)
+        assert np.linalg.norm(u) / np.linalg.norm(f) == pytest.approx(decay, rel=0.01)
