@@ -248,6 +248,7 @@ class MeshLaplacian(_LumpedLaplacian):
                 raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "
                                 f"{self.V.shape[1]}")
             self._grid = None
+            self._guard(pairs.count_entries(self.V, self.radius), estimated=False)
             self._L = pairs.assemble(self.V, self.mass, self.h, self.radius, self.dim, self.dtype)
             return
         self._grid = kernel.build_grid(self.V, self.mass, self.radius)

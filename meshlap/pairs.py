@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from .kernel import normalization
 
-__all__ = ["assemble"]
+__all__ = ["assemble", "count_entries"]
 
 
 def assemble(X: np.ndarray, mass: np.ndarray, h: float, radius: float, dim: int,
@@ -54,6 +54,20 @@ def assemble(X: np.ndarray, mass: np.ndarray, h: float, radius: float, dim: int,
     off = sp.csr_matrix((w, (i, j)), shape=(n, n))
     L = off - sp.diags(np.asarray(off.sum(axis=1)).ravel())
     return sp.csr_matrix(L, dtype=dtype)
+
+
+def count_entries(X: np.ndarray, radius: float) -> int:
+    """Entries L will store (each point's neighbours within the radius, itself included),
+    counted without listing them, so that a memory guard can run first.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> count_entries(np.array([[0.0, 0, 0, 0], [0.1, 0, 0, 0], [5, 0, 0, 0]]), 1.0)
+    5
+    """
+    tree = cKDTree(X)
+    return int(tree.count_neighbors(tree, radius * (1.0 + 1e-7))) if np.isfinite(radius) else len(X) ** 2
 
 
 def _close_pairs(X: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:

@@ -43,6 +43,11 @@ def test_surface_in_r4_matches_r3():
     assert np.allclose(a.mass, b.mass, rtol=1e-12)
     assert abs(a.L - b.L).max() < 1e-9 * abs(a.L).max()
     assert abs(b.S - b.S.T).max() < 1e-14 * abs(b.S).max()  # the k-d tree path keeps S symmetric
+    assert b.estimate_nnz() == b.nnz
+    with pytest.raises(meshlap.OperatorTooLargeError):
+        meshlap.laplacian(V4, F, h=1.0, max_memory=1_000_000)  # guarded before the pairs are listed
+    with pytest.raises(meshlap.MeshError, match="at most 3 dimensions"):
+        meshlap.laplacian(V4, F, h=0.01, matrix_free=True)
 
 
 @pytest.mark.parametrize("d", [2, 3])
