@@ -9,7 +9,21 @@ Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 (500, 500)
 """
 
-from . import baselines, curvature, heat, io, reproduce, shapes, smoothing, spectral, topology
+from . import (
+    baselines,
+    curvature,
+    geometry,
+    heat,
+    io,
+    pointcloud,
+    reproduce,
+    samples,
+    shapes,
+    smoothing,
+    spectral,
+    topology,
+)
+from .geometry import Geometry, Polygons
 from .mass import face_areas, vertex_mass
 from .operator import (
     DEFAULT_TOL,
@@ -20,20 +34,24 @@ from .operator import (
     mesh_laplacian,
     truncation_bound,
 )
-from .validation import MeshError, MeshWarning, Polygons
+from .pointcloud import point_cloud_laplacian
+from .validation import MeshError, MeshWarning
 
 __version__ = "0.1.0"
 
 __all__ = [
     "DEFAULT_TOL",
+    "Geometry",
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
     "baselines",
     "curvature",
+    "geometry",
     "heat",
     "io",
     "reproduce",
+    "samples",
     "smoothing",
     "spectral",
     "OperatorTooLargeError",
@@ -42,6 +60,8 @@ __all__ = [
     "face_areas",
     "laplacian",
     "mesh_laplacian",
+    "point_cloud_laplacian",
+    "pointcloud",
     "shapes",
     "topology",
     "truncation_bound",

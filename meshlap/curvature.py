@@ -33,8 +33,9 @@ def _vertices(op: Any, V: Any) -> np.ndarray:
 def _geometry(op: Any, V: Any, F: Any) -> tuple[np.ndarray, np.ndarray]:
     V = _vertices(op, V)
     if F is None:
-        if not hasattr(op, "faces"):
-            raise MeshError("this operator does not carry its faces; pass F")
+        if getattr(op, "faces", None) is None:
+            raise MeshError("this operator does not carry faces (a curve, volume or point cloud has none) "
+                            "to orient normals; pass F, or use mean_curvature_normal, whose norm is |H|")
         faces = op.faces
     else:
         faces = check_faces(F, len(V))

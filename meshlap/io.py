@@ -4,6 +4,10 @@
   our own so that polygon faces stay polygons (the operator gives each face Area(t)/#t per
   corner, so splitting quads into triangles would change it); PLY and STL are read with
   libigl as triangles.
+* :func:`read_points` reads point clouds (PLY with or without faces, XYZ/CSV/TXT columns,
+  ``.npy``), :func:`read_polyline` the ``l`` lines of an OBJ file, and
+  :func:`read_tetrahedra` TetGen's ``.node``/``.ele`` pair (other volume formats through
+  meshio, when it is installed: it is optional, since meshlap needs no more than these).
 * :func:`as_mesh` turns whatever the user holds (a path, a ``(V, F)`` pair, a
   ``trimesh.Trimesh`` or anything else with ``vertices`` and ``faces``) into ``(V, F)``.
 * :func:`save_operator` / :func:`load_operator` store ``L`` in scipy's own ``.npz`` layout
@@ -21,21 +25,29 @@ import numpy as np
 import scipy.sparse as sp
 
 from .baselines import SparseLaplacian
-from .validation import MeshError, Polygons, check_faces, check_vertices
+from .geometry import Polygons
+from .validation import MeshError, check_faces, check_vertices
 
 __all__ = [
     "MESH_FORMATS",
+    "POINT_FORMATS",
     "SavedLaplacian",
     "as_mesh",
     "load_operator",
     "parse_obj",
     "read_mesh",
+    "read_points",
+    "read_polyline",
+    "read_tetrahedra",
     "save_operator",
     "write_mesh",
 ]
 
 #: File suffixes :func:`read_mesh` understands.
 MESH_FORMATS = (".obj", ".off", ".ply", ".stl")
+
+#: File suffixes :func:`read_points` understands.
+POINT_FORMATS = (".ply", ".xyz", ".csv", ".txt", ".pts", ".npy", ".obj", ".off")
 
 PathLike = str | os.PathLike
 
@@ -228,6 +240,230 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     if triangulate:
         return V, faces.triangles()
     return V, _faces_out(faces)
+
+
+_PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+    "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def _ply_vertices(data: bytes, name: str) -> np.ndarray:
+    # The vertex element of a PLY file (ASCII or binary), which must come first; faces, if
+    # any, follow it and are not read.
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise MeshError(f"{name}: not a PLY file (no 'ply' ... 'end_header' header)")
+    header = data[:end].decode("ascii", errors="replace").splitlines()
+    body = data[data.index(b"\n", end) + 1:]
+    fmt, count, props, element = None, 0, [], None
+    for line in header:
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "format":
+            fmt = parts[1]
+        elif parts[0] == "element":
+            element = parts[1]
+            if element == "vertex":
+                count = int(parts[2])
+            elif count == 0:
+                raise MeshError(f"{name}: the vertex element must come first in the PLY header")
+        elif parts[0] == "property" and element == "vertex":
+            if parts[1] == "list" or parts[1] not in _PLY_TYPES:
+                raise MeshError(f"{name}: unsupported vertex property {' '.join(parts[1:])!r}")
+            props.append((parts[2], _PLY_TYPES[parts[1]]))
+    names = [p for p, _ in props]
+    if count == 0 or not {"x", "y", "z"} <= set(names):
+        raise MeshError(f"{name}: no vertex element with x, y, z properties")
+    if fmt == "ascii":
+        rows = body.decode("ascii", errors="replace").split("\n")[:count]
+        try:
+            table = np.array([r.split()[:len(props)] for r in rows], dtype=np.float64)
+        except ValueError as exc:
+            raise MeshError(f"{name}: bad vertex row ({exc})") from exc
+        if table.shape != (count, len(props)):
+            raise MeshError(f"{name}: expected {count} vertex rows of {len(props)} values")
+        cols = [names.index(c) for c in "xyz"]
+        return table[:, cols]
+    if fmt not in ("binary_little_endian", "binary_big_endian"):
+        raise MeshError(f"{name}: unknown PLY format {fmt!r}")
+    order = "<" if fmt == "binary_little_endian" else ">"
+    dtype = np.dtype([(p, order + t) for p, t in props])
+    if len(body) < count * dtype.itemsize:
+        raise MeshError(f"{name}: the file ends before its {count} vertices")
+    table = np.frombuffer(body, dtype=dtype, count=count)
+    return np.column_stack([table[c].astype(np.float64) for c in "xyz"])
+
+
+def _text_columns(path: Path, columns: Any) -> np.ndarray:
+    lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    rows = [ln.replace(",", " ").replace(";", " ").split() for ln in lines]
+    rows = [r for r in rows if r and not r[0].startswith("#")]
+    # a header line of names (x,y,z) is skipped
+    if rows:
+        try:
+            float(rows[0][0])
+        except ValueError:
+            rows = rows[1:]
+    if not rows:
+        raise MeshError(f"{path.name}: no rows of numbers")
+    width = min(len(r) for r in rows)
+    try:
+        table = np.array([r[:width] for r in rows], dtype=np.float64)
+    except ValueError as exc:
+        raise MeshError(f"{path.name}: a row holds something that is not a number ({exc})") from exc
+    cols = list(range(min(3, width))) if columns is None else list(columns)
+    if max(cols) >= width:
+        raise MeshError(f"{path.name}: asked for columns {cols} but rows have {width} values")
+    return table[:, cols]
+
+
+def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
+    """Read a point cloud: the positions of a PLY, XYZ/CSV/TXT/PTS, NPY, OBJ or OFF file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file; its suffix picks the reader. PLY may be ASCII or binary, with or without
+        faces (only the vertices are read). Text files hold one point per line, separated
+        by spaces, commas or semicolons; a first line of column names and ``#`` comments
+        are skipped. ``.npy`` holds an (n, d) array.
+    columns : sequence of int, optional
+        Text columns to read (default the first three; e.g. ``range(4)`` for R⁴ points).
+
+    Returns
+    -------
+    (n, d) float64 ndarray
+        For :func:`meshlap.point_cloud_laplacian`.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "cloud.csv"
+    >>> _ = path.write_text("x,y,z,intensity\\n0,0,0,7\\n1,0,0,7\\n0,1,0,7\\n")
+    >>> read_points(path).shape
+    (3, 3)
+    """
+    from .geometry import check_points
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such point cloud file: {path}")
+    suffix = path.suffix.lower()
+    if suffix not in POINT_FORMATS:
+        raise MeshError(f"{path.name}: unknown point cloud format {suffix or '(no suffix)'!r}; "
+                        f"meshlap reads {', '.join(POINT_FORMATS)}")
+    if suffix == ".ply":
+        P = _ply_vertices(path.read_bytes(), path.name)
+    elif suffix == ".npy":
+        P = np.load(path, allow_pickle=False)
+    elif suffix == ".off":
+        P = read_mesh(path)[0]
+    elif suffix == ".obj":  # the 'v' lines, with or without faces
+        text = path.read_text(encoding="utf-8", errors="replace")
+        rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
+        try:
+            P = np.array(rows, dtype=np.float64) if rows else np.zeros((0, 3))
+        except ValueError as exc:
+            raise MeshError(f"{path.name}: bad vertex coordinate ({exc})") from exc
+    else:
+        P = _text_columns(path, columns)
+    return check_points(P, name=f"points of {path.name}")
+
+
+def read_polyline(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Read the curves of an OBJ file: its ``v`` vertices and ``l`` lines as (m, 2) edges.
+
+    A line ``l a b c`` is the polyline a-b-c; ``l 1 2 3 1`` closes a loop. Negative indices
+    count back from the last vertex read, as for faces.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tri.obj"
+    >>> _ = path.write_text("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nl 1 2 3 1\\n")
+    >>> read_polyline(path)[1].tolist()
+    [[0, 1], [1, 2], [2, 0]]
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such polyline file: {path}")
+    verts, edges = [], []
+    for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+        parts = line.split()
+        if not parts:
+            continue
+        if parts[0] == "v":
+            verts.append(parts[1:4])
+        elif parts[0] == "l":
+            n = len(verts)
+            try:
+                idx = [int(t.split("/", 1)[0]) for t in parts[1:]]
+            except ValueError as exc:
+                raise MeshError(f"{path.name}, line {lineno}: bad line index ({exc})") from exc
+            idx = [i - 1 if i > 0 else n + i for i in idx]
+            if len(idx) < 2 or min(idx) < 0 or max(idx) >= n:
+                raise MeshError(f"{path.name}, line {lineno}: a line needs 2 or more indices of "
+                                f"vertices read so far ({n})")
+            edges += list(zip(idx[:-1], idx[1:], strict=True))
+    if not verts or not edges:
+        raise MeshError(f"{path.name}: no vertices or no 'l' lines found")
+    try:
+        V = np.array(verts, dtype=np.float64)
+    except ValueError as exc:
+        raise MeshError(f"{path.name}: bad vertex coordinate ({exc})") from exc
+    return check_vertices(V, name=f"vertices of {path.name}"), np.array(edges, dtype=np.int64)
+
+
+def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Read a tetrahedral mesh: TetGen's ``.node`` + ``.ele`` pair, or any volume format that
+    meshio reads (``.vtk``, ``.vtu``, ``.msh``, ...) when meshio is installed.
+
+    Pass either file of the TetGen pair. Returns ``(V, T)`` for
+    ``meshlap.laplacian(V, T, k=3)``.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "t.node").write_text("4 3 0 0\\n1 0 0 0\\n2 1 0 0\\n3 0 1 0\\n4 0 0 1\\n")
+    >>> _ = (d / "t.ele").write_text("1 4 0\\n1 1 2 3 4\\n")
+    >>> read_tetrahedra(d / "t.ele")[1].tolist()
+    [[0, 1, 2, 3]]
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".node", ".ele"):
+        node, ele = path.with_suffix(".node"), path.with_suffix(".ele")
+        for f in (node, ele):
+            if not f.is_file():
+                raise FileNotFoundError(f"no such TetGen file: {f}")
+
+        def table(f: Path) -> np.ndarray:
+            rows = [ln.split("#", 1)[0].split() for ln in f.read_text().splitlines()]
+            rows = [r for r in rows if r]
+            count = int(rows[0][0])
+            return np.array([r for r in rows[1:count + 1]], dtype=np.float64)
+
+        nodes, eles = table(node), table(ele)
+        first = int(nodes[0, 0])  # TetGen numbers from 0 or from 1
+        V = nodes[:, 1:4]
+        T = eles[:, 1:5].astype(np.int64) - first
+        return check_vertices(V, name=f"vertices of {node.name}"), T
+    if not path.is_file():
+        raise FileNotFoundError(f"no such mesh file: {path}")
+    try:
+        import meshio
+    except ImportError as exc:
+        raise MeshError(f"{path.name}: meshlap reads TetGen .node/.ele itself; for {suffix} files "
+                        "install meshio (pip install meshio)") from exc
+    mesh = meshio.read(path)
+    T = [c.data for c in mesh.cells if c.type == "tetra"]
+    if not T:
+        raise MeshError(f"{path.name}: no tetrahedra in the file")
+    return check_vertices(mesh.points[:, :3], name=f"vertices of {path.name}"), np.vstack(T).astype(np.int64)
 
 
 def write_mesh(path: PathLike, V: Any, F: Any) -> Path:

@@ -37,7 +37,8 @@ from numba.extending import intrinsic
 
 from ._jit import jit
 
-__all__ = ["cutoff_radius", "Grid", "build_grid", "count_entries", "fill_csr", "apply", "variable_csr"]
+__all__ = ["cutoff_radius", "normalization", "Grid", "build_grid", "count_entries", "fill_csr", "apply",
+           "variable_csr"]
 
 # Cells per cut-off radius. Finer columns hug the disc of radius r better (candidates per
 # accepted neighbour on a surface: 1.86 with 2, 1.56 with 3, 1.40 with 4) but cost more
@@ -64,6 +65,23 @@ def cutoff_radius(h: float, tol: float) -> float:
     if tol == 0:
         return math.inf
     return math.sqrt(4.0 * h * math.log(1.0 / tol))
+
+
+def normalization(h: float, dim: int = 2) -> float:
+    """The kernel's factor 1/(h (4πh)^{k/2}) for intrinsic dimension k (1/(4πh²) on surfaces).
+
+    Belkin, Sun and Wang, "Constructing Laplace operator from point clouds in R^d" (SODA 2009):
+    with it, Σ_p m_p exp(-|p-w|²/4h) (f(p) - f(w)) tends to Δf(w) on a k-manifold.
+
+    Examples
+    --------
+    >>> import math
+    >>> normalization(0.01, 1) == 1 / (0.01 * math.sqrt(4 * math.pi * 0.01))
+    True
+    """
+    if dim == 2:  # the surface case, rounded exactly as before
+        return 1.0 / (4.0 * math.pi * h * h)
+    return 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
 
 
 @dataclass
@@ -545,8 +563,9 @@ def count_entries(V: np.ndarray, grid: Grid, rows: np.ndarray | None = None,
 
 def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtype, value_dtype,
              progress: Callable[[float], None] | None = None,
-             rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`.
+             rows: np.ndarray | None = None, dim: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Fill the CSR ``indices`` and ``data`` of L for the row pointer from :func:`count_entries`;
+    ``dim`` is the intrinsic dimension k of :func:`normalization`.
 
     ``rows`` (default: all) fills only those vertices' rows; ``indptr`` is still indexed by
     vertex, and the other rows must be empty in it (a rank's own rows among its halo).
@@ -554,7 +573,7 @@ def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtyp
     nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=value_dtype)
-    coef = 1.0 / (4.0 * math.pi * h * h)
+    coef = normalization(h, dim)
     status = np.zeros(1, dtype=np.int64)
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     for a, b in _row_blocks(grid, nnz / max(len(V), 1), progress):
@@ -569,9 +588,9 @@ def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtyp
     return indices, data
 
 
-def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray,
+def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray, dim: int = 2,
           rows: np.ndarray | None = None) -> np.ndarray:
-    """L @ f without storing L; ``f`` of shape (n,) or (n, k).
+    """L @ f without storing L; ``f`` of shape (n,) or (n, q); ``dim`` as in :func:`fill_csr`.
 
     ``rows`` (default: all) computes only those rows; the other rows of the result are
     undefined.
@@ -590,7 +609,7 @@ def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray,
     out = np.empty_like(f2)
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     _apply_rows(order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.self_slot,
-                *_geometry(grid), 1.0 / (4.0 * h), 1.0 / (4.0 * math.pi * h * h), fs, f2, out)
+                *_geometry(grid), 1.0 / (4.0 * h), normalization(h, dim), fs, f2, out)
     return out[:, 0] if vec else out
 
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import igl
 import numpy as np
 
-from .validation import Polygons, check_faces, check_vertices
+from .validation import check_faces, check_vertices
+
+if TYPE_CHECKING:
+    from .geometry import Polygons
 
 __all__ = ["face_areas", "vertex_mass"]
 

@@ -21,10 +21,10 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
 from . import correction as _corr
-from . import kernel
-from .mass import _face_areas, _mean_edge_length, _vertex_mass
+from . import geometry, kernel, pairs
+from .geometry import Geometry
+from .mass import _mean_edge_length
 from .progress import ProgressLike, make_progress
-from .topology import warn_if_messy
 from .validation import (
     MeshError,
     MeshWarning,
@@ -81,8 +81,8 @@ def available_memory() -> int:
         return 8 << 30
 
 
-def default_h(V: Any, F: Any) -> float:
-    """The automatic kernel width: h = (2 ē)², ē the mean edge length of the faces.
+def default_h(V: Any, F: Any, k: int | None = None) -> float:
+    """The automatic kernel width: h = (2 ē)², ē the mean edge length of the cells.
 
     The Gaussian's standard deviation sqrt(2h) then spans about 2.8 mean edges, so each row
     averages over a few rings of neighbours (hundreds of vertices with ``tol = 1e-8``).
@@ -95,6 +95,8 @@ def default_h(V: Any, F: Any) -> float:
     >>> round(default_h(V, [[0, 1, 2]]), 4)
     5.1808
     """
+    if k in (1, 3) or geometry.cell_columns(F) == 2:
+        return geometry.from_mesh(V, F, k).default_h
     V = check_vertices(V)
     faces = check_faces(F, len(V))
     return (2.0 * _mean_edge_length(V, faces)) ** 2
@@ -148,24 +150,29 @@ class MeshLaplacian(_LumpedLaplacian):
 
     Parameters
     ----------
-    V : (n, 3) or (n, 2) array_like
-        Vertex positions.
-    F : (m, k) array_like, or list of sequences
-        Faces of any size (triangles, quads, mixed polygons). Each face gives Area(t)/#t
-        to each of its #t corners.
+    V : (n, d) array_like, or Geometry
+        Vertex positions, or a :class:`~meshlap.geometry.Geometry` (then ``F`` is None):
+        positions, masses and intrinsic dimension from any source, e.g. a point cloud.
+    F : (m, c) array_like, or list of sequences
+        Cells: faces of any size (triangles, quads, mixed polygons), each giving
+        Area(t)/#t to each of its #t corners; (m, 2) edges of a curve; tetrahedra with
+        ``k=3`` (see :func:`meshlap.geometry.from_mesh`).
     h : float or (n,) array_like, optional
         Kernel width; the Gaussian is exp(-d²/4h). An explicit value always wins; an array
         gives each vertex its own width (pair width (h_w + h_p)/2; not with
-        ``correction="none"``). Without one: 4ē² (ē the mean edge length), narrowed where
-        the surface bends (``curvature_limit``); with ``correction="none"`` the paper's
-        :func:`default_h`, (2ē)².
-    correction : {"richardson", "none"}, default "richardson"
+        ``correction="none"``). Without one, on a surface mesh: 4ē² (ē the mean edge length),
+        narrowed where the surface bends (``curvature_limit``); with ``correction="none"``
+        and on other geometries (curves, volumes, point clouds) the paper's (2ē)², ē the
+        geometry's spacing.
+    correction : {"richardson", "none"}, optional
+        Default "richardson" on surface meshes (with faces), "none" on other geometries.
         "richardson": the kernel 2K_{h/2} − K_h, second order in h, with −S checked to be
         semidefinite (otherwise a :class:`MeshWarning`, ``fallback_reason``, and the plain
-        kernel). "none": the paper's operator, eq. (1), and none of the options below
-        unless asked for. docs/accuracy.md has the measurements.
+        kernel); it needs faces (normals, boundary) and is not available on curves, volumes
+        and point clouds yet. "none": the paper's operator, eq. (1), and none of the options
+        below unless asked for. docs/accuracy.md has the measurements.
     adaptive : bool, default False
-        Per-vertex widths 4ℓ_w² from the local edge lengths.
+        Per-vertex widths 4ℓ_w² from the local edge lengths (surface meshes).
     arc_distance, pointwise, neumann : bool, optional
         Default True with the correction (False when matrix-free): distances scaled by the
         arc/chord ratio of the vertex normals; ``op @ f`` applies the row-wise moment
@@ -191,6 +198,9 @@ class MeshLaplacian(_LumpedLaplacian):
         that would exceed it raises :class:`OperatorTooLargeError` before allocating.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
+    k : {1, 2, 3}, optional
+        Intrinsic dimension of the mesh, inferred from ``F`` when not given; the kernel's
+        normalization is 1/(h (4πh)^{k/2}) (1/(4πh²) on surfaces).
 
     Attributes
     ----------
@@ -205,7 +215,11 @@ class MeshLaplacian(_LumpedLaplacian):
     S : scipy.sparse.csr_matrix
         ``M @ L``, symmetric, negative semidefinite.
     mass : (n,) ndarray
-        Vertex masses m_p = Σ_{t∋p} Area(t)/#t.
+        Vertex masses m_p = Σ_{t∋p} Area(t)/#t (length, volume shares for curves, volumes).
+    geometry : Geometry
+        What the kernel was built from; ``dim`` is its intrinsic dimension k.
+    faces : Polygons or None
+        The faces of a surface mesh; None for curves, volumes and point clouds.
     h, tol, radius : float
         Kernel width (the largest, with per-vertex widths), tolerance and the cut-off radius.
     h_vertex : (n,) ndarray or None
@@ -229,7 +243,7 @@ class MeshLaplacian(_LumpedLaplacian):
     def __init__(
         self,
         V: Any,
-        F: Any,
+        F: Any = None,
         h: float | None = None,
         tol: float = DEFAULT_TOL,
         *,
@@ -238,17 +252,44 @@ class MeshLaplacian(_LumpedLaplacian):
         matrix_free: bool = False,
         max_memory: int | None = None,
         progress: ProgressLike = None,
-        correction: str = "richardson",
+        correction: str | None = None,
         adaptive: bool = False,
         arc_distance: bool | None = None,
         pointwise: bool | None = None,
         neumann: bool | None = None,
         curvature_limit: float | None = None,
         check_psd: bool = True,
+        k: int | None = None,
     ) -> None:
+        if isinstance(V, Geometry):
+            if F is not None or k not in (None, V.dim):
+                raise MeshError("pass either a Geometry alone or vertices V with cells F")
+            geo = V
+        else:
+            if F is None:
+                raise MeshError("F must be an (m, k) index array of faces, edges or tetrahedra, or a "
+                                "list of polygons; got None (for points alone use "
+                                "meshlap.point_cloud_laplacian)")
+            geo = geometry.from_mesh(V, F, k)
+        self.geometry = geo
+        self.dim = geo.dim
+        self.faces = geo.faces
+        P = geo.points
+        # the grid kernel bins three coordinates: lower dimensions get zeros
+        self.V = P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
+        # the accuracy options need a surface mesh: normals, boundary curves, edge lengths
+        surface = geo.faces is not None and geo.dim == 2 and P.shape[1] <= 3
+        if correction is None:
+            correction = "richardson" if surface else "none"
         if correction not in CORRECTIONS:
             raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
         plain = correction == "none"
+        if not surface and (not plain or adaptive or arc_distance or pointwise or neumann
+                            or curvature_limit or np.ndim(h) == 1):
+            raise MeshError(f"the accuracy options (correction='richardson', adaptive, arc_distance, "
+                            f"pointwise, neumann, curvature_limit, a per-vertex h) need a surface mesh "
+                            f"with faces; this geometry is a {geo.source} (k={geo.dim}): use "
+                            f"correction='none'")
         # the accuracy options follow the correction unless given; matrix-free keeps a fixed h
         adaptive = bool(adaptive)
         arc_distance = (not plain and not matrix_free) if arc_distance is None else bool(arc_distance)
@@ -271,8 +312,6 @@ class MeshLaplacian(_LumpedLaplacian):
         self.adaptive = adaptive
         self.arc_distance = arc_distance
         self.fallback_reason: str | None = None
-        self.V = check_vertices(V)
-        self.faces = check_faces(F, len(self.V))
         self.tol = 0.0 if exact else check_tol(tol)
         self.exact = self.tol == 0.0
         try:
@@ -281,12 +320,7 @@ class MeshLaplacian(_LumpedLaplacian):
             raise MeshError(f"dtype must be float64 or float32; got {dtype!r}") from exc
         if self.dtype not in (np.float64, np.float32):
             raise MeshError(f"dtype must be float64 or float32; got {self.dtype}")
-        areas = _face_areas(self.V, self.faces)
-        self.mass = _vertex_mass(self.V, self.faces, areas)
-        if not self.mass.any():
-            raise MeshError("every face has zero area: the mesh has no surface to integrate over")
-        mean_edge = _mean_edge_length(self.V, self.faces)
-        warn_if_messy(self.V, self.faces, areas, mean_edge)
+        self.mass = geo.mass
         self.h_auto = h is None
         h_given: np.ndarray | None = None
         if h is not None and np.ndim(h) == 1 and not plain:
@@ -300,9 +334,9 @@ class MeshLaplacian(_LumpedLaplacian):
         elif h is not None:
             self.h = check_h(h)
         elif plain:
-            self.h = check_h((2.0 * mean_edge) ** 2, "the automatic h = (2·mean edge)²")
+            self.h = check_h(geo.default_h, "the automatic h = (2·spacing)²")
         else:
-            self.h = check_h(DEFAULT_H_SCALE * mean_edge**2, "the automatic h = 4·(mean edge)²")
+            self.h = check_h(DEFAULT_H_SCALE * geo.spacing**2, "the automatic h = 4·(mean edge)²")
         self.h_vertex: np.ndarray | None = h_given
         if adaptive:
             hv = _corr.local_h(self.V, self.faces, DEFAULT_H_SCALE)
@@ -324,7 +358,6 @@ class MeshLaplacian(_LumpedLaplacian):
         self.matrix_free = bool(matrix_free)
         self.max_memory = (int(available_memory() * 0.8) if max_memory is None
                            else int(check_positive(max_memory, "max_memory")))
-        self._grid = kernel.build_grid(self.V, self.mass, self.radius)
         self._L: sp.csr_matrix | None = None
         self._S: sp.csr_matrix | None = None
         self._L_pointwise: sp.csr_matrix | None = None
@@ -334,6 +367,15 @@ class MeshLaplacian(_LumpedLaplacian):
         self.psd_margin: float | None = None
         self._frames = None
         self.boundary_rows = 0
+        if self.V.shape[1] > 3:  # points in R^d, d > 3: the k-d tree assembly (plain operator)
+            if self.matrix_free:
+                raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "
+                                f"{self.V.shape[1]}")
+            self._grid = None
+            self._guard(pairs.count_entries(self.V, self.radius), estimated=False)
+            self._L = pairs.assemble(self.V, self.mass, self.h, self.radius, self.dim, self.dtype)
+            return
+        self._grid = kernel.build_grid(self.V, self.mass, self.radius)
         if self.matrix_free:
             if not plain:
                 self._frames = _corr.boundary_frames(self.V, self.faces, self.radius)
@@ -373,6 +415,8 @@ class MeshLaplacian(_LumpedLaplacian):
         # Mean and standard error of the row counts of `sample` rows drawn with replacement:
         # O(sample) memory and O(sample * row length) time, even when the matrix is dense.
         n = self.n_vertices
+        if self._grid is None:  # points in more than 3 dimensions: L is already stored
+            return float(self.nnz), 0.0
         if n <= sample:
             return float(kernel.count_entries(self.V, self._grid).sum()), 0.0
         rows = np.random.default_rng(seed).integers(0, n, size=sample)
@@ -430,7 +474,7 @@ class MeshLaplacian(_LumpedLaplacian):
                 stacklevel=3,
             )
         indices, data = kernel.fill_csr(self.V, self._grid, self.h, indptr, index_dtype,
-                                        self.dtype, progress=fill_cb)
+                                        self.dtype, progress=fill_cb, dim=self.dim)
         if report is not None:
             report(1.0, "done")
         return _csr(data, indices, indptr, n)
@@ -525,10 +569,10 @@ class MeshLaplacian(_LumpedLaplacian):
 
     def _apply_free(self, f: np.ndarray) -> np.ndarray:
         if self.correction == "none":
-            return kernel.apply(self.V, self._grid, self.h, f)
+            return kernel.apply(self.V, self._grid, self.h, f, self.dim)
         # the same pairs as the assembled Richardson operator: both widths cut at r(h)
-        return self.moment_scale * (2.0 * kernel.apply(self.V, self._grid, 0.5 * self.h, f)
-                                    - kernel.apply(self.V, self._grid, self.h, f))
+        return self.moment_scale * (2.0 * kernel.apply(self.V, self._grid, 0.5 * self.h, f, self.dim)
+                                    - kernel.apply(self.V, self._grid, self.h, f, self.dim))
 
     def error_estimate(self, f: Any) -> np.ndarray:
         """Estimated error |L f − Δf| at every vertex, from the same operator at half the width.
@@ -559,8 +603,12 @@ class MeshLaplacian(_LumpedLaplacian):
             opts["correction"] = self.correction  # after a fallback: the plain kernel
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", MeshWarning)
-                self._half = MeshLaplacian(self.V, self.faces, h=h, check_psd=False,
-                                           curvature_limit=0, max_memory=self.max_memory, **opts)
+                if self.faces is not None and self.dim == 2:
+                    self._half = MeshLaplacian(self.V, self.faces, h=h, check_psd=False,
+                                               curvature_limit=0, max_memory=self.max_memory, **opts)
+                else:  # curves, volumes, point clouds: the same geometry at half the width
+                    self._half = MeshLaplacian(self.geometry, h=h, max_memory=self.max_memory,
+                                               **opts)
         diff = np.abs(self @ f - self._half @ f)
         return 2.0 * diff if self.correction == "none" else diff
 
@@ -594,9 +642,15 @@ class MeshLaplacian(_LumpedLaplacian):
             h_note = " (median of the per-vertex widths, adaptive)"
         elif self.h_vertex is not None:
             h_note += f"; narrower where the surface bends, down to {self.h_vertex.min():.3g}"
-        rows = [
-            ("vertices", f"{self.n_vertices:,}"),
-            ("faces", f"{self.faces.n_faces:,}"),
+        geo = self.geometry
+        if geo.faces is None:
+            h_note = h_note.replace("mean edge", "spacing")
+        rows = [("vertices", f"{self.n_vertices:,}")]
+        if geo.faces is not None:
+            rows.append(("faces", f"{self.faces.n_faces:,}"))
+        else:
+            rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}"))
+        rows += [
             ("h", f"{self.h:.6g}{h_note}"),
             ("correction", self.correction + (" + point-wise moments" if self.pointwise else "")),
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
@@ -623,7 +677,7 @@ class MeshLaplacian(_LumpedLaplacian):
 
 def laplacian(
     V: Any,
-    F: Any,
+    F: Any = None,
     h: float | None = None,
     tol: float = DEFAULT_TOL,
     **kwargs: Any,
@@ -632,20 +686,20 @@ def laplacian(
 
     Parameters
     ----------
-    V : (n, 3) array_like
-        Vertex positions.
-    F : (m, k) array_like or list of sequences
-        Faces of any size.
+    V : (n, d) array_like, or Geometry
+        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None).
+    F : (m, c) array_like or list of sequences
+        Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
-        Kernel width (exp(-d²/4h)); default 4ē² narrowed where the surface bends
-        (:func:`default_h` = (2ē)² with ``correction="none"``).
+        Kernel width (exp(-d²/4h)); default on surface meshes 4ē² narrowed where the surface
+        bends, else (and with ``correction="none"``) :func:`default_h` = (2ē)².
     tol : float, default 1e-8
         Kernel tolerance; 0 for the untruncated operator.
     **kwargs
-        ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the accuracy
-        options ``correction`` (default "richardson"; "none" is the paper's operator),
-        ``adaptive``, ``arc_distance``, ``pointwise``, ``neumann``, ``curvature_limit``,
-        ``check_psd``: see :class:`MeshLaplacian` and docs/accuracy.md.
+        ``k``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the
+        accuracy options ``correction`` (default "richardson" on surface meshes; "none" is
+        the paper's operator), ``adaptive``, ``arc_distance``, ``pointwise``, ``neumann``,
+        ``curvature_limit``, ``check_psd``: see :class:`MeshLaplacian` and docs/accuracy.md.
 
     Returns
     -------
@@ -663,7 +717,7 @@ def laplacian(
     return MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
 
 
-def mesh_laplacian(V: Any, F: Any, h: float | None = None, tol: float = DEFAULT_TOL,
+def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = DEFAULT_TOL,
                    **kwargs: Any) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """The pair ``(L, M)``: the Belkin–Sun–Wang Laplacian and its lumped mass matrix.
 
@@ -684,7 +738,7 @@ def mesh_laplacian(V: Any, F: Any, h: float | None = None, tol: float = DEFAULT_
 
 
 def truncation_bound(op: MeshLaplacian, f: np.ndarray) -> np.ndarray:
-    """Per-vertex bound on |L_exact f - L_tol f| = tol·A·max_p|f(p)-f(w)| / (4πh²)."""
+    """Per-vertex bound on |L_exact f - L_tol f| = tol·A·max_p|f(p)-f(w)| / (h (4πh)^{k/2})."""
     f = check_function(f, op.n_vertices)
     spread = np.maximum(np.abs(f.max(axis=0) - f), np.abs(f - f.min(axis=0)))
-    return op.tol * op.mass.sum() * spread / (4.0 * math.pi * op.h**2)
+    return op.tol * op.mass.sum() * spread * kernel.normalization(op.h, op.dim)

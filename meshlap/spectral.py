@@ -162,8 +162,12 @@ def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
         if len(V) != op.n_vertices:
             raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
         return V, check_faces(F, len(V), "mesh[1]").triangles()
-    if hasattr(op, "V") and hasattr(op, "faces"):
+    if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
         return op.V, op.faces.triangles()
+    # a point cloud's local Delaunay triangles (meshlap.pointcloud) serve as well
+    cells = getattr(getattr(op, "geometry", None), "cells", None)
+    if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:
+        return op.V, cells
     return None
 
 

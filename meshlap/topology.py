@@ -22,7 +22,7 @@ import os
 import sys
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,7 +30,10 @@ from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components as _cc
 
 from .mass import _face_areas, _mean_edge_length
-from .validation import MeshWarning, Polygons, check_faces, check_h, check_vertices
+from .validation import MeshWarning, check_faces, check_h, check_vertices
+
+if TYPE_CHECKING:
+    from .geometry import Polygons
 
 __all__ = [
     "DEFAULT_BOUNDARY_WIDTH",

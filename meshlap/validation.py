@@ -10,15 +10,16 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from .geometry import Polygons
 
 __all__ = [
     "MeshError",
     "MeshWarning",
-    "Polygons",
     "check_vertices",
     "check_faces",
     "check_h",
@@ -41,62 +42,6 @@ class MeshError(ValueError):
 
 class MeshWarning(UserWarning):
     """A mesh that meshlap can use, but whose result the caller should know more about."""
-
-
-@dataclass(frozen=True)
-class Polygons:
-    """Faces of any size, stored flat: face ``i`` is ``indices[offsets[i]:offsets[i+1]]``.
-
-    Triangle and quad arrays, and lists of mixed polygons, all become this one form.
-    """
-
-    indices: np.ndarray  # int64, all corners of all faces
-    offsets: np.ndarray  # int64, len = n_faces + 1
-
-    @property
-    def n_faces(self) -> int:
-        return len(self.offsets) - 1
-
-    @property
-    def sizes(self) -> np.ndarray:
-        """Number of corners #t of each face."""
-        return np.diff(self.offsets)
-
-    @property
-    def uniform_size(self) -> int | None:
-        """The common face size, or None for a mix of sizes."""
-        s = self.sizes
-        if len(s) and np.all(s == s[0]):
-            return int(s[0])
-        return None
-
-    def as_array(self) -> np.ndarray:
-        """The faces as an (m, k) array; only for meshes whose faces share one size."""
-        k = self.uniform_size
-        if k is None:
-            raise MeshError("faces have mixed sizes; they cannot form one (m, k) array")
-        return self.indices.reshape(-1, k)
-
-    def triangles(self) -> np.ndarray:
-        """A fan triangulation, (m_tri, 3) int64, e.g. for libigl routines and plots."""
-        sizes = self.sizes
-        if self.uniform_size == 3:
-            return self.indices.reshape(-1, 3)
-        n_tri = sizes - 2
-        face_of_tri = np.repeat(np.arange(self.n_faces), n_tri)
-        # corner k of the fan within its face: 1, 2, ..., size-2
-        k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri) + 1
-        first = self.offsets[:-1][face_of_tri]
-        return np.stack(
-            [self.indices[first], self.indices[first + k], self.indices[first + k + 1]], axis=1
-        )
-
-    def edges(self) -> np.ndarray:
-        """Directed face edges (corner i to corner i+1), (sum #t, 2) int64."""
-        nxt = np.arange(1, len(self.indices) + 1)
-        last = self.offsets[1:] - 1
-        nxt[last] = self.offsets[:-1]
-        return np.stack([self.indices, self.indices[nxt]], axis=1)
 
 
 def _as_real_array(x: Any, name: str) -> np.ndarray:
@@ -187,6 +132,8 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
     >>> check_faces([[0, 1, 2, 2], [0, 2, 3, 4]], 5).sizes
     array([3, 4])
     """
+    from .geometry import Polygons  # geometry builds on these checks
+
     if isinstance(F, (str, bytes)):
         raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got a string")
     if isinstance(F, Polygons):
@@ -235,6 +182,8 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
 
 
 def _drop_repeated_corners(indices: np.ndarray, offsets: np.ndarray) -> Polygons:
+    from .geometry import Polygons
+
     sizes = np.diff(offsets)
     nxt = np.arange(1, len(indices) + 1)
     nxt[offsets[1:] - 1] = offsets[:-1]

@@ -239,3 +239,45 @@ def test_loaded_operators_work_with_the_spectral_solver(tmp_path):
         back = io.load_operator(io.save_operator(tmp_path / f"op{mesh}.npz", op, mesh=mesh))
         assert hasattr(back, "V") is mesh
         np.testing.assert_allclose(eigs(back, 6, method="lobpcg")[0], lam, rtol=1e-6, atol=1e-9)
+
+
+# -- point clouds, polylines, tetrahedra (issue 13) ----------------------------------------------
+def test_read_points_all_formats(tmp_path):
+    P = np.random.default_rng(0).normal(size=(50, 3))
+    np.save(tmp_path / "p.npy", P)
+    np.savetxt(tmp_path / "p.xyz", np.column_stack([P, np.ones(50)]))  # a 4th column: intensity
+    (tmp_path / "p.csv").write_text("x,y,z\n" + "\n".join(",".join(repr(float(v)) for v in r) for r in P))
+    head = "ply\nformat {}\nelement vertex 50\nproperty float x\nproperty float y\nproperty float z\n"
+    (tmp_path / "a.ply").write_text(head.format("ascii 1.0") + "end_header\n"
+                                    + "\n".join(" ".join(map(str, r)) for r in P.astype(np.float32)))
+    (tmp_path / "b.ply").write_bytes((head.format("binary_little_endian 1.0") + "end_header\n").encode()
+                                     + P.astype("<f4").tobytes())
+    for name in ("p.npy", "p.xyz", "p.csv"):
+        assert np.allclose(meshlap.io.read_points(tmp_path / name), P, rtol=1e-15)
+    for name in ("a.ply", "b.ply"):
+        assert np.allclose(meshlap.io.read_points(tmp_path / name), P, rtol=1e-6)
+    assert meshlap.io.read_points(tmp_path / "p.xyz", columns=range(4)).shape == (50, 4)
+    V = meshlap.io.read_points("tests/data/spot.obj")
+    assert V.shape == (2930, 3)
+    (tmp_path / "bad.csv").write_text("1,2,3\n4,five,6\n")
+    with pytest.raises(meshlap.MeshError, match="not a number"):
+        meshlap.io.read_points(tmp_path / "bad.csv")
+    (tmp_path / "p.bin").write_bytes(b"")
+    with pytest.raises(meshlap.MeshError, match="unknown point cloud format"):
+        meshlap.io.read_points(tmp_path / "p.bin")
+
+
+def test_read_polyline_and_tetrahedra(tmp_path):
+    V, E, _ = meshlap.samples.circle(40, d=3)
+    (tmp_path / "c.obj").write_text("".join(f"v {x} {y} {z}\n" for x, y, z in V)
+                                    + "l " + " ".join(str(i + 1) for i in range(40)) + " 1\n")
+    V2, E2 = meshlap.io.read_polyline(tmp_path / "c.obj")
+    assert np.allclose(V2, V) and np.array_equal(E2, E)
+    V, T = meshlap.samples.cube_tetrahedra(2)
+    (tmp_path / "c.node").write_text(f"{len(V)} 3 0 0\n" + "".join(f"{i + 1} {x} {y} {z}\n"
+                                                                   for i, (x, y, z) in enumerate(V)))
+    (tmp_path / "c.ele").write_text(f"{len(T)} 4 0\n" + "".join(f"{i + 1} " + " ".join(str(v + 1) for v in t)
+                                                                + "\n" for i, t in enumerate(T)))
+    V3, T3 = meshlap.io.read_tetrahedra(tmp_path / "c.node")
+    assert np.allclose(V3, V) and np.array_equal(T3, T)
+    assert meshlap.laplacian(V3, T3, k=3).mass.sum() == pytest.approx(1.0)

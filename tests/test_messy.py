@@ -10,7 +10,8 @@ import scipy.sparse as sp
 
 import meshlap
 from meshlap import shapes, topology
-from meshlap.validation import MeshWarning, Polygons, check_faces, check_k, check_positive
+from meshlap.geometry import Polygons
+from meshlap.validation import MeshWarning, check_faces, check_k, check_positive
 
 
 def dense(op):
@@ -46,7 +47,7 @@ V3 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
 @pytest.mark.parametrize(
     ("V", "F", "kw", "match"),
     [
-        (np.zeros((3, 10)), TRI, {}, r"V must have shape \(n, 3\).*transpose"),
+        (np.zeros((3, 10)), TRI, {}, r"V has shape \(3, 10\).*transpose"),
         (np.zeros(9), TRI, {}, r"V must have shape"),
         (np.ones((3, 3), bool), TRI, {}, "V must hold coordinates; got a boolean"),
         (V3 + 1j, TRI, {}, "V must be real"),

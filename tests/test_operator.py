@@ -255,13 +255,15 @@ def test_memory_guard():
 @pytest.mark.parametrize(
     ("V", "F", "kw", "match"),
     [
-        (np.zeros((3, 4)), [[0, 1, 2]], {}, r"shape \(n, 3\)"),
+        (np.zeros(3), [[0, 1, 2]], {}, r"shape \(n, 3\)"),
+        (np.zeros((3, 4)), [[0, 1, 2]], {}, "zero area"),
         (np.zeros((0, 3)), [[0, 1, 2]], {}, "empty"),
         (np.array([[0, 0, 0], [1, 0, np.nan], [0, 1, 0]]), [[0, 1, 2]], {}, "NaN"),
         (np.array([[0, 0, 0], [1, 0, np.inf], [0, 1, 0]]), [[0, 1, 2]], {}, "infinite"),
         (np.eye(3), [[0, 1, 3]], {}, "vertex 3 in face 0"),
         (np.eye(3), [[0, -1, 2]], {}, "vertex -1"),
-        (np.eye(3), np.array([[0, 1]]), {}, "at least 3"),
+        (np.eye(3), np.array([[0]]), {}, "at least 3"),
+        (np.eye(3), np.array([[0, 1]]), {"k": 2}, "pass k=1"),
         (np.eye(3), np.array([[0.0, 1.5, 2.0]]), {}, "integer"),
         (np.eye(3), [[0, 1, 2]], {"h": 0}, "h must be"),
         (np.eye(3), [[0, 1, 2]], {"h": -1.0}, "h must be"),

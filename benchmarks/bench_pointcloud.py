@@ -1,0 +1,192 @@
+"""Point clouds, curves and volumes (issue 13): accuracy against known spectra, beside
+robust-laplacian (and LaPy on the cube), and the build time for 1,000,000 points.
+
+    python benchmarks/bench_pointcloud.py --accuracy   # any time: errors only
+    python benchmarks/bench_pointcloud.py --timing     # on a quiet machine: build times
+
+Each part writes its own section of benchmarks/RESULTS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import time
+import warnings
+
+import numpy as np
+import scipy.sparse.linalg as sla
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from results_file import write_section  # noqa: E402
+
+import meshlap  # noqa: E402
+from meshlap import pointcloud, samples, spectral  # noqa: E402
+from meshlap.neumann import neumann_normalized  # noqa: E402
+
+L_SPHERE = np.repeat(np.arange(4), 2 * np.arange(4) + 1)
+EIG_SPHERE = (L_SPHERE * (L_SPHERE + 1)).astype(float)
+H_EIG = {"uniform": 1e-3, "random": 2e-3, "noisy": 4e-3}  # see the README for the trade-off
+H_PW = 8e-3
+
+
+def _uptime() -> str:
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def _sphere_row(kind: str, n: int, denoise: bool = False) -> list[str]:
+    import robust_laplacian
+
+    P = samples.sphere_points(n, kind, seed=1)
+    h_eig = 2e-3 if denoise else H_EIG[kind]
+    U = P / np.linalg.norm(P, axis=1, keepdims=True)
+    exact = 2 - 6 * U[:, 0] ** 2
+    f = U[:, 0] ** 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        geo = pointcloud.point_cloud_geometry(P, denoise=denoise)
+    lam = spectral.eigs(meshlap.MeshLaplacian(geo, h=h_eig), 16, tol=1e-4)[0]
+    ours_eig = np.abs(lam[1:] / EIG_SPHERE[1:] - 1).max()
+    e2 = np.linalg.norm(meshlap.MeshLaplacian(geo, h=H_PW) @ f - exact) / np.linalg.norm(exact)
+    auto = meshlap.MeshLaplacian(geo)
+    e2_auto = np.linalg.norm(auto @ f - exact) / np.linalg.norm(exact)
+    # robust-laplacian: L is the positive weak form, so Δf ≈ -M⁻¹ L f
+    L, M = robust_laplacian.point_cloud_laplacian(P)
+    m = M.diagonal()
+    lam_r = np.sort(sla.eigsh(L.tocsc(), k=16, M=M.tocsc(), sigma=-1e-6)[0])
+    rl_eig = np.abs(lam_r[1:] / EIG_SPHERE[1:] - 1).max()
+    rl_e2 = np.linalg.norm(-(L @ f) / m - exact) / np.linalg.norm(exact)
+    name = f"{kind}, denoise=True" if denoise else kind
+    return [f"| {name} | {n:,} | {100 * ours_eig:.2f}% (h={h_eig:g}) | {e2:.4f} (h={H_PW:g}) | "
+            f"{e2_auto:.3f} (auto h={auto.h:.2g}) | {100 * rl_eig:.2f}% | {rl_e2:.3f} |"]
+
+
+def _circle_rows() -> list[str]:
+    rows = []
+    for kind, n, h_pw, h_eig in (("uniform", 1000, None, None), ("random", 4000, 3e-3, 5e-4)):
+        for d in (2, 3):
+            V, E, theta = samples.circle(n, d=d, kind=kind, seed=1)
+            for what in ("polyline", "point cloud"):
+                geo = (meshlap.geometry.polyline(V, E) if what == "polyline"
+                       else pointcloud.point_cloud_geometry(V, k=1))
+                op = meshlap.MeshLaplacian(geo, h=h_pw)
+                f = np.sin(theta)
+                pw = np.abs(op @ f + f).max()
+                lam = spectral.eigs(meshlap.MeshLaplacian(geo, h=h_eig), 9)[0]
+                rel = np.abs(lam[1:] / np.array([1, 1, 4, 4, 9, 9, 16, 16.0]) - 1).max()
+                rows.append(f"| {kind} {what} in R^{d} | {n:,} | {op.h:.2g} / {h_eig or op.h:.2g} | "
+                            f"{100 * pw:.3f}% | {100 * rel:.3f}% |")
+    return rows
+
+
+def _cube_rows() -> list[str]:
+    rows = []
+    V, T = samples.cube_tetrahedra(24)
+    op = meshlap.laplacian(V, T, k=3, h=7e-4)
+    for name, o in (("BSW, plain kernel", op), ("BSW, boundary-normalized", neumann_normalized(op))):
+        lam = spectral.eigs(o, 4, tol=1e-6)[0][1:] / math.pi**2
+        rows.append(f"| {name} | {len(V):,} | {', '.join(f'{x:.4f}' for x in lam)} | "
+                    f"{100 * np.abs(lam - 1).max():.2f}% |")
+    try:
+        from lapy import Solver, TetMesh
+
+        lam = Solver(TetMesh(V, T)).eigs(k=4)[0][1:] / math.pi**2
+        rows.append(f"| LaPy TetMesh (linear FEM) | {len(V):,} | "
+                    f"{', '.join(f'{x:.4f}' for x in lam)} | {100 * np.abs(lam - 1).max():.2f}% |")
+    except ImportError:
+        rows.append("| LaPy | not installed | | |")
+    return rows
+
+
+def _r4_rows() -> list[str]:
+    rows = []
+    P, _, _ = samples.flat_torus_points(16000, seed=0)
+    lam = spectral.eigs(meshlap.point_cloud_laplacian(P, h=6e-3), 9, tol=1e-5)[0][1:]
+    rel = np.abs(lam / np.array([1, 1, 1, 1, 2, 2, 2, 2.0]) - 1)
+    rows.append(f"| flat torus in R^4, k=2 | 16,000 random | 0.006 | {', '.join(f'{x:.4f}' for x in lam)} "
+                f"| {100 * rel.max():.2f}% |")
+    for n, h in ((16000, 8e-3), (32000, 6e-3)):
+        P = samples.three_sphere_points(n, seed=0)
+        t = time.perf_counter()
+        op = meshlap.point_cloud_laplacian(P, h=h, k=3)
+        build = time.perf_counter() - t
+        lam = spectral.eigs(op, 6, tol=1e-5)[0][1:5]
+        rows.append(f"| S^3 in R^4, k=3 | {n:,} random | {h:g} | {', '.join(f'{x:.4f}' for x in lam)} | "
+                    f"{100 * np.abs(lam / 3 - 1).max():.2f}% (build {build:.0f} s) |")
+    return rows
+
+
+def accuracy() -> None:
+    lines = ["Command: `python benchmarks/bench_pointcloud.py --accuracy` (errors; the S³ build times "
+             "ran beside other work and are only indicative).", "",
+             "Unit sphere point clouds (seed 1); ours: first 16 eigenvalues' max relative error at the h "
+             "given, E2 = ‖L x² − Δx²‖/‖Δx²‖ point-wise; "
+             "robust-laplacian 1.x with its defaults, same points:",
+             "", "| points | n | ours: eigenvalues | ours: E2 | ours: E2 at auto h | robust-laplacian: "
+             "eigenvalues | robust-laplacian: E2 |", "|---|---|---|---|---|---|---|"]
+    for kind in ("uniform", "random", "noisy"):
+        for n in (4000, 16000):
+            lines += _sphere_row(kind, n)
+    for n in (4000, 16000):
+        lines += _sphere_row("noisy", n, denoise=True)
+    lines += ["", "Unit circle (k = 1): max |L sin θ + sin θ| and the first 8 nonzero eigenvalues m²:", "",
+              "| curve | n | h (point-wise / eigenvalues) | L sin θ | eigenvalues |", "|---|---|---|---|---|"]
+    lines += _circle_rows()
+    lines += ["", "Unit cube as 82,944 tetrahedra (n = 24, h = 7e-4): first Neumann eigenvalues / π²:", "",
+              "| operator | vertices | λ₁..λ₃ / π² | max error |", "|---|---|---|---|"]
+    lines += _cube_rows()
+    lines += ["", "Points in R^4 (k-d tree path):", "",
+              "| manifold | points | h | eigenvalues | max error |", "|---|---|---|---|---|"]
+    lines += _r4_rows()
+    write_section("Point clouds, curves and volumes: accuracy", lines)
+
+
+def timing(n: int) -> None:
+    import robust_laplacian
+
+    P = samples.sphere_points(n, "random", seed=0)
+    load = _uptime()
+    # warm up the compiled kernels on a small cloud
+    meshlap.point_cloud_laplacian(P[:5000])
+    t = time.perf_counter()
+    geo = pointcloud.point_cloud_geometry(P)
+    t_mass = time.perf_counter() - t
+    # h = spacing², a quarter of the automatic h, as bench_assembly's 1,000,000-vertex mesh
+    # (the automatic h would store ~1,100 entries per row, 13 GB)
+    h = geo.default_h / 4
+    t = time.perf_counter()
+    op = meshlap.MeshLaplacian(geo, h=h)
+    t_op = time.perf_counter() - t
+    nnz = op.nnz
+    del op
+    t = time.perf_counter()
+    L, M = robust_laplacian.point_cloud_laplacian(P)
+    t_rl = time.perf_counter() - t
+    lines = [f"Command: `python benchmarks/bench_pointcloud.py --timing --n {n}`", "",
+             f"Load before the runs: `{load}`; after: `{_uptime()}` (2 cores shared with other work;"
+             " the ratio from the same process is what counts).", "",
+             f"{n:,} i.i.d. random points on the unit sphere:", "",
+             "| step | seconds |", "|---|---|",
+             f"| meshlap masses (local Delaunay stars, {len(geo.cells):,} triangles) | {t_mass:.1f} |",
+             f"| meshlap operator at h = spacing² = {h:.3g} ({nnz / n:.0f} entries per row) | {t_op:.1f} |",
+             f"| meshlap total | {t_mass + t_op:.1f} |",
+             f"| robust-laplacian point_cloud_laplacian ({L.nnz / n:.0f} entries per row) | {t_rl:.1f} |"]
+    write_section("Point clouds: build time", lines)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--accuracy", action="store_true")
+    ap.add_argument("--timing", action="store_true")
+    ap.add_argument("--n", type=int, default=1_000_000)
+    args = ap.parse_args()
+    if args.accuracy:
+        accuracy()
+    if args.timing:
+        timing(args.n)
+    if not (args.accuracy or args.timing):
+        ap.print_help()

@@ -1,0 +1,179 @@
+"""Curves, volumes and point clouds with known Laplace–Beltrami spectra, for tests and benchmarks.
+
+Every generator takes a seed, so every sample is reproducible.
+
+* the unit circle (k = 1) in R² or R³, as a polyline or as points: Δ sin θ = −sin θ, eigenvalues
+  m² (0, 1, 1, 4, 4, ...);
+* the unit sphere S² ⊂ R³ as points (evenly spread, i.i.d. random, random with radial noise):
+  eigenvalues l(l + 1) with multiplicity 2l + 1;
+* the unit cube as a tetrahedral mesh (k = 3): Neumann eigenvalues π²(a² + b² + c²);
+* S³ ⊂ R⁴ as points (k = 3): eigenvalues l(l + 2) with multiplicity (l + 1)², so 3 (×4);
+* the flat torus (cos θ, sin θ, cos φ, sin φ) ⊂ R⁴ (k = 2, isometric to [0, 2π)²):
+  eigenvalues a² + b², so 1 (×4), 2 (×4).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from .shapes import _check_count, fibonacci_sphere
+from .validation import MeshError
+
+__all__ = [
+    "CLOUD_KINDS",
+    "circle",
+    "cube_tetrahedra",
+    "flat_torus_points",
+    "sphere_points",
+    "three_sphere_points",
+]
+
+#: Samplings understood by :func:`sphere_points` and :func:`circle`.
+CLOUD_KINDS = ("uniform", "random", "noisy")
+
+
+def _rotation(d: int, rng: np.random.Generator) -> np.ndarray:
+    q, _ = np.linalg.qr(rng.normal(size=(d, d)))
+    return q
+
+
+def circle(n: int, d: int = 2, kind: str = "uniform", seed: int = 0
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The unit circle as n points in R^d (d ≥ 2), in order, with the polyline's edges.
+
+    Parameters
+    ----------
+    n : int
+        Number of points.
+    d : int, default 2
+        Ambient dimension; for d > 2 the circle lies in a random plane through the origin.
+    kind : {"uniform", "random"}
+        Equal angular steps, or i.i.d. uniform angles (sorted).
+    seed : int
+        Random seed.
+
+    Returns
+    -------
+    V : (n, d) ndarray
+    E : (n, 2) int64 ndarray
+        Edges between consecutive points, closing the loop.
+    theta : (n,) ndarray
+        The angle of each point.
+
+    Examples
+    --------
+    >>> V, E, t = circle(100, d=3)
+    >>> V.shape, E.shape, bool(np.allclose(np.linalg.norm(V, axis=1), 1))
+    ((100, 3), (100, 2), True)
+    """
+    n = _check_count(n, 3, "circle")
+    if d < 2:
+        raise MeshError(f"a circle needs d >= 2 dimensions; got {d}")
+    rng = np.random.default_rng(seed)
+    if kind == "uniform":
+        theta = 2 * math.pi * np.arange(n) / n
+    elif kind == "random":
+        theta = np.sort(rng.uniform(0, 2 * math.pi, size=n))
+    else:
+        raise MeshError(f"unknown circle kind {kind!r}; use 'uniform' or 'random'")
+    V = np.zeros((n, d))
+    V[:, 0], V[:, 1] = np.cos(theta), np.sin(theta)
+    if d > 2:
+        V = V @ _rotation(d, rng).T
+    E = np.column_stack([np.arange(n), (np.arange(n) + 1) % n]).astype(np.int64)
+    return V, E, theta
+
+
+def sphere_points(n: int, kind: str = "random", seed: int = 0, noise: float = 0.01) -> np.ndarray:
+    """n points on (or near) the unit sphere S² ⊂ R³.
+
+    ``"uniform"``: the Fibonacci spiral under a random rotation; ``"random"``: i.i.d. uniform;
+    ``"noisy"``: i.i.d. uniform, each moved along its radius by a Gaussian of standard
+    deviation ``noise`` (1%): evaluate test functions at P / |P|.
+
+    Examples
+    --------
+    >>> P = sphere_points(500, "noisy")
+    >>> bool(0.95 < np.linalg.norm(P, axis=1).min() < 1.0)
+    True
+    """
+    n = _check_count(n, 4, "sphere_points")
+    rng = np.random.default_rng(seed)
+    if kind == "uniform":
+        return fibonacci_sphere(n) @ _rotation(3, rng).T
+    if kind not in ("random", "noisy"):
+        raise MeshError(f"unknown sphere sampling {kind!r}; use one of {', '.join(CLOUD_KINDS)}")
+    P = rng.normal(size=(n, 3))
+    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    if kind == "noisy":
+        P *= 1.0 + noise * rng.normal(size=(n, 1))
+    return P
+
+
+def three_sphere_points(n: int, seed: int = 0) -> np.ndarray:
+    """n i.i.d. uniform points on the unit 3-sphere S³ ⊂ R⁴ (volume 2π²).
+
+    Examples
+    --------
+    >>> three_sphere_points(10).shape
+    (10, 4)
+    """
+    n = _check_count(n, 5, "three_sphere_points")
+    P = np.random.default_rng(seed).normal(size=(n, 4))
+    return P / np.linalg.norm(P, axis=1, keepdims=True)
+
+
+def flat_torus_points(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """n i.i.d. uniform points of the flat torus (cos θ, sin θ, cos φ, sin φ) ⊂ R⁴ (area 4π²).
+
+    Returns the points and their angles θ, φ.
+
+    Examples
+    --------
+    >>> P, theta, phi = flat_torus_points(10)
+    >>> bool(np.allclose((P**2).sum(axis=1), 2))
+    True
+    """
+    n = _check_count(n, 4, "flat_torus_points")
+    theta, phi = np.random.default_rng(seed).uniform(0, 2 * math.pi, size=(2, n))
+    return np.column_stack([np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)]), theta, phi
+
+
+def cube_tetrahedra(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unit cube [0, 1]³ as a tetrahedral mesh: an n×n×n grid of cubes, six tetrahedra each.
+
+    Each cube is cut into the six tetrahedra along its main diagonal (Kuhn's subdivision),
+    which fit together across neighbouring cubes.
+
+    Returns
+    -------
+    V : ((n+1)³, 3) ndarray
+    T : (6n³, 4) int64 ndarray
+
+    Examples
+    --------
+    >>> from meshlap.geometry import simplex_volumes
+    >>> V, T = cube_tetrahedra(3)
+    >>> round(float(simplex_volumes(V, T).sum()), 12)
+    1.0
+    """
+    n = _check_count(n, 1, "cube_tetrahedra")
+    g = np.linspace(0.0, 1.0, n + 1)
+    V = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    idx = np.arange((n + 1) ** 3).reshape(n + 1, n + 1, n + 1)
+
+    def corner(i: int, j: int, k: int) -> np.ndarray:
+        return idx[i:i + n, j:j + n, k:k + n].ravel()
+
+    tets = []
+    for order in itertools.permutations(range(3)):
+        step = [0, 0, 0]
+        path = [corner(0, 0, 0)]
+        for axis in order:  # walk from (0,0,0) to (1,1,1) one axis at a time
+            step[axis] = 1
+            path.append(corner(*step))
+        tets.append(np.column_stack(path))
+    return V, np.vstack(tets).astype(np.int64)
