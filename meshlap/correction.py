@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from numba import prange
 
 from ._jit import jit
-from .validation import Polygons
+from .geometry import Polygons
 
 __all__ = ["boundary_frames", "curvature_h", "local_h", "moment_correction", "neumann_images",
            "second_moment_scale", "smallest_eigenvalue", "vertex_normals"]

@@ -18,7 +18,8 @@ def _params():
             marks.append(pytest.mark.skip(reason="needs the user's own trimesh object"))
         if "sphere(16000" in code:
             marks.append(pytest.mark.slow)
-        if "meshlap.distributed" in code and importlib.util.find_spec("petsc4py") is None:
+        uses_mpi = "meshlap.distributed" in code or "from meshlap import distributed" in code
+        if uses_mpi and importlib.util.find_spec("petsc4py") is None:
             marks.append(pytest.mark.skip(reason="petsc4py absent: install it with .ci/install-mpi"))
         yield pytest.param(code, id=f"block{i}-{first[:30]}", marks=marks)
 
