@@ -264,7 +264,7 @@ def vertex_normals(V: np.ndarray, faces: Polygons) -> np.ndarray:
     return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
 
 
-def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons,
+def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,
                         tol: float = 1e-4) -> tuple[float, float]:
     """The two ends that decide whether −S = −M L is positive semidefinite.
 
@@ -280,7 +280,8 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     op = SparseLaplacian(L, mass)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        lam, _ = eigs(op, 2, tol=tol, maxiter=60, mesh=(V, faces), method="lobpcg"
+        lam, _ = eigs(op, 2, tol=tol, maxiter=60, mesh=None if faces is None else (V, faces),
+                      method="lobpcg"
                       if (mass > 0).sum() > 1200 else "dense")
     scale = float(np.max(-L.diagonal()))
     return float(lam.min()), scale

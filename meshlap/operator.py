@@ -284,22 +284,22 @@ class MeshLaplacian(_LumpedLaplacian):
         if correction not in CORRECTIONS:
             raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
         plain = correction == "none"
-        if not surface and (not plain or adaptive or arc_distance or pointwise or neumann
-                            or curvature_limit or np.ndim(h) == 1):
-            raise MeshError(f"the accuracy options (correction='richardson', adaptive, arc_distance, "
-                            f"pointwise, neumann, curvature_limit, a per-vertex h) need a surface mesh "
-                            f"with faces; this geometry is a {geo.source} (k={geo.dim}): use "
-                            f"correction='none'")
+        if not surface and (adaptive or arc_distance or pointwise or neumann or curvature_limit
+                            or np.ndim(h) == 1):
+            raise MeshError(f"adaptive, arc_distance, pointwise, neumann, curvature_limit and a "
+                            f"per-vertex h need a surface mesh with faces; this geometry is a "
+                            f"{geo.source} (k={geo.dim})")
         # the accuracy options follow the correction unless given; matrix-free keeps a fixed h
         adaptive = bool(adaptive)
-        arc_distance = (not plain and not matrix_free) if arc_distance is None else bool(arc_distance)
-        pointwise = (not plain and not matrix_free) if pointwise is None else bool(pointwise)
-        neumann = (not plain and not matrix_free) if neumann is None else bool(neumann)
+        on = not plain and not matrix_free and surface
+        arc_distance = on if arc_distance is None else bool(arc_distance)
+        pointwise = on if pointwise is None else bool(pointwise)
+        neumann = on if neumann is None else bool(neumann)
         if matrix_free and (adaptive or arc_distance or pointwise or neumann or np.ndim(h) == 1):
             raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: "
                             "pass adaptive=False, arc_distance=False, pointwise=False, neumann=False")
         if curvature_limit is None:
-            curvature_limit = CURVATURE_LIMIT if (not plain and h is None and not matrix_free) else 0.0
+            curvature_limit = CURVATURE_LIMIT if (on and h is None) else 0.0
         if curvature_limit and matrix_free:
             raise MeshError("matrix_free=True supports a fixed h only: pass curvature_limit=0")
         if adaptive and h is not None:
@@ -374,10 +374,16 @@ class MeshLaplacian(_LumpedLaplacian):
             self._grid = None
             self._guard(pairs.count_entries(self.V, self.radius), estimated=False)
             self._L = pairs.assemble(self.V, self.mass, self.h, self.radius, self.dim, self.dtype)
+            if not plain:
+                self._richardson_of_plain(check_psd)
             return
         self._grid = kernel.build_grid(self.V, self.mass, self.radius)
+        if not surface and not plain and not self.matrix_free:
+            self._L = self._assemble(make_progress(progress))
+            self._richardson_of_plain(check_psd)
+            return
         if self.matrix_free:
-            if not plain:
+            if not plain and surface:
                 self._frames = _corr.boundary_frames(self.V, self.faces, self.radius)
                 self.moment_scale = _corr.second_moment_scale(self._apply_free, self.V, self.mass,
                                                               self._band())
@@ -495,6 +501,29 @@ class MeshLaplacian(_LumpedLaplacian):
         indptr, indices, data = kernel.variable_csr(self.V, self._grid, hv, self.tol, normals, dog,
                                                     index_dtype, self.dtype, max_nnz=guard)
         return _csr(data, indices, indptr, n)
+
+    def _richardson_of_plain(self, check_psd: bool) -> None:
+        # Curves, volumes, point clouds: 2 L_{h/2} − L_h from two plain operators of the same
+        # geometry (normalized for its dimension k; no normals or boundary curves needed).
+        plain = self._L
+        half = MeshLaplacian(self.geometry, h=0.5 * self.h, tol=self.tol, dtype=self.dtype,
+                             max_memory=self.max_memory, correction="none")
+        self._L = sp.csr_matrix(2.0 * half.L - plain)
+        if not check_psd:
+            return
+        cells = self.geometry.cells
+        faces = cells if cells is not None and cells.shape[1] == 3 and self.V.shape[1] == 3 else None
+        lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V, faces)
+        self.psd_margin = lam_min / scale
+        if lam_min < -1e-6 * scale:
+            self.fallback_reason = (
+                f"the Richardson operator is not negative semidefinite here (eigenvalue "
+                f"{lam_min:.3g} of -S against the scale {scale:.3g}): h is too small for the "
+                f"points to resolve the narrow kernel h/2; using the plain kernel (O(h) bias)")
+            warnings.warn(self.fallback_reason + "; pass a larger h to keep the correction",
+                          MeshWarning, stacklevel=4)
+            self.correction = "none"
+            self._L = plain
 
     def _band(self) -> np.ndarray | None:
         return None if self._frames is None else self._frames[0]
