@@ -185,7 +185,7 @@ def _scattered_mass(comm, V: np.ndarray, F: Any) -> np.ndarray:
     order, so the masses are the single-machine ones to the bit.
     """
     from .mass import _face_areas
-    from .validation import Polygons
+    from .geometry import Polygons
 
     rank = comm.Get_rank()
     ends = np.cumsum(comm.allgather(len(V)))
