@@ -184,8 +184,8 @@ def _scattered_mass(comm, V: np.ndarray, F: Any) -> np.ndarray:
     chunked in rank order, each vertex adds its shares in face order, the single-machine
     order, so the masses are the single-machine ones to the bit.
     """
-    from .mass import _face_areas
     from .geometry import Polygons
+    from .mass import _face_areas
 
     rank = comm.Get_rank()
     ends = np.cumsum(comm.allgather(len(V)))

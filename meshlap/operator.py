@@ -509,20 +509,9 @@ class MeshLaplacian(_LumpedLaplacian):
         half = MeshLaplacian(self.geometry, h=0.5 * self.h, tol=self.tol, dtype=self.dtype,
                              max_memory=self.max_memory, correction="none")
         self._L = sp.csr_matrix(2.0 * half.L - plain)
-        if not check_psd:
-            return
         cells = self.geometry.cells
         faces = cells if cells is not None and cells.shape[1] == 3 and self.V.shape[1] == 3 else None
-        lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V, faces)
-        self.psd_margin = lam_min / scale
-        if lam_min < -1e-6 * scale:
-            self.fallback_reason = (
-                f"the Richardson operator is not negative semidefinite here (eigenvalue "
-                f"{lam_min:.3g} of -S against the scale {scale:.3g}): h is too small for the "
-                f"points to resolve the narrow kernel h/2; using the plain kernel (O(h) bias)")
-            warnings.warn(self.fallback_reason + "; pass a larger h to keep the correction",
-                          MeshWarning, stacklevel=4)
-            self.correction = "none"
+        if check_psd and not self._psd_ok(faces, "points", stacklevel=5):
             self._L = plain
 
     def _band(self) -> np.ndarray | None:
@@ -536,16 +525,18 @@ class MeshLaplacian(_LumpedLaplacian):
             self.boundary_rows = len(self._frames[0])
         return _corr.neumann_images(L, self.V, self._frames, self.mass, hv, dog)
 
-    def _psd_ok(self) -> bool:
-        lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V, self.faces)
+    def _psd_ok(self, faces: Any = None, what: str = "mesh", stacklevel: int = 4) -> bool:
+        # faces only precondition the eigen-solver (None: none)
+        lam_min, scale = _corr.smallest_eigenvalue(self._L, self.mass, self.V,
+                                                   self.faces if what == "mesh" else faces)
         self.psd_margin = lam_min / scale
         if lam_min < -1e-6 * scale:
             self.fallback_reason = (
                 f"the Richardson operator is not negative semidefinite here (eigenvalue "
                 f"{lam_min:.3g} of -S against the scale {scale:.3g}): h is too small for the "
-                f"mesh to resolve the narrow kernel h/2; using the plain kernel (O(h) bias)")
+                f"{what} to resolve the narrow kernel h/2; using the plain kernel (O(h) bias)")
             warnings.warn(self.fallback_reason + "; pass a larger h to keep the correction",
-                          MeshWarning, stacklevel=4)
+                          MeshWarning, stacklevel=stacklevel)
             self.correction = "none"
             return False
         return True
