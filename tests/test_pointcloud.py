@@ -219,6 +219,16 @@ def test_flat_torus_in_r4():
     assert np.abs(lam[1:] / np.array([1, 1, 1, 1, 2, 2, 2, 2]) - 1).max() < 0.01
 
 
+@pytest.mark.slow
+def test_three_sphere_cloud_within_two_percent():
+    # the target for S³ ⊂ R⁴ (k = 3): eigenvalue 3 (×4) within 2%; at 16,000 points
+    # the coarse 3-D spacing leaves it 2.0% low, at 32,000 points 1.3% (benchmarks/RESULTS.md)
+    P = samples.three_sphere_points(32000, seed=0)
+    op = meshlap.point_cloud_laplacian(P, h=0.006, k=3)
+    lam = spectral.eigs(op, 6, tol=1e-5)[0]
+    assert np.abs(lam[1:5] / 3 - 1).max() < 0.02
+
+
 def test_three_sphere_cloud():
     # S³ ⊂ R⁴ with k = 3: the volume 2π², and the 4-fold first eigenvalue 3, here on 4,000
     # points whose coarse spacing (0.2) leaves it 6-8% low; 2% needs ~16,000 points and
