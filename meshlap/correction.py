@@ -71,6 +71,15 @@ def _solve_spd(G, r, k):  # pragma: no cover - compiled
     return True
 
 
+@jit(inline="always")
+def _tangent_uv(V, p, w, t1, t2, inv):  # pragma: no cover - compiled
+    # coordinates of p - w in the tangent frame (t1, t2) of w, scaled by inv
+    dx = V[p, 0] - V[w, 0]
+    dy = V[p, 1] - V[w, 1]
+    dz = V[p, 2] - V[w, 2]
+    return (dx * t1[0] + dy * t1[1] + dz * t1[2]) * inv, (dx * t2[0] + dy * t2[1] + dz * t2[2]) * inv
+
+
 @jit(parallel=True)
 def _moment_rows(indptr, indices, data, V, out, failed):  # pragma: no cover - compiled
     n = len(indptr) - 1
@@ -110,11 +119,7 @@ def _moment_rows(indptr, indices, data, V, out, failed):  # pragma: no cover - c
             p = indices[q]
             if p == w:
                 continue
-            dx = V[p, 0] - V[w, 0]
-            dy = V[p, 1] - V[w, 1]
-            dz = V[p, 2] - V[w, 2]
-            u = (dx * t1[0] + dy * t1[1] + dz * t1[2]) * inv
-            v = (dx * t2[0] + dy * t2[1] + dz * t2[2]) * inv
+            u, v = _tangent_uv(V, p, w, t1, t2, inv)
             phi[0] = u
             phi[1] = v
             phi[2] = u * u
@@ -135,11 +140,7 @@ def _moment_rows(indptr, indices, data, V, out, failed):  # pragma: no cover - c
             if p == w:
                 diag = q
                 continue
-            dx = V[p, 0] - V[w, 0]
-            dy = V[p, 1] - V[w, 1]
-            dz = V[p, 2] - V[w, 2]
-            u = (dx * t1[0] + dy * t1[1] + dz * t1[2]) * inv
-            v = (dx * t2[0] + dy * t2[1] + dz * t2[2]) * inv
+            u, v = _tangent_uv(V, p, w, t1, t2, inv)
             corr = r[0] * u + r[1] * v + r[2] * u * u + r[3] * u * v + r[4] * v * v
             out[q] = data[q] + abs(data[q]) * corr
             s += out[q]

@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -166,6 +167,21 @@ def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]
     return V, _faces_out(check_faces(faces, nv, name=f"faces of {name}"))
 
 
+def _existing(path: PathLike, what: str) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such {what} file: {path}")
+    return path
+
+
+def _suffix(path: Path, formats: Sequence[str], what: str, verb: str = "reads") -> str:
+    suffix = path.suffix.lower()
+    if suffix not in formats:
+        raise MeshError(f"{path.name}: unknown {what} format {suffix or '(no suffix)'!r}; "
+                        f"meshlap {verb} {', '.join(formats)}")
+    return suffix
+
+
 def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray, np.ndarray | Polygons]:
     """Read a surface mesh from an OBJ, OFF, PLY or STL file.
 
@@ -207,13 +223,8 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     >>> V.shape, F.tolist()
     ((4, 3), [[0, 1, 2, 3]])
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no such mesh file: {path}")
-    suffix = path.suffix.lower()
-    if suffix not in MESH_FORMATS:
-        raise MeshError(f"{path.name}: unknown mesh format {suffix or '(no suffix)'!r}; "
-                        f"meshlap reads {', '.join(MESH_FORMATS)}")
+    path = _existing(path, "mesh")
+    suffix = _suffix(path, MESH_FORMATS, "mesh")
     if suffix in (".obj", ".off"):
         try:
             text = path.read_text(encoding="utf-8", errors="replace")
@@ -348,13 +359,8 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     """
     from .geometry import check_points
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no such point cloud file: {path}")
-    suffix = path.suffix.lower()
-    if suffix not in POINT_FORMATS:
-        raise MeshError(f"{path.name}: unknown point cloud format {suffix or '(no suffix)'!r}; "
-                        f"meshlap reads {', '.join(POINT_FORMATS)}")
+    path = _existing(path, "point cloud")
+    suffix = _suffix(path, POINT_FORMATS, "point cloud")
     if suffix == ".ply":
         P = _ply_vertices(path.read_bytes(), path.name)
     elif suffix == ".npy":
@@ -387,9 +393,7 @@ def read_polyline(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
     >>> read_polyline(path)[1].tolist()
     [[0, 1], [1, 2], [2, 0]]
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no such polyline file: {path}")
+    path = _existing(path, "polyline")
     verts, edges = [], []
     for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         parts = line.split()
@@ -452,8 +456,7 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
         V = nodes[:, 1:4]
         T = eles[:, 1:5].astype(np.int64) - first
         return check_vertices(V, name=f"vertices of {node.name}"), T
-    if not path.is_file():
-        raise FileNotFoundError(f"no such mesh file: {path}")
+    _existing(path, "mesh")
     try:
         import meshio
     except ImportError as exc:
@@ -480,10 +483,7 @@ def write_mesh(path: PathLike, V: Any, F: Any) -> Path:
     path = Path(path)
     V = check_vertices(V)
     faces = check_faces(F, len(V))
-    suffix = path.suffix.lower()
-    if suffix not in MESH_FORMATS:
-        raise MeshError(f"{path.name}: unknown mesh format {suffix or '(no suffix)'!r}; "
-                        f"meshlap writes {', '.join(MESH_FORMATS)}")
+    suffix = _suffix(path, MESH_FORMATS, "mesh", verb="writes")
     if suffix in (".obj", ".off"):
         sizes = faces.sizes
         split = np.split(faces.indices, faces.offsets[1:-1])
@@ -654,9 +654,7 @@ def load_operator(path: PathLike) -> SavedLaplacian:
     MeshError
         When the file is not an operator saved by meshlap.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no such operator file: {path}")
+    path = _existing(path, "operator")
     try:
         data = np.load(path, allow_pickle=False)
     except (ValueError, OSError) as exc:
