@@ -41,7 +41,8 @@ def rank_job(per_rank: int) -> None:
     from mpi4py import MPI
 
     import meshlap
-    from meshlap import distributed, kernel
+    from meshlap import distributed
+    from meshlap.assembly import grid as kernel
 
     comm = MPI.COMM_WORLD
     size, rank = comm.Get_size(), comm.Get_rank()

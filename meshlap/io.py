@@ -25,9 +25,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .baselines import SparseLaplacian
+from .errors import MeshError
 from .geometry import Polygons
-from .validation import MeshError, check_faces, check_vertices
+from .geometry.validation import check_faces, check_vertices
+from .lumped import SparseLaplacian
 
 __all__ = [
     "MESH_FORMATS",

@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from .validation import MeshError, check_faces, check_function, check_vertices
+from .errors import MeshError
+from .geometry.validation import check_faces, check_function, check_vertices
 
 __all__ = ["plot_convergence", "plot_functions", "plot_mesh", "plot_spectrum", "slope", "up_axis"]
 

@@ -40,9 +40,10 @@ from numpy.polynomial import legendre
 from scipy import integrate, special
 
 from . import baselines, shapes
-from .operator import laplacian
+from .builders import laplacian
+from .errors import MeshError
+from .geometry.validation import check_h
 from .progress import ProgressLike, make_progress
-from .validation import MeshError, check_h
 
 __all__ = [
     "FULL_NS",

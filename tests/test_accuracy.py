@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import meshlap
-from meshlap import baselines, kernel, shapes, spectral
-from meshlap.correction import moment_correction
+from meshlap import baselines, shapes, spectral
+from meshlap.assembly import grid as kernel
+from meshlap.corrections import moment_correction
 
 DATA = Path(__file__).parent / "data"
 DEGREES = np.repeat(np.arange(6), 2 * np.arange(6) + 1)  # l = 0..5: 36 eigenvalues

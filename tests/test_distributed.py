@@ -95,7 +95,8 @@ def test_global_grid_matches_kernel():
     """The distributed visiting order rests on reproducing kernel.build_grid's lo/cell/dims."""
     from mpi4py import MPI
 
-    from meshlap import distributed, kernel
+    from meshlap import distributed
+    from meshlap.assembly import grid as kernel
 
     rng = np.random.default_rng(0)
     for n, radius in [(50, 0.3), (2000, 0.01), (10, 1e-6), (300, np.inf)]:
@@ -142,7 +143,8 @@ def test_missing_stack_names_the_install(monkeypatch):
 def test_kernel_row_subsets_match_full_build():
     """kernel.fill_csr(rows=...) and kernel.apply(rows=...), which each rank uses for its own
     rows, give exactly the full build's rows."""
-    from meshlap import kernel, shapes
+    from meshlap import shapes
+    from meshlap.assembly import grid as kernel
 
     V, _ = shapes.sphere(800, seed=0)
     mass = np.random.default_rng(0).random(len(V)) * (np.arange(len(V)) % 7 > 0)

@@ -12,7 +12,8 @@ import pytest
 
 import meshlap
 import meshlap.operator as operator_module
-from meshlap import kernel, shapes
+from meshlap import shapes
+from meshlap.assembly import grid as kernel
 
 
 def brute_force_L(V, mass, h, tol):

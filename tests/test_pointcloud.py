@@ -9,8 +9,9 @@ import pytest
 from scipy.spatial import ConvexHull
 
 import meshlap
-from meshlap import curvature, heat, pointcloud, samples, shapes, spectral
-from meshlap.mass import vertex_mass
+from meshlap import curvature, heat, samples, shapes, spectral
+from meshlap.geometry import pointcloud, stars
+from meshlap.geometry.mass import vertex_mass
 
 SPHERE_L = np.repeat(np.arange(4), 2 * np.arange(4) + 1)
 SPHERE_EIGS = (SPHERE_L * (SPHERE_L + 1)).astype(float)
@@ -48,9 +49,9 @@ def test_compiled_stars_match_qhull(k):
     for _ in range(50):
         U = rng.normal(size=(30, k))
         U /= np.linalg.norm(U, axis=1).max()
-        ref, _, _ = pointcloud._star_k(U, k)
-        got = (pointcloud._star2(U, 30, np.empty((24, 2), np.int64))[0] if k == 2
-               else pointcloud._star3(U, 30)[0])
+        ref, _, _ = stars._star_k(U, k)
+        got = (stars._star2(U, 30, np.empty((24, 2), np.int64))[0] if k == 2
+               else stars._star3(U, 30)[0])
         assert got == pytest.approx(ref, rel=1e-12)
 
 

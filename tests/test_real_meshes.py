@@ -13,7 +13,7 @@ import pytest
 
 import meshlap
 from meshlap import topology
-from meshlap.validation import MeshWarning
+from meshlap.geometry.validation import MeshWarning
 
 DATA = Path(__file__).parent / "data"
 BUNNY = DATA / "stanford-bunny.obj"  # checked by test_bunny

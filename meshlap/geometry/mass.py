@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import igl
 import numpy as np
 
+from .polygons import Polygons
 from .validation import check_faces, check_vertices
-
-if TYPE_CHECKING:
-    from .geometry import Polygons
 
 __all__ = ["face_areas", "vertex_mass"]
 

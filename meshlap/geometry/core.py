@@ -13,7 +13,7 @@ SoCG 2008, eq. 1, for surfaces: m_p = Σ_{t∋p} Area(t)/#t):
 * tetrahedral volumes (k = 3): m_p = Σ_{T∋p} Volume(T) / 4;
 
 in any ambient dimension d ≥ k. Point clouds get their masses from
-:func:`meshlap.pointcloud.point_cloud_geometry`. The kernel's normalization
+:func:`meshlap.geometry.point_cloud_geometry`. The kernel's normalization
 1/(h (4πh)^{k/2}) (Belkin, Sun and Wang, "Constructing Laplace operator from point clouds
 in R^d", SODA 2009) depends on k alone.
 
@@ -27,18 +27,20 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..errors import MeshError, MeshWarning
+from . import frames
 from .mass import _face_areas, _mean_edge_length, _vertex_mass
+from .polygons import Polygons
 from .topology import warn_if_messy
-from .validation import MeshError, MeshWarning, _as_real_array, check_faces, check_vertices
+from .validation import _as_real_array, check_faces, check_vertices
 
 __all__ = [
     "Geometry",
-    "Polygons",
     "cell_columns",
     "check_points",
     "from_mesh",
@@ -53,62 +55,6 @@ _MAX_COORD = 1e150
 # Median |volume| / (mean edge)³ of 4-corner cells above which they look like tetrahedra
 # (a regular tetrahedron has 0.118; a quad bent by 10° about a diagonal about 0.01).
 _SOLID_QUADS = 0.03
-
-
-@dataclass(frozen=True)
-class Polygons:
-    """Faces of any size, stored flat: face ``i`` is ``indices[offsets[i]:offsets[i+1]]``.
-
-    Triangle and quad arrays, and lists of mixed polygons, all become this one form.
-    """
-
-    indices: np.ndarray  # int64, all corners of all faces
-    offsets: np.ndarray  # int64, len = n_faces + 1
-
-    @property
-    def n_faces(self) -> int:
-        return len(self.offsets) - 1
-
-    @property
-    def sizes(self) -> np.ndarray:
-        """Number of corners #t of each face."""
-        return np.diff(self.offsets)
-
-    @property
-    def uniform_size(self) -> int | None:
-        """The common face size, or None for a mix of sizes."""
-        s = self.sizes
-        if len(s) and np.all(s == s[0]):
-            return int(s[0])
-        return None
-
-    def as_array(self) -> np.ndarray:
-        """The faces as an (m, k) array; only for meshes whose faces share one size."""
-        k = self.uniform_size
-        if k is None:
-            raise MeshError("faces have mixed sizes; they cannot form one (m, k) array")
-        return self.indices.reshape(-1, k)
-
-    def triangles(self) -> np.ndarray:
-        """A fan triangulation, (m_tri, 3) int64, e.g. for libigl routines and plots."""
-        sizes = self.sizes
-        if self.uniform_size == 3:
-            return self.indices.reshape(-1, 3)
-        n_tri = sizes - 2
-        face_of_tri = np.repeat(np.arange(self.n_faces), n_tri)
-        # corner k of the fan within its face: 1, 2, ..., size-2
-        k = np.arange(n_tri.sum()) - np.repeat(np.cumsum(n_tri) - n_tri, n_tri) + 1
-        first = self.offsets[:-1][face_of_tri]
-        return np.stack(
-            [self.indices[first], self.indices[first + k], self.indices[first + k + 1]], axis=1
-        )
-
-    def edges(self) -> np.ndarray:
-        """Directed face edges (corner i to corner i+1), (sum #t, 2) int64."""
-        nxt = np.arange(1, len(self.indices) + 1)
-        last = self.offsets[1:] - 1
-        nxt[last] = self.offsets[:-1]
-        return np.stack([self.indices, self.indices[nxt]], axis=1)
 
 
 @dataclass(frozen=True)
@@ -154,10 +100,82 @@ class Geometry:
     faces: Polygons | None = None
     cells: np.ndarray | None = None
     source: str = "mesh"
+    # frames computed on first use and kept: a build asks for each once
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def n_points(self) -> int:
         return len(self.points)
+
+    @property
+    def codim(self) -> int:
+        """d − k: 1 for surfaces in R³ and plane curves, where a normal is defined."""
+        return self.ambient_dim - self.dim
+
+    def _cached(self, key: Any, make: Any) -> Any:
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+    def _pca(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._cached("pca", lambda: frames.pca_frames(self.points, self.dim))
+
+    def normals(self) -> np.ndarray | None:
+        """Unit normals, consistently oriented, where the codimension is 1; else None.
+
+        From the faces for a surface mesh in R³ (area-weighted), otherwise from local
+        principal axes, oriented along the neighbour graph.
+        """
+        if self.codim != 1:
+            return None
+
+        def make() -> np.ndarray:
+            if self.faces is not None and self.ambient_dim == 3:
+                return frames.vertex_normals(self.points, self.faces)
+            T, idx = self._pca()
+            return frames.orient_normals(np.ascontiguousarray(T[:, :, self.dim]), idx)
+
+        return self._cached("normals", make)
+
+    def edges(self) -> np.ndarray:
+        """Undirected neighbour edges (each once): the cells' sides, or nearest neighbours."""
+
+        def make() -> np.ndarray:
+            if self.faces is not None:
+                e = self.faces.edges()
+            elif self.cells is not None and self.source != "point cloud":
+                c = self.cells.shape[1]
+                e = np.concatenate([self.cells[:, [i, j]] for i in range(c) for j in range(i + 1, c)])
+            else:
+                return frames.knn_edges(self._pca()[1][:, :9])
+            e = np.sort(e, axis=1)
+            return np.unique(e[e[:, 0] != e[:, 1]], axis=0)
+
+        return self._cached("edges", make)
+
+    def boundary_frames(self, radius: float) -> frames.BoundaryFrames:
+        """``(band, b, ν)`` for the points within ``radius`` of the boundary (see
+        :mod:`meshlap.geometry.frames`); None without a boundary."""
+
+        def make() -> frames.BoundaryFrames:
+            P = self.points
+            if self.boundary is None or not self.boundary.any():
+                return None
+            step = max(radius / 16, self.spacing / 4)
+            if self.faces is not None:
+                s, nu = frames.boundary_samples_surface(P, self.faces, step)
+            elif self.dim == 1 and self.cells is not None:
+                s, nu = frames.boundary_samples_curve(P, self.cells)
+            elif self.dim == 3 and self.cells is not None and self.source == "tetrahedra":
+                s, nu = frames.boundary_samples_volume(P, self.cells, step)
+                if P.shape[1] > 3:
+                    return None
+            else:
+                T, idx = self._pca()
+                s, nu = frames.boundary_samples_cloud(P, self.boundary, T, idx, self.dim)
+            return frames.frames_from_samples(P, s, nu, radius)
+
+        return self._cached(("boundary", radius), make)
 
     @property
     def ambient_dim(self) -> int:

@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .geometry import Polygons
+from ..errors import MeshError, MeshWarning
+from .polygons import Polygons
 
 __all__ = [
     "MeshError",
@@ -34,14 +34,6 @@ _MAX_COORD = 1e150
 _H_RANGE = (1e-150, 1e150)
 # libigl's doublearea squares 2D double areas: below this extent they underflow to zero.
 _MIN_SPAN = 1e-60
-
-
-class MeshError(ValueError):
-    """A mesh, parameter or function that meshlap cannot use, with the reason."""
-
-
-class MeshWarning(UserWarning):
-    """A mesh that meshlap can use, but whose result the caller should know more about."""
 
 
 def _as_real_array(x: Any, name: str) -> np.ndarray:
@@ -132,7 +124,6 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
     >>> check_faces([[0, 1, 2, 2], [0, 2, 3, 4]], 5).sizes
     array([3, 4])
     """
-    from .geometry import Polygons  # geometry builds on these checks
 
     if isinstance(F, (str, bytes)):
         raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got a string")
@@ -182,7 +173,6 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
 
 
 def _drop_repeated_corners(indices: np.ndarray, offsets: np.ndarray) -> Polygons:
-    from .geometry import Polygons
 
     sizes = np.diff(offsets)
     nxt = np.arange(1, len(indices) + 1)

@@ -22,18 +22,17 @@ import os
 import sys
 import warnings
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components as _cc
 
+from ..errors import MeshWarning
 from .mass import _face_areas, _mean_edge_length
-from .validation import MeshWarning, check_faces, check_h, check_vertices
-
-if TYPE_CHECKING:
-    from .geometry import Polygons
+from .polygons import Polygons
+from .validation import check_faces, check_h, check_vertices
 
 __all__ = [
     "DEFAULT_BOUNDARY_WIDTH",
