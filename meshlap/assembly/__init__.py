@@ -207,7 +207,10 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
     indptr, indices, data = variable.variable_csr(P, g, widths.per_point(n), kernel.tol, normals,
                                                   kernel.dog, index_dtype, np.dtype(dtype), max_nnz=check,
                                                   dim=kernel.dim)
-    return csr(data, indices, indptr, n)
+    variable.sort_rows(indptr, indices, data)
+    L = csr(data, indices, indptr, n)
+    L.has_sorted_indices = True
+    return L
 
 
 @dataclass

@@ -20,7 +20,7 @@ from .._jit import jit
 from ._intrinsics import _exp_neg, _fetch_add
 from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
 
-__all__ = ["dog_factor", "variable_csr"]
+__all__ = ["dog_factor", "sort_rows", "variable_csr"]
 
 
 @jit(inline="always")
@@ -169,3 +169,30 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
         raise RuntimeError("meshlap internal error: the count and fill passes found different "
                            "neighbourhoods; please report this with the mesh")
     return indptr, indices, data.astype(value_dtype, copy=False)
+
+
+@jit(parallel=True)
+def _sort_rows(indptr, indices, data):  # pragma: no cover - compiled
+    for w in prange(len(indptr) - 1):
+        a, b = indptr[w], indptr[w + 1]
+        if b - a > 1:
+            order = np.argsort(indices[a:b])
+            indices[a:b] = indices[a:b][order]
+            data[a:b] = data[a:b][order]
+
+
+def sort_rows(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> None:
+    """Sort every CSR row by column, in place (the fill writes the diagonal first).
+
+    Matrices that share one index array (the symmetric L and the point-wise rows) must be
+    canonical: scipy sorts unsorted rows in place, which would reorder the shared indices
+    under the other matrix's values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ip, ind, dat = np.array([0, 3]), np.array([0, 2, 1]), np.array([1.0, 3.0, 2.0])
+    >>> sort_rows(ip, ind, dat); ind.tolist(), dat.tolist()
+    ([0, 1, 2], [1.0, 2.0, 3.0])
+    """
+    _sort_rows(indptr, indices, data)

@@ -58,6 +58,9 @@ def _exchange(comm, dest: np.ndarray, *arrays: np.ndarray) -> list[np.ndarray]:
         a = np.ascontiguousarray(a[order])
         width = int(np.prod(a.shape[1:], dtype=np.int64))
         recv = np.empty((int(rcounts.sum()), *a.shape[1:]), dtype=a.dtype)
+        if width == 0:  # nothing to send (rows without columns)
+            out.append(recv)
+            continue
         sc, rc = counts * width, rcounts * width
         sd = np.concatenate([[0], np.cumsum(sc)[:-1]])
         rd = np.concatenate([[0], np.cumsum(rc)[:-1]])

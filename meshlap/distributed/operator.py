@@ -34,9 +34,12 @@ from typing import Any
 import numpy as np
 
 from .. import assembly
+from .. import widths as widths_mod
 from ..errors import MeshError
+from ..geometry import Geometry
 from ..geometry.validation import check_faces, check_h, check_tol, check_vertices
-from ..operator import DEFAULT_TOL
+from ..operator import DEFAULT_TOL, as_geometry
+from ..pipeline import Options
 from .comm import (
     _BLOCK_ENTRIES,
     _IMBALANCE,
@@ -50,6 +53,7 @@ from .comm import (
     _scattered_mass,
     _visit_rank,
 )
+from .corrected import PointAttributes, attributes, local_rows
 
 __all__ = ["DistributedLaplacian", "laplacian"]
 
@@ -65,7 +69,13 @@ class DistributedLaplacian:
     Attributes
     ----------
     L : petsc4py.PETSc.Mat
-        The operator: an MPIAIJ matrix, or a shell that recomputes rows (``matrix_free``).
+        What :meth:`apply` applies: an MPIAIJ matrix (the point-wise rows of the corrected
+        default, as ``MeshLaplacian.L``), or a shell that recomputes rows (``matrix_free``).
+    L_sym : petsc4py.PETSc.Mat
+        The symmetric pencil's L (S = M L_sym), which the solvers use; ``L`` itself for the
+        paper's operator.
+    correction, moment_scale, fallback_reason : str, float, str or None
+        As for :class:`meshlap.MeshLaplacian`.
     mass : (n_local,) ndarray
         Masses of the own rows.
     ids : (n_local,) ndarray
@@ -80,12 +90,21 @@ class DistributedLaplacian:
     """
 
     def __init__(self, comm, V: np.ndarray, mass: np.ndarray, uid: np.ndarray, h: float, tol: float,
-                 matrix_free: bool, partition: np.ndarray | None) -> None:
+                 matrix_free: bool, partition: np.ndarray | None, attrs: PointAttributes | None = None,
+                 table: np.ndarray | None = None) -> None:
         MPI, PETSc = _mpi()
         self.comm = comm
         self.h, self.tol = h, tol
-        self.radius = assembly.grid.cutoff_radius(h, tol)
+        self.attrs = attrs
+        self.correction = "none" if attrs is None or not attrs.dog else "richardson"
+        self.fallback_reason: str | None = None
+        self.moment_scale = 1.0
+        # the halo reaches as far as the widest pair: the largest width sets the radius
+        widest = h if table is None or not len(table) else float(table[:, 0].max())
+        widest = comm.allreduce(widest, op=MPI.MAX)
+        self.radius = assembly.grid.cutoff_radius(widest, tol)
         self.matrix_free = bool(matrix_free)
+        T = np.zeros((len(V), 0)) if table is None else np.asarray(table, dtype=np.float64)
         self._lo, self._cell, self._dims = _global_grid(comm, V, mass, self.radius)
         self.n_vertices = comm.allreduce(len(V), op=MPI.SUM)
         self.rebalanced = False
@@ -94,9 +113,9 @@ class DistributedLaplacian:
             bad = len(owner) and (owner.min() < 0 or owner.max() >= comm.Get_size())
             if owner.shape != (len(V),) or bad:
                 raise MeshError(f"partition must give one rank in [0, {comm.Get_size()}) per local point")
-            self._setup(V, mass, uid, owner)
+            self._setup(V, mass, uid, T, owner)
         else:
-            self._setup(V, mass, uid, _kd_split(comm, V, np.ones(len(V))))
+            self._setup(V, mass, uid, T, _kd_split(comm, V, np.ones(len(V))))
             entries = self._counts.sum()
             busiest = comm.allreduce(entries, op=MPI.MAX)
             mean = comm.allreduce(entries, op=MPI.SUM) / comm.Get_size()
@@ -104,25 +123,27 @@ class DistributedLaplacian:
             if self.rebalanced:
                 # re-split the points where they are now, weighted by their counted entries
                 Vn, mn, un, wn = self.V, self.mass, self.ids, self._counts.astype(np.float64)
-                self._setup(Vn, mn, un, _kd_split(comm, Vn, wn))
+                self._setup(Vn, mn, un, self._Tloc[: self.n_local], _kd_split(comm, Vn, wn))
         if self.matrix_free:
-            self.L = self._shell()
+            self.L = self.L_sym = self._shell()
+        elif attrs is None:
+            self.L = self.L_sym = self._assemble()
         else:
-            self.L = self._assemble()
+            self.L_sym, self.L = self._assemble_corrected()
         self._S = None
 
     # -- setup: partition, halo, local grid ----------------------------------------------
-    def _setup(self, V, mass, uid, owner) -> None:
+    def _setup(self, V, mass, uid, T, owner) -> None:
         MPI, PETSc = _mpi()
         comm = self.comm
-        V, mass, uid = _exchange(comm, owner, V, mass, uid)
+        V, mass, uid, T = _exchange(comm, owner, V, mass, uid, T)
         # own rows in grid-cell order (locality for the products), independent of chunking
         by_id = np.argsort(uid, kind="stable")
-        V, mass, uid = V[by_id], mass[by_id], uid[by_id]
+        V, mass, uid, T = V[by_id], mass[by_id], uid[by_id], T[by_id]
         if len(V):
             cells = assembly.grid.build_grid(V, np.ones(len(V)), self.radius if math.isfinite(self.radius)
-                                      else math.inf).tgt_order
-            V, mass, uid = V[cells], mass[cells], uid[cells]
+                                             else math.inf).tgt_order
+            V, mass, uid, T = V[cells], mass[cells], uid[cells], T[cells]
         n_own = len(V)
         self.n_local = n_own
         off = comm.exscan(n_own, op=MPI.SUM)  # collective; None on rank 0
@@ -143,22 +164,24 @@ class DistributedLaplacian:
             dest.append(np.full(len(sel), q, dtype=np.int64))
         rows_ = np.concatenate(rows) if rows else np.zeros(0, np.int64)
         dest_ = np.concatenate(dest) if dest else np.zeros(0, np.int64)
-        hV, hm, hu, hp = _exchange(comm, dest_, V[rows_], mass[rows_], uid[rows_], petsc_id[rows_])
+        hV, hm, hu, hp, hT = _exchange(comm, dest_, V[rows_], mass[rows_], uid[rows_], petsc_id[rows_],
+                                       T[rows_])
         if len(hV) and n_own and math.isfinite(self.radius):
             # keep only points within r of an own point (the box holds more on a curved surface)
             from pykdtree.kdtree import KDTree
 
             d, _ = KDTree(V).query(hV, k=1, distance_upper_bound=margin)
             keep = np.isfinite(d)
-            hV, hm, hu, hp = hV[keep], hm[keep], hu[keep], hp[keep]
+            hV, hm, hu, hp, hT = hV[keep], hm[keep], hu[keep], hp[keep], hT[keep]
         elif not n_own:
-            hV, hm, hu, hp = hV[:0], hm[:0], hu[:0], hp[:0]
+            hV, hm, hu, hp, hT = hV[:0], hm[:0], hu[:0], hp[:0], hT[:0]
         self.V, self.mass, self.ids = V, mass, uid
         self.n_halo = len(hV)
         self._Vloc = np.ascontiguousarray(np.vstack([V, hV]))
         self._mloc = np.concatenate([mass, hm])
         self._uloc = np.concatenate([uid, hu])
         self._ploc = np.concatenate([petsc_id, hp])
+        self._Tloc = np.concatenate([T, hT])
         self._rows = np.zeros(0, np.int64)
         self._grid = None
         self._counts = np.zeros(0, np.int64)
@@ -222,6 +245,32 @@ class DistributedLaplacian:
         L.assemble()
         return L
 
+    def _assemble_corrected(self):
+        # stages 4-5 on the own rows (meshlap.distributed.corrected), then into PETSc
+        MPI, PETSc = _mpi()
+        N, n = self.n_vertices, self.n_local
+        L_sym, L_pw, info = local_rows(self.comm, self._Vloc, self._mloc, self._Tloc, n, self._grid,
+                                       self._rows, self.attrs)
+        self.correction = info["correction"]
+        self.fallback_reason = info["fallback_reason"]
+        self.moment_scale = info["moment_scale"]
+        self.psd_margin = info["psd_margin"]
+        mats = []
+        for A in (L_sym, L_pw) if L_pw is not L_sym else (L_sym,):
+            indptr = A.indptr[: n + 1].astype(PETSc.IntType)
+            cols = A.indices[: indptr[-1]]
+            row = np.repeat(np.arange(n), np.diff(indptr))
+            d_nnz = np.bincount(row[cols < n], minlength=n)  # entries in own columns
+            o_nnz = np.diff(indptr) - d_nnz
+            M = PETSc.Mat().create(comm=self.comm)
+            M.setSizes(((n, N), (n, N)))
+            M.setType(PETSc.Mat.Type.MPIAIJ)
+            M.setPreallocationNNZ((d_nnz.astype(PETSc.IntType), o_nnz.astype(PETSc.IntType)))
+            M.setValuesCSR(indptr, self._ploc[cols].astype(PETSc.IntType), A.data[: indptr[-1]])
+            M.assemble()
+            mats.append(M)
+        return mats[0], mats[-1]
+
     # -- the matrix-free shell -----------------------------------------------------------
     def _shell(self):
         MPI, PETSc = _mpi()
@@ -232,9 +281,9 @@ class DistributedLaplacian:
         return L
 
     def diagonal(self) -> np.ndarray:
-        """Diagonal of L on the own rows (computed in blocks of rows when matrix-free)."""
+        """Diagonal of L_sym on the own rows (computed in blocks of rows when matrix-free)."""
         if not self.matrix_free:
-            return self.L.getDiagonal().getArray().copy()
+            return self.L_sym.getDiagonal().getArray().copy()
         if not hasattr(self, "_diag"):
             diag = np.zeros(self.n_local)
             for rows in self._row_blocks():
@@ -274,8 +323,9 @@ class DistributedLaplacian:
             v.zeroEntries()
         return v
 
-    def apply(self, X: Any) -> np.ndarray:
-        """``L @ X`` for a local vector (n_local,) or block (n_local, k); returns local values."""
+    def apply(self, X: Any, symmetric: bool = False) -> np.ndarray:
+        """``L @ X`` (``L_sym @ X`` with ``symmetric``) for a local vector (n_local,) or block
+        (n_local, k); returns local values."""
         X = np.asarray(X, dtype=np.float64)
         if X.shape[0] != self.n_local or X.ndim not in (1, 2):
             raise MeshError(f"X must have shape ({self.n_local},) or ({self.n_local}, k) on this rank; "
@@ -285,10 +335,11 @@ class DistributedLaplacian:
             # one pass over the kernel for the whole block: the weights are the cost
             return self.L.getPythonContext().apply_block(X2).reshape(X.shape)
         out = np.empty_like(X2)
-        x, y = self.L.createVecs()
+        A = self.L_sym if symmetric else self.L
+        x, y = A.createVecs()
         for j in range(X2.shape[1]):
             x.setArray(X2[:, j])
-            self.L.mult(x, y)
+            A.mult(x, y)
             out[:, j] = y.getArray()
         return out.reshape(X.shape)
 
@@ -300,18 +351,19 @@ class DistributedLaplacian:
         if self.matrix_free:
             raise MeshError("S is not stored for a matrix-free operator")
         if self._S is None:
-            self._S = self.L.copy()
+            self._S = self.L_sym.copy()
             self._S.diagonalScale(L=self.vec(self.mass))
         return self._S
 
-    def to_scipy(self, root: int = 0):
-        """The stored matrix gathered on ``root`` as a scipy CSR in the caller's numbering
-        (None on the other ranks); for checks and small problems."""
+    def to_scipy(self, root: int = 0, symmetric: bool = False):
+        """The stored matrix (``L``, or ``L_sym`` with ``symmetric``) gathered on ``root`` as a
+        scipy CSR in the caller's numbering (None on the other ranks); for checks and small
+        problems."""
         import scipy.sparse as sp
 
         if self.matrix_free:
             raise MeshError("a matrix-free operator stores no matrix to gather")
-        indptr, cols, data = self.L.getValuesCSR()
+        indptr, cols, data = (self.L_sym if symmetric else self.L).getValuesCSR()
         order = self.comm.gather(self.ids, root=root)
         parts = self.comm.gather((self.ids, indptr, cols, data), root=root)
         if parts is None:
@@ -390,6 +442,9 @@ def laplacian(
     scattered: bool = False,
     matrix_free: bool = False,
     partition: Any = None,
+    correction: str | None = None,
+    k: int | None = None,
+    **options: Any,
 ) -> DistributedLaplacian:
     r"""Build the Belkin–Sun–Wang Laplacian over the ranks of an MPI communicator (collective).
 
@@ -436,7 +491,7 @@ def laplacian(
     >>> import meshlap, numpy as np
     >>> from meshlap import distributed
     >>> V, F = meshlap.shapes.sphere(500, seed=0)
-    >>> op = distributed.laplacian(V, F, h=0.01)         # on a one-rank COMM_WORLD here
+    >>> op = distributed.laplacian(V, F, correction="none", h=0.01)         # on a one-rank COMM_WORLD here
     >>> Lx = op.gather(op.apply(op.local(V[:, 0])))
     >>> serial = meshlap.laplacian(V, F, h=0.01, correction="none")
     >>> bool(np.allclose(Lx, serial @ V[:, 0], rtol=0, atol=1e-12))
@@ -445,6 +500,15 @@ def laplacian(
     MPI, PETSc = _mpi()
     comm = MPI.COMM_WORLD if comm is None else comm
     tol = check_tol(tol)
+    if correction != "none":
+        if scattered or matrix_free or (F is None and not isinstance(V, Geometry)):
+            raise MeshError(
+                "the corrected default (correction='richardson') needs the whole geometry on every rank: "
+                "pass V and F, or a Geometry (e.g. meshlap.geometry.point_cloud_geometry(P)), without "
+                "scattered=True or matrix_free=True; or pass correction='none' for the paper's operator")
+        return _corrected(comm, V, F, k, h, tol, partition, correction, options)
+    if options:
+        raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
     V = np.asarray(V, dtype=np.float64)
     if len(V):
         V = check_vertices(V)
@@ -484,3 +548,24 @@ def laplacian(
         part = None if partition is None else np.asarray(partition)[a:b]
         V, mass = V[a:b], mass[a:b]
     return DistributedLaplacian(comm, np.ascontiguousarray(V), mass, uid, h, tol, matrix_free, part)
+
+
+def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partition: Any, correction: Any,
+               options: dict) -> DistributedLaplacian:
+    # stages 1-2 on every rank (each holds the whole input), then the rows on their owners
+    geo = as_geometry(V, F, k)
+    if geo.ambient_dim > 3:
+        raise MeshError(f"meshlap.distributed needs points in at most 3 dimensions; these have "
+                        f"{geo.ambient_dim}")
+    opts = Options.resolve(geo, h, correction=correction, tol=tol, **options)
+    widths = widths_mod.choose(geo, h, plain=opts.plain, adaptive=opts.adaptive,
+                               curvature_limit=opts.curvature_limit)
+    attrs = attributes(geo, widths, opts)
+    P = assembly.pad3(geo.points)
+    size, rank = comm.Get_size(), comm.Get_rank()
+    n = geo.n_points
+    a, b = n * rank // size, n * (rank + 1) // size
+    part = None if partition is None else np.asarray(partition)[a:b]
+    return DistributedLaplacian(comm, np.ascontiguousarray(P[a:b]), geo.mass[a:b],
+                                np.arange(a, b, dtype=np.int64), widths.h, opts.tol, False, part,
+                                attrs=attrs, table=attrs.table[a:b])
