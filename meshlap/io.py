@@ -612,7 +612,7 @@ def save_operator(path: PathLike, op: Any, *, mesh: bool = True, compress: bool 
         raise MeshError(f"save_operator needs an operator with L and mass; got {type(op).__name__}")
     if getattr(op, "matrix_free", False):
         raise MeshError("this operator is matrix-free: there is no stored matrix to save")
-    L = sp.csr_matrix(op.L)
+    L = sp.csr_matrix(getattr(op, "L_sym", op.L))  # the symmetric pencil's L
     arrays: dict[str, Any] = {
         "format": np.array("csr"),
         "shape": np.array(L.shape),

@@ -365,7 +365,7 @@ class MeshLaplacian(LumpedLaplacian):
         spacing = "mean edge" if geo.faces is not None else "spacing"
         h_note = ""
         if self.h_auto:
-            c = widths_mod.h_scale(self.dim)
+            c = widths_mod.h_scale(self.geometry)
             scale = f"(2·{spacing})²" if self.options.plain else f"{c:g}·{spacing}²"
             h_note = f" (auto: {scale})"
         if self.adaptive:

@@ -26,12 +26,12 @@ from .geometry.validation import check_h, check_positive
 __all__ = ["CURVATURE_LIMIT", "DEFAULT_H_SCALE", "H_SCALE", "Widths", "choose", "curvature_h", "default_h",
            "h_scale", "local_h"]
 
-#: With the correction, h = c_k · ē² (ē the spacing: the mean length of the cells' edges, or
-#: of a cloud's lattice), or per point h_w = c_k · ℓ_w² with ``adaptive=True``; c_k by
-#: intrinsic dimension k. Tetrahedra count their face diagonals among the edges, so their
-#: spacing is long and c_3 small. docs/accuracy.md has the measurements.
-H_SCALE = {1: 8.0, 2: 4.0, 3: 0.5}
-#: c_2, the surfaces' scale.
+#: With the correction, h = c · ē² (ē the spacing: the mean length of the cells' edges, or
+#: a cloud's lattice distance), or per point h_w = c · ℓ_w² with ``adaptive=True``; c by
+#: intrinsic dimension k, and for tetrahedra, whose edges include the face diagonals (a long
+#: spacing for their density), its own. docs/accuracy.md has the measurements.
+H_SCALE = {1: 8.0, 2: 4.0, 3: 4.0, "tetrahedra": 0.5}
+#: c on surfaces.
 DEFAULT_H_SCALE = H_SCALE[2]
 #: β of the curvature cap h_w = min(h, β/κ_w²).
 CURVATURE_LIMIT = 0.05
@@ -76,9 +76,16 @@ def default_h(V: Any, F: Any, k: int | None = None) -> float:
     return from_mesh(V, F, k).default_h
 
 
-def h_scale(dim: int) -> float:
-    """c_k of the corrected default width h = c_k · spacing² (:data:`H_SCALE`; c_2 beyond 3)."""
-    return H_SCALE.get(dim, DEFAULT_H_SCALE)
+def h_scale(geo: Geometry) -> float:
+    """c of the corrected default width h = c · spacing² for this geometry (:data:`H_SCALE`).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> h_scale(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(100, seed=0)))
+    4.0
+    """
+    return H_SCALE.get(geo.source, H_SCALE.get(geo.dim, DEFAULT_H_SCALE))
 
 
 def _adjacency(n: int, edges: np.ndarray) -> sp.csr_matrix:
@@ -184,9 +191,9 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     elif plain:
         h0 = check_h(geo.default_h, "the automatic h = (2·spacing)²")
     else:
-        h0 = check_h(h_scale(geo.dim) * geo.spacing**2, f"the automatic h = {h_scale(geo.dim):g}·(spacing)²")
+        h0 = check_h(h_scale(geo) * geo.spacing**2, f"the automatic h = {h_scale(geo):g}·(spacing)²")
     if adaptive:
-        h_vertex = local_h(geo.points, geo.edges(), h_scale(geo.dim))
+        h_vertex = local_h(geo.points, geo.edges(), h_scale(geo))
         check_h(float(h_vertex.min()), "the smallest local h")
         check_h(float(h_vertex.max()), "the largest local h")
         h0 = float(np.median(h_vertex[geo.mass > 0])) if (geo.mass > 0).any() else h0

@@ -40,11 +40,15 @@ def test_surface_in_r4_matches_r3():
     V, F = shapes.sphere(800, seed=0)
     q, _ = np.linalg.qr(np.random.default_rng(0).normal(size=(4, 4)))
     V4 = np.column_stack([V, np.zeros(len(V))]) @ q.T
-    # in R^4 the surface gets the paper's operator (the accuracy options need R^3 normals)
-    a, b = meshlap.laplacian(V, F, h=0.01, correction="none"), meshlap.laplacian(V4, F, h=0.01)
+    # in R^4 there are no normals (codimension 2): no arc distances; the rest is the same
+    a = meshlap.laplacian(V, F, h=0.01, arc_distance=False)
+    b = meshlap.laplacian(V4, F, h=0.01)
+    assert a.correction == b.correction == "richardson" and b.pointwise and not b.arc_distance
     assert b.geometry.ambient_dim == 4
     assert np.allclose(a.mass, b.mass, rtol=1e-12)
-    assert abs(a.L - b.L).max() < 1e-9 * abs(a.L).max()
+    assert abs(a.L_sym - b.L_sym).max() < 1e-9 * abs(a.L_sym).max()
+    f = V[:, 0] ** 2
+    assert np.abs(a @ f - b @ f).max() < 1e-7 * np.abs(a @ f).max()  # point-wise rows in R^4 too
     assert abs(b.S - b.S.T).max() < 1e-14 * abs(b.S).max()  # the k-d tree path keeps S symmetric
     assert b.estimate_nnz() == b.nnz
     with pytest.raises(meshlap.OperatorTooLargeError):
@@ -119,7 +123,8 @@ def test_geometry_input_and_repr():
     V, E, _ = samples.circle(200)
     g = geometry.polyline(V, E)
     op = meshlap.MeshLaplacian(g)
-    assert op.h == pytest.approx(g.default_h) and op.h_auto
+    assert op.h == pytest.approx(meshlap.widths.h_scale(g) * g.spacing**2) and op.h_auto
+    assert meshlap.MeshLaplacian(g, correction="none").h == pytest.approx(g.default_h)
     assert "polyline, k=1 in R^2" in repr(op)
     with pytest.raises(meshlap.MeshError, match="Geometry alone"):
         meshlap.MeshLaplacian(g, E)
