@@ -54,6 +54,7 @@ from .comm import (
     _visit_rank,
 )
 from .corrected import PointAttributes, attributes, local_rows
+from .scattered import scattered_attributes
 
 __all__ = ["DistributedLaplacian", "laplacian"]
 
@@ -501,11 +502,13 @@ def laplacian(
     comm = MPI.COMM_WORLD if comm is None else comm
     tol = check_tol(tol)
     if correction != "none":
-        if scattered or matrix_free or (F is None and not isinstance(V, Geometry)):
+        if matrix_free or (F is None and not isinstance(V, Geometry)):
             raise MeshError(
-                "the corrected default (correction='richardson') needs the whole geometry on every rank: "
-                "pass V and F, or a Geometry (e.g. meshlap.geometry.point_cloud_geometry(P)), without "
-                "scattered=True or matrix_free=True; or pass correction='none' for the paper's operator")
+                "the corrected default (correction='richardson') needs faces or a Geometry: pass V and F "
+                "(scattered or whole), or a Geometry such as meshlap.geometry.point_cloud_geometry(P), "
+                "without matrix_free=True; or pass correction='none' for the paper's operator")
+        if scattered:
+            return _scattered_corrected(comm, V, F, h, tol, partition, correction, options)
         return _corrected(comm, V, F, k, h, tol, partition, correction, options)
     if options:
         raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
@@ -569,3 +572,16 @@ def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partitio
     return DistributedLaplacian(comm, np.ascontiguousarray(P[a:b]), geo.mass[a:b],
                                 np.arange(a, b, dtype=np.int64), widths.h, opts.tol, False, part,
                                 attrs=attrs, table=attrs.table[a:b])
+
+
+def _scattered_corrected(comm, V: Any, F: Any, h: Any, tol: float, partition: Any, correction: Any,
+                         options: dict) -> DistributedLaplacian:
+    # stages 1-2 by global reductions over the faces each rank holds (meshlap.distributed.scattered)
+    from mpi4py import MPI
+
+    V = check_vertices(V) if len(V) else np.zeros((0, 3))
+    mass, h0, attrs = scattered_attributes(comm, V, F, h, tol, correction, options)
+    start = comm.exscan(len(V), op=MPI.SUM)  # collective; None on rank 0
+    uid = (int(start) if comm.Get_rank() > 0 else 0) + np.arange(len(V), dtype=np.int64)
+    return DistributedLaplacian(comm, np.ascontiguousarray(V, dtype=np.float64), mass, uid, h0, attrs.tol,
+                                False, partition, attrs=attrs, table=attrs.table)
