@@ -69,11 +69,13 @@ class Checks:
         info = op.L.getInfo()
         assert info["nz_allocated"] == info["nz_used"], info  # exact preallocation
         # rows handed to PETSc in many small blocks
-        saved, distributed._BLOCK_ENTRIES = distributed._BLOCK_ENTRIES, 30_000
+        from meshlap.distributed import operator as dop
+
+        saved, dop._BLOCK_ENTRIES = dop._BLOCK_ENTRIES, 30_000
         try:
             B = distributed.laplacian(V, F, correction="none", h=0.004, comm=self.comm).to_scipy()
         finally:
-            distributed._BLOCK_ENTRIES = saved
+            dop._BLOCK_ENTRIES = saved
         # scattered input in uneven chunks (rank q passes a share growing with q)
         cuts = np.round(len(V) * np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum())
         a, b = int(cuts[self.rank]), int(cuts[self.rank + 1])

@@ -113,7 +113,7 @@ def test_global_grid_matches_kernel():
         V = rng.standard_normal((n, 3))
         mass = rng.random(n) * (rng.random(n) > 0.2)
         g = kernel.build_grid(V, mass, radius)
-        lo, cell, dims = distributed._global_grid(MPI.COMM_SELF, V, mass, radius)
+        lo, cell, dims = distributed.comm._global_grid(MPI.COMM_SELF, V, mass, radius)
         assert np.array_equal(lo, g.lo) and cell == g.cell and np.array_equal(dims, g.dims)
 
 
