@@ -252,7 +252,7 @@ class Checks:
     def corrected_plane(self):
         import meshlap
 
-        V, F = meshlap.shapes.plane(1500, seed=2)  # boundary: mirror images and one-sided rows
+        V, F = meshlap.shapes.plane(900, seed=2)  # boundary: mirror images and one-sided rows
         self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F))
 
     def corrected_scattered(self):
@@ -261,7 +261,7 @@ class Checks:
         import meshlap
         from meshlap import distributed
 
-        V, F = meshlap.shapes.plane(1500, seed=2)
+        V, F = meshlap.shapes.plane(900, seed=2)
         V = V.copy()
         V[:, 2] = 0.15 * np.sin(3 * V[:, 0])  # bent: normals turn, the curvature cap acts
         cuts = np.round(len(V) * np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum())
@@ -282,7 +282,7 @@ class Checks:
         import meshlap
 
         rng = np.random.default_rng(3)
-        P = rng.standard_normal((1500, 3))
+        P = rng.standard_normal((900, 3))
         P /= np.linalg.norm(P, axis=1, keepdims=True)
         geo = meshlap.geometry.point_cloud_geometry(P)
         self._corrected("corrected_cloud", geo, None, meshlap.MeshLaplacian(geo))
