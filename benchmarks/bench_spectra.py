@@ -110,7 +110,7 @@ def _cube_exact():
 
 
 def _disc(n, seed=0):
-    V, F = shapes.plane(n, seed=seed)
+    V, F = shapes.plane(n, seed=seed, kind="stratified")
     inside = np.linalg.norm(V[:, :2], axis=1) <= 1
     # the disc: the plane's points inside the unit circle, re-triangulated, the rim added
     m = max(int(round(2 * math.pi / math.sqrt(4 / n))), 12)
@@ -144,7 +144,7 @@ def inputs(quick: bool):
         Vf = Vf / math.sqrt(igl.doublearea(Vf, Ff).sum() / 2)
         out.append((f"fandisk, {len(Vf):,} vertices (vs COT 16×)", "mesh", (Vf, Ff), cot(*_refined(Vf, Ff))))
     for m in (400, 4000) if not quick else (400,):
-        Vq, Fq = shapes.plane(m, seed=0)
+        Vq, Fq = shapes.plane(m, seed=0, kind="stratified")
         out.append((f"square [-1, 1]², {m:,} vertices, Neumann", "mesh", (Vq, Fq), _square_exact()))
         Vd, Fd = _disc(m)
         out.append((f"unit disc, {len(Vd):,} vertices, Neumann", "mesh", (Vd, Fd), _disc_exact()))
