@@ -323,6 +323,16 @@ def _rows(P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
             s *= th[j]
             out[a0 + j] = s
             s2 += s * s
+        # the basis holds the constants, so the row sums to zero up to rounding: make it exact
+        # on the centre's own entry (it is among the neighbours)
+        tot_row = 0.0
+        self_q = -1
+        for j in range(K):
+            tot_row += out[a0 + j]
+            if nbr[j] == w:
+                self_q = a0 + j
+        if self_q >= 0:
+            out[self_q] -= tot_row
         amp[r] = math.sqrt(s2)
         # probes: the row applied to the monomials of degree q + 1 and q + 2 (unscaled)
         for e in range(2):
