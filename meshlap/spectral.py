@@ -212,9 +212,13 @@ class _CotPreconditioner:
 
 
 # -- LOBPCG --------------------------------------------------------------------------------------
-def _svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+def _local(a: np.ndarray) -> np.ndarray:
+    return a
+
+
+def _svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10, allsum=_local) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormalize the columns of U (dropping near-dependent directions): U @ T."""
-    G = U.T @ (m[:, None] * U)
+    G = allsum(U.T @ (m[:, None] * U))
     d = np.sqrt(np.abs(np.diag(G)))
     d[d == 0] = 1.0
     w, Q = np.linalg.eigh(G / d[:, None] / d[None, :])
@@ -223,49 +227,52 @@ def _svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10) -> tuple[np.ndarray
     return U @ T, T
 
 
-def _lobpcg(apply_A, m: np.ndarray, precond, X0: np.ndarray, k: int, tol: float, maxiter: int):
+def _lobpcg(apply_A, m: np.ndarray, precond, X0: np.ndarray, k: int, tol: float, maxiter: int,
+            allsum=_local):
     """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
 
     Rayleigh–Ritz on [X, W, P] with W and P kept M-orthogonal to X (the basis selection of
     Hetmaniuk and Lehoucq, 2006), so the small problems are well conditioned. Columns whose
     residual ‖A x - λ M x‖_{M⁻¹} is below ``tol · max(λ, λ_k)`` stop receiving new directions.
+    The rows may be a share of the problem's (an MPI rank's): ``allsum`` then adds the small
+    Gram matrices and norms over the shares, so every share solves the same small problems.
     Returns (λ, X, iterations, residual norms).
     """
-    X, _ = _svqb(X0, m)
+    X, _ = _svqb(X0, m, allsum=allsum)
     AX = apply_A(X)
-    G = X.T @ AX
+    G = allsum(X.T @ AX)
     lam, Q = np.linalg.eigh(0.5 * (G + G.T))
     X, AX = X @ Q, AX @ Q
     nb = X.shape[1]
     P = AP = None
     for it in range(maxiter + 1):
         R = AX - (m[:, None] * X) * lam
-        res = np.sqrt(np.sum(R * R / m[:, None], axis=0))
+        res = np.sqrt(allsum(np.sum(R * R / m[:, None], axis=0)))
         scale = np.maximum(np.abs(lam), max(abs(float(lam[k - 1])), 1e-300))
         active = res > tol * scale
         if not active[:k].any() or it == maxiter:
             break
         W = precond(R[:, active])
         for _ in range(2):  # classical Gram–Schmidt, twice is enough
-            W -= X @ (X.T @ (m[:, None] * W))
+            W -= X @ allsum(X.T @ (m[:, None] * W))
             if P is not None:
-                W -= P @ (P.T @ (m[:, None] * W))
-        W, _ = _svqb(W, m)
+                W -= P @ allsum(P.T @ (m[:, None] * W))
+        W, _ = _svqb(W, m, allsum=allsum)
         AW = apply_A(W)
         Z = np.hstack([X, W] if P is None else [X, W, P])
         AZ = np.hstack([AX, AW] if P is None else [AX, AW, AP])
-        G = Z.T @ AZ
-        B = Z.T @ (m[:, None] * Z)
+        G = allsum(Z.T @ AZ)
+        B = allsum(Z.T @ (m[:, None] * Z))
         lam_all, C = sla.eigh(0.5 * (G + G.T), 0.5 * (B + B.T))
         C, lam = C[:, :nb], lam_all[:nb]
         Xn, AXn = Z @ C, AZ @ C
         # the new search directions: the part of the update outside the old X
         Cp = C[nb:, active]
         Pn, APn = Z[:, nb:] @ Cp, AZ[:, nb:] @ Cp
-        c = Xn.T @ (m[:, None] * Pn)
+        c = allsum(Xn.T @ (m[:, None] * Pn))
         Pn -= Xn @ c
         APn -= AXn @ c
-        P, T = _svqb(Pn, m)
+        P, T = _svqb(Pn, m, allsum=allsum)
         AP = APn @ T
         X, AX = Xn, AXn
     return lam, X, it, res
