@@ -47,6 +47,8 @@ __all__ = ["eigs", "finish"]
 
 # nearest neighbours of the point-cloud preconditioner's graph
 _NEIGHBOURS = 10
+# iterations of the start on the cotangent problem
+_START_ITERATIONS = 20
 
 
 def _allsum(comm):
@@ -61,8 +63,12 @@ def _allsum(comm):
     return allsum
 
 
-def _mesh_block(op: Any, P: np.ndarray, mesh: Any) -> sp.csc_matrix | None:
-    """Cotangent stiffness on the own rows with mass, from the faces that touch them."""
+def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any):
+    """The cotangent stiffness K on the points with mass: its rows on this rank as a
+    distributed PETSc matrix (columns numbered over the points with mass, rank by rank) and
+    its own × own block for the local factorization; both from the faces touching own rows."""
+    from petsc4py import PETSc
+
     try:
         V, F = mesh
     except (TypeError, ValueError) as exc:
@@ -71,13 +77,28 @@ def _mesh_block(op: Any, P: np.ndarray, mesh: Any) -> sp.csc_matrix | None:
     if len(V) != op.n_vertices:
         raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
     T = check_faces(F, len(V), "mesh[1]").triangles()
+    comm = op.comm
     own = op.ids[P]
-    mine = np.zeros(len(V), dtype=bool)
-    mine[own] = True
-    T = T[mine[T].any(axis=1)]
-    # the touched vertices, and the own ones among them in the order of P
+    # the points with mass, numbered rank by rank (the order of the solver's rows)
+    gid = np.full(len(V), -1, dtype=np.int64)
+    start = 0
+    for part in comm.allgather(own):
+        gid[part] = start + np.arange(len(part))
+        start += len(part)
+    first = int(gid[own[0]]) if len(own) else 0
+    T = T[((gid[T] >= first) & (gid[T] < first + len(own))).any(axis=1)]
     used = np.union1d(np.unique(T), own)
-    return spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.searchsorted(used, own))
+    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used)))
+    if K is None:
+        return None, None
+    K = sp.coo_matrix(sp.csr_matrix(K)[np.searchsorted(used, own)])
+    cols = gid[used][K.col]
+    keep = cols >= 0  # no column for points without mass
+    K = sp.csr_matrix((K.data[keep], (K.row[keep], cols[keep])), shape=(len(own), start))
+    sizes = ((len(own), start), (len(own), start))
+    Kg = PETSc.Mat().createAIJ(sizes, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
+                                           K.data), comm=comm)
+    return sp.csc_matrix(K[:, first:first + len(own)]), Kg
 
 
 def _rank_colors(op: Any) -> tuple[np.ndarray, int]:
@@ -143,16 +164,19 @@ def _cloud_block(op: Any, P: np.ndarray, m: np.ndarray, allsum) -> sp.csc_matrix
 def _product(op: Any, X: np.ndarray) -> np.ndarray:
     """L X for a local block: one PETSc MatMatMult with a dense block for a stored operator
     (the matrix is read once, not once per column), the shell's block product otherwise."""
-    if op.matrix_free:
-        return op.apply(X)
+    return op.apply(X) if op.matrix_free else _matmat(op.L, X)
+
+
+def _matmat(A, X: np.ndarray) -> np.ndarray:
+    """A X for a distributed PETSc matrix and this rank's rows of a dense block."""
     from petsc4py import PETSc
 
-    D = PETSc.Mat().createDense(((op.n_local, op.n_vertices), (PETSc.DECIDE, X.shape[1])),
-                                comm=op.comm)
+    (n_local, n), _ = A.getSizes()
+    D = PETSc.Mat().createDense(((n_local, n), (PETSc.DECIDE, X.shape[1])), comm=A.getComm())
     D.setUp()
     D.getDenseArray()[:] = X
     D.assemble()
-    C = op.L.matMult(D)
+    C = A.matMult(D)
     out = C.getDenseArray().copy()
     C.destroy()
     D.destroy()
@@ -241,10 +265,17 @@ def eigs(
 
     diag = -m * op.diagonal()[P]
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
-    K = _mesh_block(op, P, mesh) if mesh is not None else _cloud_block(op, P, m, allsum)
+    K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
     T = spectral._CotPreconditioner(K, m, diag, sigma)
     X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), nb))
     with spectral._one_blas_thread():
+        if Kg is not None:
+            # start from the cotangent eigenvectors, the local factors as preconditioner
+            def local(R: np.ndarray) -> np.ndarray:
+                return T.lu.solve(np.asfortranarray(R))
+
+            _, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,
+                                           _START_ITERATIONS, allsum)
         lam, X, it, res = spectral._lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum)
     scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
     if (res[:k] > tol * scale).any():
