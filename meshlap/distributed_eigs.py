@@ -88,17 +88,19 @@ def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any):
     first = int(gid[own[0]]) if len(own) else 0
     T = T[((gid[T] >= first) & (gid[T] < first + len(own))).any(axis=1)]
     used = np.union1d(np.unique(T), own)
-    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used)))
-    if K is None:
-        return None, None
-    K = sp.coo_matrix(sp.csr_matrix(K)[np.searchsorted(used, own)])
+    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used))) if len(T) else None
+    # no usable face here (an empty rank, degenerate faces): empty rows, K_r the diagonal term alone
+    K = sp.coo_matrix(sp.csr_matrix((len(own), len(used))) if K is None else sp.csr_matrix(K)[
+        np.searchsorted(used, own)])
     cols = gid[used][K.col]
     keep = cols >= 0  # no column for points without mass
     K = sp.csr_matrix((K.data[keep], (K.row[keep], cols[keep])), shape=(len(own), start))
+    K.eliminate_zeros()
     sizes = ((len(own), start), (len(own), start))
     Kg = PETSc.Mat().createAIJ(sizes, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
                                            K.data), comm=comm)
-    return sp.csc_matrix(K[:, first:first + len(own)]), Kg
+    block = sp.csc_matrix(K[:, first:first + len(own)])
+    return (block if block.nnz else None), Kg
 
 
 def _rank_colors(op: Any) -> tuple[np.ndarray, int]:
@@ -266,12 +268,14 @@ def eigs(
     diag = -m * op.diagonal()[P]
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
     K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
-    T = spectral._CotPreconditioner(K, m, diag, sigma)
+    T = spectral._CotPreconditioner(K if len(P) else None, m, diag, sigma)
     X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), nb))
     with spectral._one_blas_thread():
         if Kg is not None:
             # start from the cotangent eigenvectors, the local factors as preconditioner
             def local(R: np.ndarray) -> np.ndarray:
+                if T.lu is None:
+                    return R / (sigma * m[:, None])
                 return T.lu.solve(np.asfortranarray(R))
 
             _, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,

@@ -201,7 +201,8 @@ class _CotPreconditioner:
         self.m = m
         self.sigma = sigma
         self.lu = None if K is None else _factor(K + sp.diags(sigma * m))
-        d = np.where(diag > 0, diag, m * max(float(np.median(diag / m)), 1e-300))
+        typical = float(np.median(diag / m)) if len(m) else 1.0  # no rows: an MPI rank without any
+        d = np.where(diag > 0, diag, m * max(typical, 1e-300))
         self.half_inv_diag = 0.5 / d
 
     def __call__(self, R: np.ndarray) -> np.ndarray:
