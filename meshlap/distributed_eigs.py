@@ -213,14 +213,16 @@ def eigs(
     maxiter : int, default 300
         Iterations before giving up with a warning.
     extra : int, optional
-        Guard vectors (default ``max(4, k // 10)``).
+        Guard vectors; by default as in :func:`meshlap.spectral.eigs` (enough to hold the
+        cluster of the k-th eigenvalue, seen in the cotangent start).
     mesh : (V, F), optional
         The whole mesh in the caller's numbering (the same on every rank): the preconditioner
         is then its cotangent Laplacian; without it, a nearest-neighbour graph of the points.
     seed : int, default 0
         Seed of the random start vectors (with the rank).
     info : dict, optional
-        Filled with ``iterations`` and the relative ``residuals`` of the k pairs.
+        Filled with ``iterations``, the relative ``residuals`` of the k pairs and the
+        ``block`` width.
 
     Returns
     -------
@@ -253,8 +255,7 @@ def eigs(
     if n_p == 0:
         raise MeshError("every point has zero mass: the operator has no surface")
     k = check_k(k, n_p)
-    extra = max(4, k // 10) if extra is None else int(extra)
-    nb = min(k + extra, n_p)
+    nb = min(k + (max(4, k // 10) if extra is None else int(extra)), n_p)
     allsum = _allsum(comm)
     full = len(P) == op.n_local
 
@@ -269,7 +270,9 @@ def eigs(
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
     K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
     T = spectral._CotPreconditioner(K if len(P) else None, m, diag, sigma)
-    X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), nb))
+    adapt = extra is None and Kg is not None
+    width = spectral._start_width(k, nb, n_p) if adapt else nb
+    X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
     with spectral._one_blas_thread():
         if Kg is not None:
             # start from the cotangent eigenvectors, the local factors as preconditioner
@@ -278,8 +281,10 @@ def eigs(
                     return R / (sigma * m[:, None])
                 return T.lu.solve(np.asfortranarray(R))
 
-            _, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,
-                                           _START_ITERATIONS, allsum)
+            theta, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,
+                                               _START_ITERATIONS, allsum)
+            nb = spectral._block_size(theta, k, nb) if adapt else nb
+            X0 = X0[:, :nb]
         lam, X, it, res = spectral._lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum)
     scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
     if (res[:k] > tol * scale).any():
@@ -287,7 +292,7 @@ def eigs(
                       f"{float((res[:k] / scale).max()):.2e} > tol={tol:g}; raise maxiter or tol",
                       RuntimeWarning, stacklevel=2)
     if info is not None:
-        info.update(iterations=it, residuals=res[:k] / scale)
+        info.update(iterations=it, residuals=res[:k] / scale, block=nb)
     return finish(op, P, lam[:k], X[:, :k])
 
 
