@@ -357,7 +357,10 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     if suffix == ".ply":
         P = _ply_vertices(path.read_bytes(), path.name)
     elif suffix == ".npy":
-        P = np.load(path, allow_pickle=False)
+        try:
+            P = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            raise MeshError(f"{path.name}: not a NumPy .npy file of numbers") from exc
     elif suffix == ".off":
         P = read_mesh(path)[0]
     elif suffix == ".obj":  # the 'v' lines, with or without faces
@@ -438,16 +441,27 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
             if not f.is_file():
                 raise FileNotFoundError(f"no such TetGen file: {f}")
 
-        def table(f: Path) -> np.ndarray:
-            rows = [ln.split("#", 1)[0].split() for ln in f.read_text().splitlines()]
+        def table(f: Path, width: int) -> np.ndarray:
+            rows = [ln.split("#", 1)[0].split() for ln in f.read_text(errors="replace").splitlines()]
             rows = [r for r in rows if r]
-            count = int(rows[0][0])
-            return np.array([r for r in rows[1:count + 1]], dtype=np.float64)
+            try:
+                count = int(rows[0][0])
+                table = np.array([r[:width] for r in rows[1:count + 1]], dtype=np.float64)
+            except (IndexError, ValueError) as exc:
+                raise MeshError(f"{f.name}: malformed TetGen file ({exc})") from exc
+            if count < 1 or table.shape != (count, width):
+                raise MeshError(f"{f.name}: the header announces {count} rows of {width} numbers; "
+                                f"found {len(rows) - 1} rows")
+            return table
 
-        nodes, eles = table(node), table(ele)
+        nodes, eles = table(node, 4), table(ele, 5)
         first = int(nodes[0, 0])  # TetGen numbers from 0 or from 1
         V = nodes[:, 1:4]
         T = eles[:, 1:5].astype(np.int64) - first
+        bad = np.flatnonzero(((T < 0) | (T >= len(V))).any(axis=1))
+        if len(bad):
+            raise MeshError(f"{ele.name}: tetrahedron {int(eles[bad[0], 0])} refers to a node that does not "
+                            f"exist (the nodes are numbered {first} to {len(V) - 1 + first})")
         return check_vertices(V, name=f"vertices of {node.name}"), T
     existing_file(path, "mesh")
     try:

@@ -157,8 +157,9 @@ def plot_mesh(
     ----------
     V : (n, 3) array_like
         Vertex positions.
-    F : (m, k) array_like, list of polygons or Polygons
-        Faces; polygons are drawn as fans of triangles.
+    F : (m, k) array_like, list of polygons or Polygons, or None
+        Faces; polygons are drawn as fans of triangles. None draws the vertices as dots
+        (a point cloud).
     values : (n,) array_like, optional
         Scalar per vertex (an eigenfunction, the curvature, an error). Without it the
         mesh is drawn in grey.
@@ -199,8 +200,9 @@ def plot_mesh(
 
     plt = _pyplot()
     V = check_vertices(V)
-    tris = check_faces(F, len(V)).triangles()
-    V = _to_z_up(V, _parse_up(up, V, F))
+    # without faces (a point cloud, a curve) every vertex is drawn as a dot
+    tris = np.arange(len(V))[:, None] if F is None else check_faces(F, len(V)).triangles()
+    V = _to_z_up(V, "+z" if F is None and up == "auto" else _parse_up(up, V, F))
     if ax is None:
         fig = plt.figure(figsize=figsize)
         ax = fig.add_subplot(projection="3d")
@@ -228,10 +230,13 @@ def plot_mesh(
         rgb = cm(norm(face_value))[:, :3]
         mappable = mpl.cm.ScalarMappable(norm=norm, cmap=cm)
         mappable.set_array(f)
-    if shade:
-        rgb = rgb * _shading(P, light)[:, None]
-    coll = Poly3DCollection(P, facecolors=np.clip(rgb, 0, 1), edgecolors=edgecolor, linewidths=0.2)
-    ax.add_collection3d(coll)
+    if F is None:
+        ax.scatter(*V.T, c=np.clip(rgb, 0, 1), s=max(1.0, 3000.0 / len(V)), depthshade=shade)
+    else:
+        if shade:
+            rgb = rgb * _shading(P, light)[:, None]
+        coll = Poly3DCollection(P, facecolors=np.clip(rgb, 0, 1), edgecolors=edgecolor, linewidths=0.2)
+        ax.add_collection3d(coll)
     lo_xyz, hi_xyz = V.min(axis=0), V.max(axis=0)
     centre, half = (lo_xyz + hi_xyz) / 2, (hi_xyz - lo_xyz).max() / 2
     ax.set_xlim(centre[0] - half, centre[0] + half)
