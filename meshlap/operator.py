@@ -706,8 +706,11 @@ def laplacian(
 
     Parameters
     ----------
-    V : (n, d) array_like, or Geometry
-        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None).
+    V : (n, d) array_like, Geometry, or a mesh object
+        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None), or,
+        with ``F`` None, a ``trimesh.Trimesh``, ``pyvista.PolyData`` / ``UnstructuredGrid``,
+        ``open3d`` ``TriangleMesh`` / ``TetraMesh``, ``meshio.Mesh`` or a file path
+        (:func:`meshlap.inputs.as_geometry_input`).
     F : (m, c) array_like or list of sequences
         Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
@@ -734,7 +737,16 @@ def laplacian(
     >>> op.L.shape
     (2000, 2000)
     """
+    if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
+        V, F, kwargs["k"] = _held_input(V, kwargs.get("k"))
     return MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
+
+
+def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:
+    from .inputs import as_geometry_input
+
+    V, F, k_cells = as_geometry_input(obj)
+    return V, F, k if k is not None else k_cells
 
 
 def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = DEFAULT_TOL,

@@ -635,8 +635,10 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
 
     Parameters
     ----------
-    P : (n, d) array_like
-        Points in R^d, d ≥ k (d > 3 uses a k-d tree instead of the cell grid).
+    P : (n, d) array_like, or a point cloud object
+        Points in R^d, d ≥ k (d > 3 uses a k-d tree instead of the cell grid); or an
+        ``open3d.geometry.PointCloud``, ``pyvista.PolyData``, ``trimesh.PointCloud`` or a
+        file path (:func:`meshlap.inputs.as_geometry_input`; a mesh gives its vertices).
     h : float, optional
         Kernel width. Default (2a)², a the neighbour distance of a regular lattice with the
         cloud's mean mass (as (2·mean edge)² on a mesh); ``op.h`` and ``op.h_auto`` report it.
@@ -664,9 +666,17 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     >>> bool(err < 0.05)                             # Δx = -2x on the unit sphere
     True
     """
+    if not isinstance(P, (np.ndarray, list)):  # open3d, pyvista, trimesh point clouds (or meshes)
+        P = _held_points(P)
     geo = point_cloud_geometry(P, k, denoise=denoise, neighbors=neighbors, merge_tol=merge_tol,
                                outlier_ratio=outlier_ratio)
     return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)
+
+
+def _held_points(obj: Any) -> np.ndarray:
+    from .inputs import as_geometry_input
+
+    return as_geometry_input(obj)[0]
 
 
 def point_cloud_matrices(P: Any, h: float | None = None, k: int = 2, **kwargs: Any
