@@ -92,9 +92,11 @@ def _table(rows: Sequence[tuple[str, str]]) -> str:
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
-def _need_png_suffix(path: str | None) -> None:
-    if path is not None and Path(path).suffix.lower() != ".png":
-        raise MeshError(f"--png expects a file name ending in .png; got {path!r}")
+def _need_suffixes(args: argparse.Namespace) -> None:
+    for option, suffix in (("png", ".png"), ("html", ".html")):
+        path = getattr(args, option)
+        if path is not None and Path(path).suffix.lower() != suffix:
+            raise MeshError(f"--{option} expects a file name ending in {suffix}; got {path!r}")
 
 
 def _save_png(fig: Any, path: str) -> None:
@@ -180,7 +182,7 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 
     from .spectral import eigs
 
-    _need_png_suffix(args.png)
+    _need_suffixes(args)
     op, V, F = _operator_from(args)
     t0 = time.perf_counter()
     lam, phi = eigs(op, args.k)
@@ -201,6 +203,15 @@ def cmd_eigs(args: argparse.Namespace) -> int:
     if args.output:
         np.savez(args.output, eigenvalues=lam, eigenvectors=phi)
         print(f"wrote {args.output}")
+    if args.html:
+        if V is None:
+            raise MeshError("--html needs the mesh: give a mesh file or an operator saved with it")
+        from .viewer import save_html, show
+
+        shown = list(range(1, args.k))  # skip the constant eigenvector
+        plot = show(V, F, phi[:, shown], titles=[f"φ{i}  λ = {lam[i]:.4g}" for i in shown], cmap="RdBu_r",
+                    symmetric=True, up=args.up)
+        print(f"wrote {save_html(plot, args.html)}")
     if args.png:
         if V is None:
             raise MeshError("--png needs the mesh: give a mesh file or an operator saved with it")
@@ -271,7 +282,7 @@ def cmd_curvature(args: argparse.Namespace) -> int:
     """Mean curvature per vertex from ΔX = -2H n; print a summary, optionally save and draw."""
     from .curvature import mean_curvature, mean_curvature_normal
 
-    _need_png_suffix(args.png)
+    _need_suffixes(args)
     if args.output and Path(args.output).suffix.lower() not in (".npy", ".txt", ".csv"):
         raise MeshError(f"--output must end in .npy, .txt or .csv; got {args.output!r}")
     V, F, k = _read(args)
@@ -303,11 +314,17 @@ def cmd_curvature(args: argparse.Namespace) -> int:
         else:
             np.savetxt(out, H, delimiter=",")
         print(f"wrote {out}")
+    lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
+    if args.html:
+        from .viewer import save_html, show
+
+        plot = show(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), cmap="coolwarm", vmin=lo, vmax=hi,
+                    up=args.up, titles=[f"mean curvature of {Path(args.input).name}"])
+        print(f"wrote {save_html(plot, args.html)}")
     if args.png:
         _use_agg()
         from .plot import plot_mesh
 
-        lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
         ax = plot_mesh(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), vmin=lo, vmax=hi,
                        cmap="coolwarm", up=args.up, title=f"mean curvature of {Path(args.input).name}")
         _save_png(ax.figure, args.png)
@@ -460,6 +477,7 @@ def build_parser() -> argparse.ArgumentParser:
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save eigenvalues and eigenvectors to this .npz")
     p.add_argument("--png", help="draw the first eigenfunctions on the surface into this PNG")
+    p.add_argument("--html", help="an interactive view of the eigenfunctions: standalone HTML (needs k3d)")
     _up_option(p)
     p.add_argument("--compare-cot", action="store_true",
                    help="also print the cotangent Laplacian's eigenvalues on the same mesh")
@@ -489,6 +507,7 @@ def build_parser() -> argparse.ArgumentParser:
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save H to .npy, .txt or .csv")
     p.add_argument("--png", help="draw the mesh coloured by H into this PNG")
+    p.add_argument("--html", help="an interactive view of H: standalone HTML (needs k3d)")
     _up_option(p)
     p.add_argument("--compare-cot", action="store_true", help="also summarize the cotangent estimate")
     _progress_option(p)

@@ -4,6 +4,9 @@ rows of eigenfunctions, log-log convergence plots and spectra.
 Only matplotlib is needed (``pip install "meshlap[plot]"``); nothing here needs a display
 or a GPU, so the functions work under the Agg backend in CI. Each returns the matplotlib
 object it drew on, to be shown in a notebook or saved with ``fig.savefig``.
+
+The interactive views :func:`show`, :func:`show_modes` and :func:`save_html` (k3d in
+Jupyter, standalone HTML) live in :mod:`meshlap.viewer` and are imported here too.
 """
 
 from __future__ import annotations
@@ -14,8 +17,10 @@ from typing import Any
 import numpy as np
 
 from .validation import MeshError, check_faces, check_function, check_vertices
+from .viewer import colour_range, save_html, show, show_modes
 
-__all__ = ["plot_convergence", "plot_functions", "plot_mesh", "plot_spectrum", "slope", "up_axis"]
+__all__ = ["plot_convergence", "plot_functions", "plot_mesh", "plot_spectrum", "save_html", "show",
+           "show_modes", "slope", "up_axis"]
 
 
 def _pyplot():
@@ -216,13 +221,7 @@ def plot_mesh(
         if f.ndim != 1:
             raise MeshError(f"values must be one scalar per vertex, shape ({len(V)},); got {f.shape}")
         face_value = f[tris].mean(axis=1)
-        lo = float(f.min()) if vmin is None else float(vmin)
-        hi = float(f.max()) if vmax is None else float(vmax)
-        if symmetric:
-            hi = max(abs(lo), abs(hi))
-            lo = -hi
-        if hi <= lo:  # a constant function: any non-empty range draws it in one colour
-            lo, hi = lo - 0.5, hi + 0.5
+        lo, hi = colour_range(f, vmin, vmax, symmetric)
         import matplotlib as mpl
 
         norm = mpl.colors.Normalize(lo, hi)
