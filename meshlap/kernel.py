@@ -730,7 +730,9 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     head = (grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
             grid.self_slot)
     tail = (hv, hs, nv, ns, use_normals, lnt4, hmax, dog)
-    dummy_i = np.zeros(1, dtype=np.int64)
+    # the count pass takes index arrays of the fill pass's type: one compiled specialization
+    # serves both (a fresh cache compiles it once, about 5 s, instead of twice)
+    dummy_i = np.zeros(1, dtype=index_dtype)
     _var_rows(*head, *geo, *tail, False, dummy_i, dummy_i, np.zeros(1), counts, status)
     nnz = int(counts.sum())
     if max_nnz is not None:
