@@ -87,6 +87,7 @@ class SavedLaplacian(_LumpedLaplacian):
                  params: dict[str, Any], S: sp.csr_matrix | None = None,
                  geometry: Geometry | None = None) -> None:
         self._applied, self._sym, self.mass, self._S = applied, symmetric, mass, S
+        self._exact_S = S is not None  # S stored as such (the cotangent Laplacian's), not M @ L_sym
         self.name = str(params.get("name", "BSW"))
         for key in _PARAMS:
             setattr(self, key, float(params[key]) if key in params else None)
@@ -269,7 +270,8 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
                 same = (np.array_equal(sym.indptr, applied.indptr)
                         and np.array_equal(sym.indices, applied.indices))
                 arrays.update({"sym_data": sym.data} if same else _csr_arrays("sym_", sym))
-            if not isinstance(op, MeshLaplacian):  # S may be exact rather than M @ L (cotangent)
+            if not isinstance(op, MeshLaplacian) and getattr(op, "_exact_S", True):
+                # S may be exact rather than M @ L (the cotangent Laplacian's)
                 arrays.update(_csr_arrays("S_", sp.csr_matrix(op.S)))
         for key in _PARAMS:
             if getattr(op, key, None) is not None:
@@ -355,7 +357,11 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
     with data:
         if "mass" not in data or "name" not in data:
             raise MeshError(f"{path.name}: not an operator saved by meshlap (no mass or name)")
-        version = int(data["meshlap_format"]) if "meshlap_format" in data else 1
+        try:
+            version = int(data["meshlap_format"]) if "meshlap_format" in data else 1
+        except (TypeError, ValueError) as exc:
+            raise OperatorFormatError(f"{path.name}: the format version {data['meshlap_format']!r} "
+                                      "is not a number") from exc
         if version != FORMAT_VERSION:
             when = "an older" if version < FORMAT_VERSION else "a newer"
             raise OperatorFormatError(
