@@ -286,7 +286,15 @@ def check_function(f: Any, n: int, name: str = "f") -> np.ndarray:
 
 
 def existing_file(path: str | os.PathLike, what: str) -> Path:
-    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file."""
+    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file.
+
+    Examples
+    --------
+    >>> existing_file("no-such.obj", "mesh")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: no such mesh file: no-such.obj
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such {what} file: {path}")

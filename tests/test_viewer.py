@@ -132,6 +132,9 @@ def test_cli_html_of_eigenfunctions_renders(capsys, tmp_path):
     assert code == 0 and "wrote" in out
     image, _ = screenshot(tmp_path / "modes.html", tmp_path / "modes.png")
     assert image.std() > 0.05
+    code, out, _ = run(capsys, "curvature", tmp_path / "sphere.obj", "--html", tmp_path / "H.html")
+    assert code == 0 and (tmp_path / "H.html").stat().st_size > 500_000
+    assert f"wrote {tmp_path / 'H.html'}" in out
     # red and blue of RdBu_r: signed eigenfunctions on four copies
     red = (image[..., 0] > 0.6) & (image[..., 2] < 0.35)
     blue = (image[..., 2] > 0.6) & (image[..., 0] < 0.35)
