@@ -75,6 +75,11 @@ def test_open3d_like_objects():
     o3d = pytest.importorskip("open3d")
     mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(V), o3d.utility.Vector3iVector(F))
     assert same_operator(meshlap.laplacian(mesh, h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(P))
+    assert same_operator(meshlap.point_cloud_laplacian(cloud, h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+    tets = o3d.geometry.TetraMesh(o3d.utility.Vector3dVector(VT), o3d.utility.Vector4iVector(T))
+    assert same_operator(meshlap.laplacian(tets), meshlap.laplacian(VT, T, k=3), VT)
 
 
 def test_unknown_objects_are_refused():
