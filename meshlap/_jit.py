@@ -8,21 +8,30 @@ then imports that folder as an empty namespace package that shadows the real one
 keeps its compiled kernels in the user's cache directory instead (``$NUMBA_CACHE_DIR`` when the
 user set one, else ``$XDG_CACHE_HOME/meshlap/numba`` or ``~/.cache/meshlap/numba``), one
 sub-folder per installed copy of the sources, and never writes into the package.
+
+Compiling takes a while (tens of seconds for the first mesh and the first point cloud on a
+fresh cache, once per installed copy): the first time this process compiles one of meshlap's
+kernels, a one-line notice on stderr says so. numba reports only real compilations (cache
+misses), so a warm cache prints nothing.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numba
-from numba.core import config
+from numba.core import config, event
 
 __all__ = ["cache_dir", "jit"]
+
+#: What the notice says: the first compilations cost about this long on a quiet machine.
+NOTICE = ("meshlap: compiling kernels for first use (once, ~15-30 s; later runs load them from {})…")
 
 
 def cache_dir() -> Path:
@@ -79,3 +88,24 @@ def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
             return numba.njit(cache=True, **options)(fn)
 
     return decorate
+
+
+class _FirstCompileNotice(event.Listener):
+    """Prints :data:`NOTICE` once per process, when numba starts compiling a meshlap function."""
+
+    def __init__(self) -> None:
+        self.told = False
+
+    def on_start(self, ev: event.Event) -> None:
+        if self.told:
+            return
+        module = getattr(getattr(ev.data.get("dispatcher"), "py_func", None), "__module__", "")
+        if module.startswith("meshlap."):
+            self.told = True
+            print(NOTICE.format(cache_dir()), file=sys.stderr, flush=True)
+
+    def on_end(self, ev: event.Event) -> None:
+        pass
+
+
+event.register("numba:compile", _FirstCompileNotice())

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import scipy.sparse as sp
 
-from .geometry import point_cloud_geometry
+from .geometry import Geometry, point_cloud_geometry
 from .operator import DEFAULT_TOL, MeshLaplacian
 
 __all__ = ["laplacian", "mesh_laplacian", "point_cloud_laplacian", "point_cloud_matrices"]
@@ -28,8 +29,11 @@ def laplacian(
 
     Parameters
     ----------
-    V : (n, d) array_like, or Geometry
-        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None).
+    V : (n, d) array_like, Geometry, or a mesh object
+        Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None), or,
+        with ``F`` None, a ``trimesh.Trimesh``, ``pyvista.PolyData`` / ``UnstructuredGrid``,
+        ``open3d`` ``TriangleMesh`` / ``TetraMesh``, ``meshio.Mesh`` or a file path
+        (:func:`meshlap.inputs.as_geometry_input`).
     F : (m, c) array_like or list of sequences
         Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
@@ -56,7 +60,16 @@ def laplacian(
     >>> op.L.shape
     (2000, 2000)
     """
+    if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
+        V, F, kwargs["k"] = _held_input(V, kwargs.get("k"))
     return MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
+
+
+def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:
+    from .inputs import as_geometry_input
+
+    V, F, k_cells = as_geometry_input(obj)
+    return V, F, k if k is not None else k_cells
 
 
 def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = DEFAULT_TOL,
@@ -95,8 +108,10 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
 
     Parameters
     ----------
-    P : (n, d) array_like
-        Points in R^d, d ≥ k (d > 3 uses a k-d tree instead of the cell grid).
+    P : (n, d) array_like, or a point cloud object
+        Points in R^d, d ≥ k (d > 3 uses a k-d tree instead of the cell grid); or an
+        ``open3d.geometry.PointCloud``, ``pyvista.PolyData``, ``trimesh.PointCloud`` or a
+        file path (:func:`meshlap.inputs.as_geometry_input`; a mesh gives its vertices).
     h : float, optional
         Kernel width. Default 4a², a the neighbour distance of a regular lattice with the
         cloud's mean mass ((2a)² with ``correction="none"``, as on a mesh); ``op.h`` and
@@ -125,6 +140,10 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     >>> bool(err < 0.05)                             # Δx = -2x on the unit sphere
     True
     """
+    if not isinstance(P, (np.ndarray, list)):  # open3d, pyvista, trimesh point clouds (or meshes)
+        from .inputs import as_geometry_input
+
+        P = as_geometry_input(P)[0]
     geo = point_cloud_geometry(P, k, denoise=denoise, neighbors=neighbors, merge_tol=merge_tol,
                                outlier_ratio=outlier_ratio)
     return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)

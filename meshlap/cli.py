@@ -24,6 +24,9 @@ from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
 __all__ = ["main"]
 
 PROG = "meshlap"
+#: What info, build, eigs and curvature read (meshio adds its formats: pip install "meshlap[io]").
+INPUTS = ("surface meshes (.obj .off .ply .stl), point clouds (.ply without faces, .xyz .csv .txt .pts "
+          ".npy), tetrahedra (TetGen .node/.ele; .vtk .vtu .msh ... with meshio)")
 
 
 # -- helpers ----------------------------------------------------------------------------
@@ -33,22 +36,55 @@ def _face_summary(F: Any, n: int) -> str:
     return ", ".join(f"{c:,} {names.get(int(s), f'{s}-gons')}" for s, c in zip(sizes, counts, strict=True))
 
 
-def _build(args: argparse.Namespace, V: np.ndarray, F: Any) -> Any:
-    from .builders import laplacian
+#: What each kind of input is called, and the name of its measure (the sum of the masses).
+_KINDS = {1: ("curve", "length"), 2: ("surface", "surface area"), 3: ("volume", "volume")}
+
+
+def _read(args: argparse.Namespace) -> tuple[np.ndarray, Any, int | None]:
+    """``(points, cells, k)`` of ``args.input``: a surface, a point cloud, a curve or a volume."""
+    from .inputs import read_input
+
+    return read_input(args.input)
+
+
+def _is_cloud(cells: Any) -> bool:
+    return cells is None
+
+
+def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -> Any:
+    from .builders import laplacian, point_cloud_laplacian
 
     dtype = np.float32 if getattr(args, "float32", False) else np.float64
-    # the library's default operator (the one notebooks and scripts get), unless --correction none
-    return laplacian(V, F, h=args.h, tol=args.tol, dtype=dtype, progress=args.progress or None,
-                     correction=args.correction)
+    # the library's default operator (the one notebooks and scripts get), unless --correction
+    options = {"h": args.h, "tol": args.tol, "dtype": dtype, "progress": args.progress or None,
+               "correction": args.correction}
+    if _is_cloud(F):
+        return point_cloud_laplacian(V, k=args.dim, **options)
+    return laplacian(V, F, k=k, **options)
 
 
 def _operator_from(args: argparse.Namespace) -> tuple[Any, np.ndarray | None, Any]:
-    """The operator named by ``args.input``: a saved .npz, or built from a mesh file."""
+    """The operator named by ``args.input`` (a saved .npz, or built from a geometry file), its
+    points and what to draw them with (faces; the hull of a volume; None for clouds)."""
     if Path(args.input).suffix.lower() == ".npz":
         op = load_operator(args.input)
         return op, getattr(op, "V", None), getattr(op, "faces", None)
-    V, F = read_mesh(args.input)
-    return _build(args, V, F), V, F
+    V, cells, k = _read(args)
+    return _build(args, V, cells, k), V, _drawn(cells, k)
+
+
+def _drawn(cells: Any, k: int | None) -> Any:
+    from .inputs import boundary_triangles
+
+    if k == 3:
+        return boundary_triangles(cells)
+    return cells if k == 2 else None
+
+
+def _surface_only(cells: Any, k: int | None, what: str) -> None:
+    if cells is None or k != 2:
+        kind = "point cloud" if cells is None else _KINDS[k][0]
+        raise MeshError(f"{what} needs a surface mesh; this input is a {kind}")
 
 
 def _table(rows: Sequence[tuple[str, str]]) -> str:
@@ -56,9 +92,11 @@ def _table(rows: Sequence[tuple[str, str]]) -> str:
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
 
-def _need_png_suffix(path: str | None) -> None:
-    if path is not None and Path(path).suffix.lower() != ".png":
-        raise MeshError(f"--png expects a file name ending in .png; got {path!r}")
+def _need_suffixes(args: argparse.Namespace) -> None:
+    for option, suffix in (("png", ".png"), ("html", ".html")):
+        path = getattr(args, option)
+        if path is not None and Path(path).suffix.lower() != suffix:
+            raise MeshError(f"--{option} expects a file name ending in {suffix}; got {path!r}")
 
 
 def _save_png(fig: Any, path: str) -> None:
@@ -93,36 +131,45 @@ def cmd_info(args: argparse.Namespace) -> int:
         ]
         print(_table(rows))
         return 0
+    from . import geometry
+    from .geometry import point_cloud_geometry
     from .geometry.topology import diagnose
     from .operator import DEFAULT_TOL, MeshLaplacian
 
-    V, F = read_mesh(args.input)
+    V, cells, k = _read(args)
     tol = DEFAULT_TOL if args.tol is None else args.tol
+    geo = point_cloud_geometry(V, args.dim) if _is_cloud(cells) else geometry.from_mesh(V, cells, k)
     # matrix-free: sets up the kernel (h, radius, cell grid) without assembling L
-    probe = MeshLaplacian(V, F, h=args.h, tol=tol, matrix_free=True, correction="none")
+    probe = MeshLaplacian(geo, h=args.h, tol=tol, matrix_free=True, correction="none")
     nnz = probe.estimate_nnz()
     bbox = V.max(axis=0) - V.min(axis=0)
-    rows = [
-        ("file", str(args.input)),
-        ("vertices", f"{len(V):,}"),
-        ("faces", _face_summary(F, len(V))),
-        ("surface area", f"{probe.mass.sum():.6g}"),
+    kind, measure = _KINDS[geo.dim]
+    rows = [("file", str(args.input)), ("points" if _is_cloud(cells) else "vertices", f"{len(V):,}")]
+    if _is_cloud(cells):
+        rows.append(("kind", f"point cloud (k={geo.dim}, --dim)"))
+    elif k == 2:
+        rows.append(("faces", _face_summary(cells, len(V))))
+    else:
+        rows.append(("cells", f"{len(cells):,} {'tetrahedra' if k == 3 else 'edges'} ({kind})"))
+    rows += [
+        (measure, f"{probe.mass.sum():.6g}"),
         ("bounding box", " x ".join(f"{b:.4g}" for b in bbox)),
-        ("h", f"{probe.h:.6g}" + (" (auto: (2·mean edge)²)" if probe.h_auto else "")),
+        ("h", f"{probe.h:.6g}" + (" (auto: (2·spacing)²)" if probe.h_auto else "")),
         ("tol, radius", f"{probe.tol:.3g}, {probe.radius:.6g}"),
         ("nnz of L", f"≈ {nnz:,} ({nnz / len(V):.0f} per row), "
                      f"≈ {nnz * 12 / 2**20:.1f} MiB in float64"),  # 8-byte value + 4-byte index
     ]
     print(_table(rows))
-    print(diagnose(V, F))
+    if k == 2 and not _is_cloud(cells):
+        print(diagnose(V, cells))
     return 0
 
 
 def cmd_build(args: argparse.Namespace) -> int:
     """Build the operator of a mesh and save it as .npz."""
-    V, F = read_mesh(args.input)
+    V, cells, k = _read(args)
     out = Path(args.output) if args.output else Path(Path(args.input).stem + ".npz")
-    op = _build(args, V, F)
+    op = _build(args, V, cells, k)
     path = save_operator(out, op, mesh=not args.no_mesh)
     print(op)
     print(f"wrote {path} ({path.stat().st_size / 2**20:.1f} MiB)")
@@ -135,18 +182,18 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 
     from .spectral import eigs
 
-    _need_png_suffix(args.png)
+    _need_suffixes(args)
     op, V, F = _operator_from(args)
     t0 = time.perf_counter()
     lam, phi = eigs(op, args.k)
     seconds = time.perf_counter() - t0
     columns = {getattr(op, "name", "BSW"): lam}
     if args.compare_cot:
-        if V is None:
-            raise MeshError("--compare-cot needs the mesh: give a mesh file or an operator saved with it")
+        if getattr(op, "faces", None) is None:
+            raise MeshError("--compare-cot needs a surface mesh: a mesh file or an operator saved with it")
         from .baselines import cotangent
 
-        columns["COT"] = eigs(cotangent(V, F), args.k)[0]
+        columns["COT"] = eigs(cotangent(V, op.faces), args.k)[0]
     print(f"{args.k} smallest eigenvalues of -L (-S φ = λ M φ; φ M-orthonormal), {seconds:.1f} s:")
     print(f"{'i':>4}" + "".join(f"{name:>14}" for name in columns))
     for i in range(args.k):
@@ -156,6 +203,15 @@ def cmd_eigs(args: argparse.Namespace) -> int:
     if args.output:
         np.savez(args.output, eigenvalues=lam, eigenvectors=phi)
         print(f"wrote {args.output}")
+    if args.html:
+        if V is None:
+            raise MeshError("--html needs the mesh: give a mesh file or an operator saved with it")
+        from .viewer import save_html, show
+
+        shown = list(range(1, args.k))  # skip the constant eigenvector
+        plot = show(V, F, phi[:, shown], titles=[f"φ{i}  λ = {lam[i]:.4g}" for i in shown], cmap="RdBu_r",
+                    symmetric=True, up=args.up)
+        print(f"wrote {save_html(plot, args.html)}")
     if args.png:
         if V is None:
             raise MeshError("--png needs the mesh: give a mesh file or an operator saved with it")
@@ -224,19 +280,26 @@ def _laplacian(V: np.ndarray, F: Any, h: float, tol: float) -> Any:
 
 def cmd_curvature(args: argparse.Namespace) -> int:
     """Mean curvature per vertex from ΔX = -2H n; print a summary, optionally save and draw."""
-    from .curvature import mean_curvature
+    from .curvature import mean_curvature, mean_curvature_normal
 
-    _need_png_suffix(args.png)
+    _need_suffixes(args)
     if args.output and Path(args.output).suffix.lower() not in (".npy", ".txt", ".csv"):
         raise MeshError(f"--output must end in .npy, .txt or .csv; got {args.output!r}")
-    V, F = read_mesh(args.input)
-    H = mean_curvature(_build(args, V, F), V, F)
+    V, F, k = _read(args)
+    if k != 2 and not _is_cloud(F):
+        raise MeshError(f"curvature needs a surface or a point cloud sampled from one; this input is a "
+                        f"{_KINDS[k][0]}")
+    op = _build(args, V, F, k)
+    # a cloud has no faces to orient normals by: the unsigned |H| = |L X| / 2
+    H = np.linalg.norm(mean_curvature_normal(op, V), axis=1) if _is_cloud(F) else mean_curvature(op, V, F)
     rows = {"BSW": H}
     if args.compare_cot:
         from .baselines import cotangent
 
+        _surface_only(F, k, "--compare-cot")
         rows["COT"] = mean_curvature(cotangent(V, F), V, F)
-    print(f"mean curvature H (ΔX = -2H n; H = 1/R on a sphere of radius R), {len(V):,} vertices")
+    what = "|H| (unsigned: a point cloud has no orientation)" if _is_cloud(F) else "H"
+    print(f"mean curvature {what} (ΔX = -2H n; H = 1/R on a sphere of radius R), {len(V):,} points")
     print(f"{'':<6}{'min':>11}{'5%':>11}{'median':>11}{'95%':>11}{'max':>11}")
     for name, values in rows.items():
         q = np.nanpercentile(values, [0, 5, 50, 95, 100])
@@ -251,11 +314,17 @@ def cmd_curvature(args: argparse.Namespace) -> int:
         else:
             np.savetxt(out, H, delimiter=",")
         print(f"wrote {out}")
+    lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
+    if args.html:
+        from .viewer import save_html, show
+
+        plot = show(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), cmap="coolwarm", vmin=lo, vmax=hi,
+                    up=args.up, titles=[f"mean curvature of {Path(args.input).name}"])
+        print(f"wrote {save_html(plot, args.html)}")
     if args.png:
         _use_agg()
         from .plot import plot_mesh
 
-        lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
         ax = plot_mesh(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), vmin=lo, vmax=hi,
                        cmap="coolwarm", up=args.up, title=f"mean curvature of {Path(args.input).name}")
         _save_png(ax.figure, args.png)
@@ -353,9 +422,11 @@ def _kernel_options(p: argparse.ArgumentParser, tol_default: float | None) -> No
                    help="kernel width h (exp(-d²/4h)); default (2·mean edge length)²")
     p.add_argument("--tol", type=float, default=tol_default,
                    help="kernel tolerance: weights below it are dropped (default 1e-8; 0 = exact)")
-    p.add_argument("--correction", choices=("richardson", "none"), default="richardson",
-                   help="richardson (default, as meshlap.laplacian): the O(h) bias removed; none: "
-                        "the paper's operator")
+    p.add_argument("--correction", choices=("richardson", "none"), default=None,
+                   help="default as meshlap.laplacian: richardson (the O(h) bias removed) on surface "
+                        "meshes, none (the paper's operator) on point clouds, curves and volumes")
+    p.add_argument("--dim", type=int, choices=(1, 2, 3), default=2,
+                   help="intrinsic dimension of a point cloud: 1 curve, 2 surface (default), 3 volume")
 
 
 def _up_option(p: argparse.ArgumentParser) -> None:
@@ -375,22 +446,22 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG,
         description="The Belkin–Sun–Wang heat-kernel mesh Laplacian (SoCG 2008) from the shell. "
-                    f"Meshes: {', '.join(MESH_FORMATS)}; operators: .npz written by 'meshlap build'.",
+                    f"Inputs: {INPUTS}; operators: .npz written by 'meshlap build'.",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    p = sub.add_parser("info", help="describe a mesh or a saved operator",
+    p = sub.add_parser("info", help="describe a mesh, point cloud, volume or saved operator",
                        description="Print a mesh's size, area, the default h, the operator's expected "
                                    "size and a diagnosis (boundaries, unreferenced vertices, ...).")
-    p.add_argument("input", help="mesh file, or an operator .npz")
+    p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz")
     _kernel_options(p, None)
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("build", help="build the operator of a mesh and save it (.npz)",
                        description="Build L, M and the kernel parameters and save them as .npz "
                                    "(scipy.sparse.load_npz reads L; meshlap.io.load_operator reads all).")
-    p.add_argument("input", help="mesh file")
+    p.add_argument("input", help="mesh, point cloud or volume file")
     p.add_argument("-o", "--output", help="output .npz (default: the mesh's name with .npz, here)")
     _kernel_options(p, 1e-8)
     p.add_argument("--float32", action="store_true", help="store the values in float32 (half the memory)")
@@ -401,11 +472,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("eigs", help="the smallest eigenvalues and eigenfunctions",
                        description="Compute the k smallest eigenpairs of -S φ = λ M φ (λ ≥ 0, φ "
                                    "M-orthonormal) of a mesh's operator, or of a saved one.")
-    p.add_argument("input", help="mesh file, or an operator .npz from 'meshlap build'")
+    p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz from 'meshlap build'")
     p.add_argument("-k", type=_positive_int, default=10, help="number of eigenpairs (default 10)")
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save eigenvalues and eigenvectors to this .npz")
     p.add_argument("--png", help="draw the first eigenfunctions on the surface into this PNG")
+    p.add_argument("--html", help="an interactive view of the eigenfunctions: standalone HTML (needs k3d)")
     _up_option(p)
     p.add_argument("--compare-cot", action="store_true",
                    help="also print the cotangent Laplacian's eigenvalues on the same mesh")
@@ -431,10 +503,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("curvature", help="mean curvature per vertex",
                        description="Mean curvature H at every vertex from ΔX = -2H n with the "
                                    "heat-kernel operator; prints percentiles, saves or draws it.")
-    p.add_argument("input", help="mesh file")
+    p.add_argument("input", help="surface mesh or point cloud file")
     _kernel_options(p, 1e-8)
     p.add_argument("-o", "--output", help="save H to .npy, .txt or .csv")
     p.add_argument("--png", help="draw the mesh coloured by H into this PNG")
+    p.add_argument("--html", help="an interactive view of H: standalone HTML (needs k3d)")
     _up_option(p)
     p.add_argument("--compare-cot", action="store_true", help="also summarize the cotangent estimate")
     _progress_option(p)

@@ -88,7 +88,7 @@ def heat_flow(
     Returns
     -------
     ndarray
-        Shape of f for a scalar t; (T, *f.shape) for an array of times.
+        Shape of f for a scalar t; (T,) + f.shape for an array of times.
 
     Examples
     --------

@@ -10,9 +10,8 @@
   meshio, when it is installed: it is optional, since meshlap needs no more than these).
 * :func:`as_mesh` turns whatever the user holds (a path, a ``(V, F)`` pair, a
   ``trimesh.Trimesh`` or anything else with ``vertices`` and ``faces``) into ``(V, F)``.
-* :func:`save_operator` / :func:`load_operator` store ``L`` in scipy's own ``.npz`` layout
-  (so :func:`scipy.sparse.load_npz` reads it too) together with the mass, the kernel
-  parameters and, by default, the mesh.
+* :func:`save_operator` / :func:`load_operator` (from :mod:`meshlap.store`) save a built
+  operator to ``.npz`` and read it back bit for bit.
 """
 
 from __future__ import annotations
@@ -23,15 +22,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .errors import MeshError
 from .geometry import Polygons
-from .geometry.validation import check_faces, check_vertices
-from .lumped import SparseLaplacian
+from .geometry.validation import check_faces, check_vertices, existing_file
+from .store import FORMAT_VERSION, OperatorFormatError, SavedLaplacian, load_operator, save_operator
 
 __all__ = [
+    "FORMAT_VERSION",
     "MESH_FORMATS",
+    "OperatorFormatError",
     "POINT_FORMATS",
     "SavedLaplacian",
     "as_mesh",
@@ -168,13 +168,6 @@ def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]
     return V, _faces_out(check_faces(faces, nv, name=f"faces of {name}"))
 
 
-def _existing(path: PathLike, what: str) -> Path:
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no such {what} file: {path}")
-    return path
-
-
 def _suffix(path: Path, formats: Sequence[str], what: str, verb: str = "reads") -> str:
     suffix = path.suffix.lower()
     if suffix not in formats:
@@ -224,7 +217,7 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     >>> V.shape, F.tolist()
     ((4, 3), [[0, 1, 2, 3]])
     """
-    path = _existing(path, "mesh")
+    path = existing_file(path, "mesh")
     suffix = _suffix(path, MESH_FORMATS, "mesh")
     if suffix in (".obj", ".off"):
         try:
@@ -360,12 +353,15 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     """
     from .geometry import check_points
 
-    path = _existing(path, "point cloud")
+    path = existing_file(path, "point cloud")
     suffix = _suffix(path, POINT_FORMATS, "point cloud")
     if suffix == ".ply":
         P = _ply_vertices(path.read_bytes(), path.name)
     elif suffix == ".npy":
-        P = np.load(path, allow_pickle=False)
+        try:
+            P = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            raise MeshError(f"{path.name}: not a NumPy .npy file of numbers") from exc
     elif suffix == ".off":
         P = read_mesh(path)[0]
     elif suffix == ".obj":  # the 'v' lines, with or without faces
@@ -394,7 +390,7 @@ def read_polyline(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
     >>> read_polyline(path)[1].tolist()
     [[0, 1], [1, 2], [2, 0]]
     """
-    path = _existing(path, "polyline")
+    path = existing_file(path, "polyline")
     verts, edges = [], []
     for lineno, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         parts = line.split()
@@ -446,18 +442,29 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
             if not f.is_file():
                 raise FileNotFoundError(f"no such TetGen file: {f}")
 
-        def table(f: Path) -> np.ndarray:
-            rows = [ln.split("#", 1)[0].split() for ln in f.read_text().splitlines()]
+        def table(f: Path, width: int) -> np.ndarray:
+            rows = [ln.split("#", 1)[0].split() for ln in f.read_text(errors="replace").splitlines()]
             rows = [r for r in rows if r]
-            count = int(rows[0][0])
-            return np.array([r for r in rows[1:count + 1]], dtype=np.float64)
+            try:
+                count = int(rows[0][0])
+                table = np.array([r[:width] for r in rows[1:count + 1]], dtype=np.float64)
+            except (IndexError, ValueError) as exc:
+                raise MeshError(f"{f.name}: malformed TetGen file ({exc})") from exc
+            if count < 1 or table.shape != (count, width):
+                raise MeshError(f"{f.name}: the header announces {count} rows of {width} numbers; "
+                                f"found {len(rows) - 1} rows")
+            return table
 
-        nodes, eles = table(node), table(ele)
+        nodes, eles = table(node, 4), table(ele, 5)
         first = int(nodes[0, 0])  # TetGen numbers from 0 or from 1
         V = nodes[:, 1:4]
         T = eles[:, 1:5].astype(np.int64) - first
+        bad = np.flatnonzero(((T < 0) | (T >= len(V))).any(axis=1))
+        if len(bad):
+            raise MeshError(f"{ele.name}: tetrahedron {int(eles[bad[0], 0])} refers to a node that does not "
+                            f"exist (the nodes are numbered {first} to {len(V) - 1 + first})")
         return check_vertices(V, name=f"vertices of {node.name}"), T
-    _existing(path, "mesh")
+    existing_file(path, "mesh")
     try:
         import meshio
     except ImportError as exc:
@@ -538,141 +545,3 @@ def as_mesh(mesh: Any) -> tuple[np.ndarray, np.ndarray | Polygons]:
     V = check_vertices(np.asarray(V), name="mesh vertices")
     F = np.asarray(F) if not isinstance(F, (Polygons, list)) else F
     return V, _faces_out(check_faces(F, len(V), name="mesh faces"))
-
-
-class SavedLaplacian(SparseLaplacian):
-    """An operator read back by :func:`load_operator`.
-
-    Behaves like the :class:`~meshlap.MeshLaplacian` it was saved from: ``op @ f``,
-    ``L``, ``M``, ``S``, ``mass``, and the kernel parameters ``h``, ``tol``, ``radius``
-    and ``h_auto`` (None for operators without them, such as the cotangent Laplacian).
-    The attributes ``V`` and ``faces`` exist when the mesh was saved with it.
-    """
-
-    def __init__(self, L: Any, mass: Any, params: dict[str, Any], V: np.ndarray | None = None,
-                 faces: Polygons | None = None) -> None:
-        super().__init__(L, mass, name=str(params.get("name", "BSW")))
-        self.h = float(params["h"]) if "h" in params else None
-        self.tol = float(params["tol"]) if "tol" in params else None
-        self.radius = float(params["radius"]) if "radius" in params else None
-        self.h_auto = bool(params.get("h_auto", False))
-        self.exact = self.tol == 0.0
-        if V is not None:  # only then: code that looks for op.V/op.faces falls back without them
-            self.V = V
-            self.faces = faces
-
-    @property
-    def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L."""
-        return int(self.L.data.nbytes + self.L.indices.nbytes + self.L.indptr.nbytes)
-
-    def __repr__(self) -> str:
-        h = "" if self.h is None else f", h={self.h:.6g}, tol={self.tol:.3g}"
-        return f"SavedLaplacian({self.name}, vertices={self.n_vertices:,}, nnz={self.nnz:,}{h})"
-
-
-def save_operator(path: PathLike, op: Any, *, mesh: bool = True, compress: bool = False) -> Path:
-    """Save a built operator to ``.npz``: L in scipy's layout, the mass and the parameters.
-
-    ``scipy.sparse.load_npz(path)`` returns L alone; :func:`load_operator` gives back the
-    whole operator. The CSR arrays are stored as they are (rows keep their diagonal
-    first), so the loaded ``L`` is bit-for-bit the saved one.
-
-    Parameters
-    ----------
-    path : str or path-like
-        Target file; ``.npz`` is appended when missing.
-    op : MeshLaplacian or SparseLaplacian
-        Any operator with ``L`` and ``mass`` (``h``, ``tol``, ``radius`` are saved when
-        present). Matrix-free operators hold no matrix and cannot be saved.
-    mesh : bool, default True
-        Also store the vertices and faces, so that the loaded operator can be plotted.
-    compress : bool, default False
-        Zip-compress the arrays (smaller, slower to write and read).
-
-    Returns
-    -------
-    Path
-        The file written.
-
-    Examples
-    --------
-    >>> import meshlap, tempfile, pathlib, numpy as np
-    >>> V, F = meshlap.shapes.sphere(200, seed=0)
-    >>> op = meshlap.laplacian(V, F, h=0.02, correction="none")
-    >>> p = save_operator(pathlib.Path(tempfile.mkdtemp()) / "op", op)
-    >>> back = load_operator(p)
-    >>> back.h, bool(np.array_equal((back @ V).ravel(), (op @ V).ravel()))
-    (0.02, True)
-    """
-    path = Path(path)
-    if path.suffix != ".npz":
-        path = path.with_name(path.name + ".npz")
-    if not (hasattr(op, "L") and hasattr(op, "mass")):
-        raise MeshError(f"save_operator needs an operator with L and mass; got {type(op).__name__}")
-    if getattr(op, "matrix_free", False):
-        raise MeshError("this operator is matrix-free: there is no stored matrix to save")
-    L = sp.csr_matrix(getattr(op, "L_sym", op.L))  # the symmetric pencil's L
-    arrays: dict[str, Any] = {
-        "format": np.array("csr"),
-        "shape": np.array(L.shape),
-        "data": L.data,
-        "indices": L.indices,
-        "indptr": L.indptr,
-        "mass": np.asarray(op.mass, dtype=np.float64),
-        "name": np.array(str(getattr(op, "name", "BSW"))),
-    }
-    from . import __version__
-
-    arrays["meshlap_version"] = np.array(__version__)
-    for key in ("h", "tol", "radius"):
-        value = getattr(op, key, None)
-        if value is not None:
-            arrays[key] = np.array(float(value))
-    arrays["h_auto"] = np.array(bool(getattr(op, "h_auto", False)))
-    V, faces = getattr(op, "V", None), getattr(op, "faces", None)
-    if mesh and V is not None and faces is not None:
-        arrays["V"] = np.asarray(V, dtype=np.float64)
-        arrays["face_indices"] = faces.indices
-        arrays["face_offsets"] = faces.offsets
-    (np.savez_compressed if compress else np.savez)(path, **arrays)
-    return path
-
-
-def load_operator(path: PathLike) -> SavedLaplacian:
-    """Load an operator written by :func:`save_operator`.
-
-    Returns
-    -------
-    SavedLaplacian
-        ``op @ f``, ``L``, ``M``, ``S``, ``mass``, ``h``, ``tol``, ``radius``, and ``V``
-        and ``faces`` when the mesh was saved (``hasattr(op, "V")``).
-
-    Raises
-    ------
-    FileNotFoundError
-        When the file does not exist.
-    MeshError
-        When the file is not an operator saved by meshlap.
-    """
-    path = _existing(path, "operator")
-    try:
-        data = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        raise MeshError(f"{path.name}: not an .npz file saved by meshlap") from exc
-    with data:
-        missing = [k for k in ("format", "shape", "data", "indices", "indptr", "mass") if k not in data]
-        if missing or str(data["format"]) != "csr":
-            raise MeshError(f"{path.name}: not an operator saved by meshlap (missing {', '.join(missing)})")
-        n = int(data["shape"][0])
-        L = sp.csr_matrix((data["data"], data["indices"], data["indptr"]), shape=tuple(data["shape"]))
-        mass = data["mass"]
-        if mass.shape != (n,):
-            raise MeshError(f"{path.name}: mass has shape {mass.shape}, expected ({n},)")
-        params = {k: data[k].item() for k in ("h", "tol", "radius", "h_auto", "name") if k in data}
-        V = faces = None
-        if "V" in data:
-            V = check_vertices(data["V"], name=f"vertices in {path.name}")
-            faces = check_faces(Polygons(indices=data["face_indices"], offsets=data["face_offsets"]),
-                                len(V), name=f"faces in {path.name}")
-    return SavedLaplacian(L, mass, params, V=V, faces=faces)

@@ -4,6 +4,9 @@ rows of eigenfunctions, log-log convergence plots and spectra.
 Only matplotlib is needed (``pip install "meshlap[plot]"``); nothing here needs a display
 or a GPU, so the functions work under the Agg backend in CI. Each returns the matplotlib
 object it drew on, to be shown in a notebook or saved with ``fig.savefig``.
+
+The interactive views :func:`show`, :func:`show_modes` and :func:`save_html` (k3d in
+Jupyter, standalone HTML) live in :mod:`meshlap.viewer` and are imported here too.
 """
 
 from __future__ import annotations
@@ -15,8 +18,10 @@ import numpy as np
 
 from .errors import MeshError
 from .geometry.validation import check_faces, check_function, check_vertices
+from .viewer import colour_range, save_html, show, show_modes
 
-__all__ = ["plot_convergence", "plot_functions", "plot_mesh", "plot_spectrum", "slope", "up_axis"]
+__all__ = ["plot_convergence", "plot_functions", "plot_mesh", "plot_spectrum", "save_html", "show",
+           "show_modes", "slope", "up_axis"]
 
 
 def _pyplot():
@@ -158,8 +163,9 @@ def plot_mesh(
     ----------
     V : (n, 3) array_like
         Vertex positions.
-    F : (m, k) array_like, list of polygons or Polygons
-        Faces; polygons are drawn as fans of triangles.
+    F : (m, k) array_like, list of polygons or Polygons, or None
+        Faces; polygons are drawn as fans of triangles. None draws the vertices as dots
+        (a point cloud).
     values : (n,) array_like, optional
         Scalar per vertex (an eigenfunction, the curvature, an error). Without it the
         mesh is drawn in grey.
@@ -200,8 +206,9 @@ def plot_mesh(
 
     plt = _pyplot()
     V = check_vertices(V)
-    tris = check_faces(F, len(V)).triangles()
-    V = _to_z_up(V, _parse_up(up, V, F))
+    # without faces (a point cloud, a curve) every vertex is drawn as a dot
+    tris = np.arange(len(V))[:, None] if F is None else check_faces(F, len(V)).triangles()
+    V = _to_z_up(V, "+z" if F is None and up == "auto" else _parse_up(up, V, F))
     if ax is None:
         fig = plt.figure(figsize=figsize)
         ax = fig.add_subplot(projection="3d")
@@ -215,13 +222,7 @@ def plot_mesh(
         if f.ndim != 1:
             raise MeshError(f"values must be one scalar per vertex, shape ({len(V)},); got {f.shape}")
         face_value = f[tris].mean(axis=1)
-        lo = float(f.min()) if vmin is None else float(vmin)
-        hi = float(f.max()) if vmax is None else float(vmax)
-        if symmetric:
-            hi = max(abs(lo), abs(hi))
-            lo = -hi
-        if hi <= lo:  # a constant function: any non-empty range draws it in one colour
-            lo, hi = lo - 0.5, hi + 0.5
+        lo, hi = colour_range(f, vmin, vmax, symmetric)
         import matplotlib as mpl
 
         norm = mpl.colors.Normalize(lo, hi)
@@ -229,10 +230,13 @@ def plot_mesh(
         rgb = cm(norm(face_value))[:, :3]
         mappable = mpl.cm.ScalarMappable(norm=norm, cmap=cm)
         mappable.set_array(f)
-    if shade:
-        rgb = rgb * _shading(P, light)[:, None]
-    coll = Poly3DCollection(P, facecolors=np.clip(rgb, 0, 1), edgecolors=edgecolor, linewidths=0.2)
-    ax.add_collection3d(coll)
+    if F is None:
+        ax.scatter(*V.T, c=np.clip(rgb, 0, 1), s=max(1.0, 3000.0 / len(V)), depthshade=shade)
+    else:
+        if shade:
+            rgb = rgb * _shading(P, light)[:, None]
+        coll = Poly3DCollection(P, facecolors=np.clip(rgb, 0, 1), edgecolors=edgecolor, linewidths=0.2)
+        ax.add_collection3d(coll)
     lo_xyz, hi_xyz = V.min(axis=0), V.max(axis=0)
     centre, half = (lo_xyz + hi_xyz) / 2, (hi_xyz - lo_xyz).max() / 2
     ax.set_xlim(centre[0] - half, centre[0] + half)

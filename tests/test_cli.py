@@ -56,7 +56,7 @@ def test_bad_input_exits_1_with_one_line(capsys, tmp_path):
     bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
     fails(capsys, "bad.obj, line 4: face index 9 refers to no vertex", "build", bad)
     (tmp_path / "m.xyz").write_text("1 2 3\n")
-    fails(capsys, "unknown mesh format", "info", tmp_path / "m.xyz")
+    fails(capsys, "needs at least 4 distinct points", "info", tmp_path / "m.xyz")
     fails(capsys, "tol must lie in (0, 1)", "build", SPOT, "--tol", "3")
     np.savez(tmp_path / "other.npz", a=np.arange(3))
     fails(capsys, "not an operator saved by meshlap", "info", tmp_path / "other.npz")

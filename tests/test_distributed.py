@@ -52,7 +52,7 @@ def mpirun(n: int, *checks: str, timeout: float = 600) -> list[str]:
 def test_matrix_equals_serial_exactly(n):
     """Gathered MPIAIJ == meshlap.laplacian(...).L bit for bit: a k-d split, slabs r/3 wide with
     one rank empty, and a lattice of spacing exactly r handed in by rank 0 alone."""
-    mpirun(n, "exact", "thin", "r_apart", "balance")
+    mpirun(n, "exact", "thin", "r_apart", "balance", "saved")
 
 
 @needs_mpi

@@ -155,7 +155,9 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     tail = (hv, hs, nv, ns, use_normals, lnt4, hmax, dog_factor(dim) if dog else 0.0, 0.5 * dim)
     if rows is not None:
         head = (np.ascontiguousarray(rows, dtype=np.int64),) + head[1:]
-    dummy_i = np.zeros(1, dtype=np.int64)
+    # the count pass takes index arrays of the fill pass's type: one compiled specialization
+    # serves both (a fresh cache compiles it once, about 5 s, instead of twice)
+    dummy_i = np.zeros(1, dtype=index_dtype)
     _var_rows(*head, *geo, *tail, False, dummy_i, dummy_i, np.zeros(1), counts, status)
     nnz = int(counts.sum())
     if max_nnz is not None:

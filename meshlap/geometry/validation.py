@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -27,6 +29,7 @@ __all__ = [
     "check_positive",
     "check_tol",
     "check_function",
+    "existing_file",
 ]
 
 # Beyond these magnitudes squared distances and 1/(4πh²) leave the float64 range.
@@ -270,3 +273,19 @@ def check_function(f: Any, n: int, name: str = "f") -> np.ndarray:
         count, where = _first_nonfinite(a)
         raise MeshError(f"{name} has {count} NaN or infinite value(s), first at {name}{list(where)}")
     return a
+
+
+def existing_file(path: str | os.PathLike, what: str) -> Path:
+    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file.
+
+    Examples
+    --------
+    >>> existing_file("no-such.obj", "mesh")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: no such mesh file: no-such.obj
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such {what} file: {path}")
+    return path

@@ -1,0 +1,214 @@
+"""What users already hold, as the builders' input: ``(points, cells, k)``.
+
+:func:`as_geometry_input` takes a file path or an object of another library and returns
+the points, the cells (None for a point cloud) and the intrinsic dimension k of the cells
+(None where the builder infers it). The objects are read through their attributes only, so
+none of these libraries is needed, or imported, by meshlap:
+
+* ``trimesh.Trimesh`` and ``trimesh.PointCloud`` (``vertices``, ``faces``);
+* ``pyvista.PolyData`` (``points`` and its flat ``faces`` / ``lines`` arrays) and
+  ``pyvista.UnstructuredGrid`` (``points``, ``cells_dict``: tetrahedra);
+* ``open3d.geometry.TriangleMesh`` (``vertices``, ``triangles``), ``TetraMesh``
+  (``vertices``, ``tetras``) and ``PointCloud`` (``points``);
+* ``meshio.Mesh`` (``points``, ``cells_dict``).
+
+:func:`read_input` reads any file the command line takes: surface meshes, point clouds,
+TetGen's ``.node``/``.ele`` and, with meshio installed (``pip install "meshlap[io]"``),
+every format meshio reads (VTK, VTU, Gmsh ``.msh``, ...).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import MeshError
+from .geometry import Polygons
+from .geometry.validation import check_faces, check_vertices, existing_file
+from .io import MESH_FORMATS, POINT_FORMATS, read_mesh, read_points, read_polyline, read_tetrahedra
+
+__all__ = ["TETGEN_FORMATS", "as_geometry_input", "boundary_triangles", "read_input"]
+
+#: TetGen's pair of files, read without meshio.
+TETGEN_FORMATS = (".node", ".ele")
+
+# cell type names (meshio) and VTK cell type codes (pyvista) → intrinsic dimension
+_CELL_DIMS = {"tetra": 3, "triangle": 2, "quad": 2, "line": 1}
+_VTK_NAMES = {10: "tetra", 5: "triangle", 9: "quad", 3: "line"}
+
+GeometryInput = tuple[np.ndarray, "np.ndarray | Polygons | None", "int | None"]
+
+
+def _has_faces(path: Path) -> bool:
+    # a PLY file is a mesh when its header declares faces, else a point cloud
+    head = path.read_bytes()[:4096].split(b"end_header", 1)[0].decode("ascii", errors="replace")
+    for line in head.splitlines():
+        parts = line.split()
+        if parts[:2] == ["element", "face"] and len(parts) > 2:
+            return parts[2] != "0"
+    return False
+
+
+def _obj_kind(path: Path) -> str:
+    keys = {ln.split(maxsplit=1)[0] for ln in path.read_text(errors="replace").splitlines() if ln.strip()}
+    return "surface" if "f" in keys else ("polyline" if "l" in keys else "points")
+
+
+def _from_cell_blocks(points: Any, blocks: dict[Any, Any], name: str) -> GeometryInput:
+    # the highest-dimensional cells present: tetrahedra, else faces, else lines, else none
+    named = {_VTK_NAMES.get(int(t), str(t)) if not isinstance(t, str) else t: np.asarray(c)
+             for t, c in blocks.items()}
+    P = check_vertices(np.asarray(points, dtype=np.float64), name=f"points of {name}")
+    for kind, k in sorted(_CELL_DIMS.items(), key=lambda kv: -kv[1]):
+        if kind in named:
+            if k == 2:  # triangles and quads together as polygons
+                faces = [f for key in ("triangle", "quad") if key in named for f in named[key].tolist()]
+                return P, check_faces(faces, len(P), name=f"faces of {name}"), 2
+            return P, named[kind].astype(np.int64), k
+    return P, None, None
+
+
+def _pyvista_polys(flat: np.ndarray) -> list[list[int]]:
+    # VTK's flat cell array: [n, i_1, ..., i_n, m, j_1, ...]
+    out, i = [], 0
+    while i < len(flat):
+        n = int(flat[i])
+        out.append(flat[i + 1:i + 1 + n].tolist())
+        i += n + 1
+    return out
+
+
+def as_geometry_input(obj: Any) -> GeometryInput:
+    """``(points, cells, k)`` from a path or from an object of trimesh, pyvista, open3d or meshio.
+
+    Parameters
+    ----------
+    obj : str, path-like, (V, F) pair, (n, d) array or mesh object
+        See the module's description for the objects understood.
+
+    Returns
+    -------
+    points : (n, d) float64 ndarray
+    cells : (m, c) int64 ndarray, Polygons, or None
+        Faces, tetrahedra or edges; None for a point cloud.
+    k : int or None
+        Intrinsic dimension of the cells (3 for tetrahedra); None where the builder
+        infers it (a (V, F) pair, a point cloud).
+
+    Raises
+    ------
+    MeshError
+        For objects that hold neither points nor vertices.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> class Grid:   # stands in for a pyvista.UnstructuredGrid of one tetrahedron
+    ...     points = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    ...     cells_dict = {10: np.array([[0, 1, 2, 3]])}
+    >>> P, T, k = as_geometry_input(Grid())
+    >>> T.tolist(), k
+    ([[0, 1, 2, 3]], 3)
+    """
+    if isinstance(obj, (str, os.PathLike)):
+        return read_input(obj)
+    if isinstance(obj, tuple) and len(obj) == 2:
+        return check_vertices(np.asarray(obj[0]), name="mesh vertices"), obj[1], None
+    name = type(obj).__name__
+    if isinstance(obj, (np.ndarray, list)):
+        return np.asarray(obj, dtype=np.float64), None, None
+    if hasattr(obj, "points") and hasattr(obj, "cells_dict"):  # meshio.Mesh, pyvista.UnstructuredGrid
+        return _from_cell_blocks(obj.points, dict(obj.cells_dict), name)
+    if hasattr(obj, "points") and hasattr(obj, "faces") and hasattr(obj, "n_points"):  # pyvista.PolyData
+        faces, lines = np.asarray(obj.faces).ravel(), np.asarray(getattr(obj, "lines", [])).ravel()
+        blocks: dict[str, Any] = {}
+        if len(faces):
+            blocks["quad"] = _pyvista_polys(faces)  # polygons of any size
+        elif len(lines):
+            polylines = _pyvista_polys(lines)
+            blocks["line"] = [e for pl in polylines for e in zip(pl[:-1], pl[1:], strict=True)]
+        if "quad" in blocks:
+            P = check_vertices(np.asarray(obj.points, dtype=np.float64), name=f"points of {name}")
+            return P, check_faces(blocks["quad"], len(P), name=f"faces of {name}"), 2
+        return _from_cell_blocks(obj.points, blocks, name)
+    if hasattr(obj, "vertices"):  # trimesh, open3d meshes, trimesh.PointCloud
+        V = np.asarray(obj.vertices, dtype=np.float64)
+        for attr, k in (("tetras", 3), ("faces", None), ("triangles", None)):
+            cells = getattr(obj, attr, None)
+            if cells is not None and len(np.asarray(cells)):
+                cells = np.asarray(cells, dtype=np.int64)
+                return check_vertices(V, name=f"vertices of {name}"), cells, k
+        return V, None, None
+    if hasattr(obj, "points"):  # open3d.geometry.PointCloud
+        return np.asarray(obj.points, dtype=np.float64), None, None
+    raise MeshError(f"cannot read a mesh or point cloud from a {name}: pass a file path, a (V, F) pair, "
+                    "an (n, d) array, or a trimesh, pyvista, open3d or meshio object")
+
+
+def read_input(path: str | os.PathLike) -> GeometryInput:
+    """Read any geometry file the command line takes, as ``(points, cells, k)``.
+
+    Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces,
+    .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
+    lines), TetGen's .node/.ele, and with meshio installed every format meshio reads.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "cloud.xyz"
+    >>> _ = path.write_text("0 0 0\\n1 0 0\\n0 1 0\\n")
+    >>> P, cells, k = read_input(path)
+    >>> P.shape, cells
+    ((3, 3), None)
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in TETGEN_FORMATS:
+        V, T = read_tetrahedra(path)
+        return V, T, 3
+    existing_file(path, "mesh" if suffix in MESH_FORMATS else
+                  "point cloud" if suffix in POINT_FORMATS else "input")
+    if suffix == ".obj" and _obj_kind(path) != "surface":
+        if _obj_kind(path) == "polyline":
+            V, E = read_polyline(path)
+            return V, E, 1
+        return read_points(path), None, None
+    if suffix in MESH_FORMATS and (suffix != ".ply" or _has_faces(path)):
+        V, F = read_mesh(path)
+        return V, F, 2
+    if suffix in POINT_FORMATS:
+        return read_points(path), None, None
+    try:
+        import meshio
+    except ImportError as exc:
+        known = ", ".join(MESH_FORMATS + POINT_FORMATS + TETGEN_FORMATS)
+        what = suffix or "files without a suffix"
+        raise MeshError(f"{path.name}: meshlap reads {known} itself; for {what} "
+                        'install meshio (pip install "meshlap[io]")') from exc
+    said = io.StringIO()
+    try:  # on a bad file meshio prints its reasons and calls sys.exit; keep them for the message
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            mesh = meshio.read(path)
+    except (Exception, SystemExit) as exc:  # meshio's ReadError, ValueError, KeyError, exit, ...
+        why = (said.getvalue().strip().splitlines() or [str(exc) or type(exc).__name__])[0]
+        raise MeshError(f"{path.name}: meshio could not read it ({why})") from None
+    return _from_cell_blocks(mesh.points, mesh.cells_dict, path.name)
+
+
+def boundary_triangles(T: Any) -> np.ndarray:
+    """The triangles on the hull of a tetrahedral mesh (faces of one tetrahedron only), for drawing.
+
+    Examples
+    --------
+    >>> boundary_triangles([[0, 1, 2, 3]]).shape
+    (4, 3)
+    """
+    T = np.asarray(T, dtype=np.int64)
+    tri = np.concatenate([T[:, [1, 2, 3]], T[:, [0, 3, 2]], T[:, [0, 1, 3]], T[:, [0, 2, 1]]])
+    _, first, count = np.unique(np.sort(tri, axis=1), axis=0, return_index=True, return_counts=True)
+    return tri[np.sort(first[count == 1])]

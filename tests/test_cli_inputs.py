@@ -1,0 +1,130 @@
+"""The ``meshlap`` command on point clouds and tetrahedral meshes (issue 21)."""
+
+import numpy as np
+import pytest
+from test_cli import fails, run
+
+import meshlap
+from meshlap.inputs import read_input
+
+
+def write_tetgen(stem, V, T):
+    stem.with_suffix(".node").write_text(f"{len(V)} 3 0 0\n" + "".join(
+        f"{i + 1} {x!r} {y!r} {z!r}\n" for i, (x, y, z) in enumerate(V.tolist())))
+    stem.with_suffix(".ele").write_text(f"{len(T)} 4 0\n" + "".join(
+        f"{i + 1} " + " ".join(str(v + 1) for v in t) + "\n" for i, t in enumerate(T.tolist())))
+    return stem.with_suffix(".ele")
+
+
+def write_ply_cloud(path, P):
+    head = f"ply\nformat binary_little_endian 1.0\nelement vertex {len(P)}\n" + "".join(
+        f"property double {c}\n" for c in "xyz") + "end_header\n"
+    path.write_bytes(head.encode() + P.astype("<f8").tobytes())
+    return path
+
+
+def eigenvalues(out):
+    rows = [line.split() for line in out.splitlines()]
+    return np.array([float(r[1]) for r in rows if len(r) == 2 and r[0].isdigit()])
+
+
+@pytest.fixture(scope="module")
+def cloud(tmp_path_factory):
+    P = meshlap.samples.sphere_points(1000)
+    return write_ply_cloud(tmp_path_factory.mktemp("cloud") / "sphere.ply", P)
+
+
+@pytest.fixture(scope="module")
+def tets(tmp_path_factory):
+    return write_tetgen(tmp_path_factory.mktemp("tets") / "cube", *meshlap.samples.cube_tetrahedra(6))
+
+
+def test_eigs_of_a_ply_point_cloud(capsys, cloud, tmp_path):
+    code, out, err = run(capsys, "eigs", cloud, "-k", "5", "--png", tmp_path / "modes.png")
+    assert code == 0, err
+    lam = eigenvalues(out)
+    # the unit sphere: 0, then 2 three times
+    assert lam[0] == 0 and np.allclose(lam[1:4], 2, rtol=0.03) and lam[4] > 5
+    ref = meshlap.spectral.eigs(meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(1000)), 5)[0]
+    np.testing.assert_allclose(lam[1:], ref[1:], rtol=1e-5)
+    assert (tmp_path / "modes.png").stat().st_size > 10_000
+
+
+def test_eigs_of_tetrahedra_tetgen_and_meshio(capsys, tets, tmp_path):
+    code, out, _ = run(capsys, "eigs", tets, "-k", "4")
+    assert code == 0
+    lam = eigenvalues(out)
+    V, T = meshlap.samples.cube_tetrahedra(6)
+    ref = meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 4)[0]
+    np.testing.assert_allclose(lam[1:], ref[1:], rtol=1e-5)
+    assert lam[1] > 0 and np.allclose(lam[1:4], lam[1], rtol=0.02)  # the cube's threefold first mode
+    meshio = pytest.importorskip("meshio")
+    for suffix in (".vtk", ".vtu", ".msh"):
+        path = tmp_path / f"cube{suffix}"
+        options = {"file_format": "gmsh22"} if suffix == ".msh" else {}
+        meshio.write(path, meshio.Mesh(V, [("tetra", T)]), **options)
+        code, out, _ = run(capsys, "eigs", path, "-k", "4")
+        assert code == 0 and np.allclose(eigenvalues(out), lam, rtol=1e-5, atol=1e-12), suffix
+
+
+def test_info_build_and_curvature_of_clouds_and_volumes(capsys, cloud, tets, tmp_path):
+    code, out, _ = run(capsys, "info", cloud)
+    assert code == 0 and "point cloud (k=2" in out and "1,000" in out
+    area = float(next(line for line in out.splitlines() if line.startswith("surface area")).split()[-1])
+    assert area == pytest.approx(4 * np.pi, rel=0.02)
+    code, out, _ = run(capsys, "info", tets)
+    volume = float(next(line for line in out.splitlines() if line.startswith("volume")).split()[-1])
+    assert code == 0 and "1,296 tetrahedra" in out and volume == pytest.approx(1.0)
+    code, _, _ = run(capsys, "build", tets, "-o", tmp_path / "cube.npz")
+    op = meshlap.io.load_operator(tmp_path / "cube.npz")
+    assert code == 0 and op.dim == 3 and op.geometry.source == "tetrahedra"
+    code, out, _ = run(capsys, "curvature", cloud, "-o", tmp_path / "H.npy")
+    H = np.load(tmp_path / "H.npy")
+    assert code == 0 and "unsigned" in out and np.median(H) == pytest.approx(1.0, abs=0.03)
+    fails(capsys, "curvature needs a surface or a point cloud", "curvature", tets)
+    fails(capsys, "--compare-cot needs a surface mesh", "eigs", cloud, "-k", "3", "--compare-cot")
+
+
+MALFORMED = {
+    "noz.ply": (b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                b"end_header\n0 0\n1 0\n0 1\n", "no vertex element with x, y, z"),
+    "short.ply": (b"ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\n"
+                  b"property float y\nproperty float z\nend_header\n\0\0\0\0",
+                  "ends before its 100 vertices"),
+    "words.xyz": (b"0 0 0\n1 zero 0\n", "not a number"),
+    "empty.csv": (b"# nothing\n", "no rows of numbers"),
+    "few.txt": (b"0 0 0\n1 0 0\n0 1 0\n", "needs at least 4 distinct points"),
+    "junk.npy": (b"not an array", "not a NumPy .npy file"),
+    "short.ele": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n", "ele": "1 4 0\n1 1 2 3 4\n"},
+                  "announces 4 rows of 4 numbers; found 3"),
+    "far.ele": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n", "ele": "1 4 0\n1 1 2 3 9\n"},
+                "tetrahedron 1 refers to a node that does not exist"),
+    "flat.ele": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 1 1 0\n", "ele": "1 4 0\n1 1 2 3 4\n"},
+                 "zero measure"),
+    "lonely.node": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"}, "no such TetGen file"),
+    "bad.vtk": (b"garbage", "meshio could not read it (Illegal VTK header)"),
+}
+
+
+@pytest.mark.parametrize("name", MALFORMED)
+def test_malformed_clouds_and_volumes_end_in_one_line(capsys, tmp_path, name):
+    content, message = MALFORMED[name]
+    path = tmp_path / name
+    if isinstance(content, dict):
+        for suffix, text in content.items():
+            path.with_suffix("." + suffix).write_text(text)
+    else:
+        if name.endswith(".vtk"):
+            pytest.importorskip("meshio")
+        path.write_bytes(content)
+    for command in ("info", "eigs"):
+        fails(capsys, message, command, path)
+
+
+def test_read_input_kinds(tmp_path, cloud, tets):
+    P, cells, k = read_input(cloud)
+    assert P.shape == (1000, 3) and cells is None and k is None
+    V, T, k = read_input(tets)
+    assert T.shape == (1296, 4) and k == 3
+    (tmp_path / "c.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n")
+    assert read_input(tmp_path / "c.obj")[1].tolist() == [[0, 1], [1, 2]]

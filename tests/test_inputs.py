@@ -1,0 +1,89 @@
+"""Objects users already hold (trimesh, pyvista, open3d, meshio) go straight into the builders."""
+
+import numpy as np
+import pytest
+
+import meshlap
+from meshlap.inputs import as_geometry_input, boundary_triangles
+
+V, F = meshlap.shapes.sphere(400, seed=0)
+VT, T = meshlap.samples.cube_tetrahedra(3)
+P = meshlap.samples.sphere_points(500)
+
+
+def same_operator(a, b, f):
+    return np.array_equal(a @ f, b @ f) and np.array_equal(a.mass, b.mass)
+
+
+def test_trimesh_objects():
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.Trimesh(V, F, process=False)
+    assert same_operator(meshlap.laplacian(mesh, h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    cloud = trimesh.PointCloud(P)
+    assert same_operator(meshlap.point_cloud_laplacian(cloud, h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+
+
+def test_pyvista_objects():
+    pv = pytest.importorskip("pyvista")
+    faces = np.column_stack([np.full(len(F), 3), F]).ravel()
+    surf = pv.PolyData(V, faces)
+    assert same_operator(meshlap.laplacian(surf, h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    quads = pv.Plane(i_resolution=6, j_resolution=5)  # quads stay quads
+    Vq, Fq, k = as_geometry_input(quads)
+    assert k == 2 and Fq.sizes.tolist() == [4] * 30
+    cells = np.column_stack([np.full(len(T), 4), T]).ravel()
+    grid = pv.UnstructuredGrid(cells, np.full(len(T), pv.CellType.TETRA, dtype=np.uint8), VT)
+    vol = meshlap.laplacian(grid)
+    assert vol.dim == 3 and vol.mass.sum() == pytest.approx(1.0)
+    assert same_operator(vol, meshlap.laplacian(VT, T, k=3), VT)
+    assert same_operator(meshlap.point_cloud_laplacian(pv.PolyData(P), h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+    # the hull of the tetrahedra is a closed surface: Euler characteristic 2
+    hull = boundary_triangles(T)
+    edges = {tuple(sorted(e)) for t in hull.tolist() for e in ((t[0], t[1]), (t[1], t[2]), (t[0], t[2]))}
+    assert len(np.unique(hull)) - len(edges) + len(hull) == 2
+
+
+def test_meshio_objects(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    vol = meshio.Mesh(VT, [("triangle", boundary_triangles(T)), ("tetra", T)])
+    assert same_operator(meshlap.laplacian(vol), meshlap.laplacian(VT, T, k=3), VT)
+    surf = meshio.Mesh(V, [("triangle", F)])
+    assert same_operator(meshlap.laplacian(surf, h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    path = tmp_path / "cube.vtu"
+    meshio.write(path, vol)
+    assert same_operator(meshlap.laplacian(str(path)), meshlap.laplacian(VT, T, k=3), VT)
+
+
+def test_open3d_like_objects():
+    # open3d's geometry classes, by the attributes meshlap reads (open3d itself is large;
+    # when it is installed, its own classes are checked below)
+    class TriangleMesh:
+        vertices, triangles = V, F
+
+    class TetraMesh:
+        vertices, tetras = VT, T
+
+    class PointCloud:
+        points = P
+
+    assert same_operator(meshlap.laplacian(TriangleMesh(), h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    assert meshlap.laplacian(TetraMesh()).dim == 3
+    assert same_operator(meshlap.point_cloud_laplacian(PointCloud(), h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+    o3d = pytest.importorskip("open3d")
+    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(V), o3d.utility.Vector3iVector(F))
+    assert same_operator(meshlap.laplacian(mesh, h=0.02), meshlap.laplacian(V, F, h=0.02), V)
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(P))
+    assert same_operator(meshlap.point_cloud_laplacian(cloud, h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+    tets = o3d.geometry.TetraMesh(o3d.utility.Vector3dVector(VT), o3d.utility.Vector4iVector(T))
+    assert same_operator(meshlap.laplacian(tets), meshlap.laplacian(VT, T, k=3), VT)
+
+
+def test_unknown_objects_are_refused():
+    with pytest.raises(meshlap.MeshError, match="cannot read a mesh or point cloud from a dict"):
+        meshlap.laplacian({"V": V})
+    with pytest.raises(meshlap.MeshError, match="for points alone use meshlap.point_cloud_laplacian"):
+        meshlap.laplacian(type("Cloud", (), {"points": P})())
