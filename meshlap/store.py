@@ -30,10 +30,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from .assembly import csr as _csr
 from .errors import MeshError
 from .geometry import Geometry, Polygons
 from .geometry.validation import check_faces, check_function, existing_file
-from .assembly import csr as _csr
 from .lumped import LumpedLaplacian
 from .operator import MeshLaplacian
 
