@@ -24,6 +24,7 @@ rank 0 (:meth:`~meshlap.distributed.DistributedLaplacian.to_scipy`) and saved th
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -307,7 +308,7 @@ def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str
         raise MeshError(f"{name}: a matrix-free operator saved without its geometry")
     op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True,
                        correction=params["correction"], dtype=np.dtype(params["dtype"]))
-    op.h_auto = bool(params["h_auto"])
+    op.widths = replace(op.widths, h_auto=bool(params["h_auto"]))  # as it was built
     return op
 
 
