@@ -402,8 +402,9 @@ def _shift_invert(op: Any, P: np.ndarray, m: np.ndarray, k: int, tol: float):
 
 
 def _start_width(k: int, least: int, n: int) -> int:
-    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends."""
-    return max(least, min(n // 3, least + max(8, k // 4)))
+    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends
+    (none added for k < 4, e.g. the semidefiniteness check's two vectors)."""
+    return max(least, min(n // 3, least + k // 4))
 
 
 def _block_size(theta: np.ndarray, k: int, least: int) -> int:
