@@ -318,8 +318,8 @@ def eigs(
     extra : int, optional
         Guard vectors carried along by LOBPCG. Default: at least ``max(4, k // 10)``, and with
         the cotangent start as many as close the cluster of the k-th eigenvalue (every
-        cotangent eigenvalue within 10% of the k-th, plus two); a block that ends inside a
-        cluster converges slowly.
+        cotangent eigenvalue within 10% of the k-th, plus two; at most k // 4 more); a block
+        that ends inside a cluster converges slowly.
     mesh : (V, F), optional
         Mesh for the cotangent preconditioner when ``op`` does not carry one (e.g.
         :func:`meshlap.baselines.bsw_scipy`). Polygons are fan-triangulated.
