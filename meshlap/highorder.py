@@ -523,9 +523,8 @@ def _rows_matrix(n: int, centers: np.ndarray, indptr: np.ndarray, indices: np.nd
         take = np.concatenate([np.arange(indptr[r], indptr[r + 1]) for r in order]) if len(order) else \
             np.zeros(0, dtype=np.int64)
         idx, dat = indices[take], data[take]
-    L = sp.csr_matrix((dat, idx, full), shape=(n, n))
-    L.sum_duplicates()
-    return L
+    # no sort: rows keep their neighbours' order (a repeated neighbour still sums in L @ f)
+    return sp.csr_matrix((dat, idx, full), shape=(n, n))
 
 
 def mean_curvature_normal(L: Any, P: Any) -> np.ndarray:
