@@ -39,8 +39,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from .geometry import check_points
 from .highorder import RowFit, knn_pattern, monomials, pointwise_rows  # noqa: F401
-from .validation import MeshError, MeshWarning, check_vertices
+from .validation import MeshError, MeshWarning
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error"]
 
@@ -178,7 +179,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     >>> bool(np.abs(L @ x**2 - (2 - 6 * x**2)).max() < 1e-4), int(np.median(choice.degree))
     (True, 6)
     """
-    P = np.ascontiguousarray(check_vertices(P, "P"), dtype=np.float64)
+    P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     n, d = P.shape
     if isinstance(max_degree, bool) or not isinstance(max_degree, (int, np.integer)) \
             or not 2 <= max_degree <= 6:
