@@ -41,7 +41,7 @@ from scipy.spatial import cKDTree
 
 from ._jit import jit
 from .errors import MeshError
-from .geometry.validation import check_vertices
+from .geometry import check_points
 
 __all__ = ["RowFit", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]
@@ -399,7 +399,7 @@ def knn_pattern(P: Any, K: int, centers: Any = None, tree: cKDTree | None = None
     >>> indptr.tolist(), indices[:2].tolist()
     ([0, 2, 4, 6], [0, 1])
     """
-    P = check_vertices(P, "P")
+    P = check_points(P, "P")
     n = len(P)
     if not 1 <= K <= n:
         raise MeshError(f"knn_pattern: K must be between 1 and the number of points ({n}); got {K}")
@@ -415,7 +415,7 @@ def knn_pattern(P: Any, K: int, centers: Any = None, tree: cKDTree | None = None
 
 
 def _check_inputs(P: Any, k: int, degree: int, normals: Any) -> tuple[np.ndarray, np.ndarray, bool]:
-    P = np.ascontiguousarray(check_vertices(P, "P"), dtype=np.float64)
+    P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     d = P.shape[1]
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= d:
         raise MeshError(f"k must be an integer between 1 and the dimension {d}; got {k!r}")
@@ -524,9 +524,8 @@ def _rows_matrix(n: int, centers: np.ndarray, indptr: np.ndarray, indices: np.nd
         take = np.concatenate([np.arange(indptr[r], indptr[r + 1]) for r in order]) if len(order) else \
             np.zeros(0, dtype=np.int64)
         idx, dat = indices[take], data[take]
-    L = sp.csr_matrix((dat, idx, full), shape=(n, n))
-    L.sum_duplicates()
-    return L
+    # no sort: rows keep their neighbours' order (a repeated neighbour still sums in L @ f)
+    return sp.csr_matrix((dat, idx, full), shape=(n, n))
 
 
 def mean_curvature_normal(L: Any, P: Any) -> np.ndarray:
@@ -540,7 +539,7 @@ def mean_curvature_normal(L: Any, P: Any) -> np.ndarray:
     >>> bool(np.abs(mean_curvature_normal(L, P) - P).max() < 1e-3)
     True
     """
-    P = check_vertices(P, "P")
+    P = check_points(P, "P")
     if L.shape != (len(P), len(P)):
         raise MeshError(f"L is {L.shape} but there are {len(P)} points")
     return -0.5 * np.asarray(L @ P)

@@ -10,8 +10,9 @@ Wide, low-degree rows average noise out at the price of a bias that grows with t
   of freedom the fit used, the smallest over the fits tried at w (a fit of too low a degree
   also leaves the surface's own shape in its residual) and then the median over w's nearest
   neighbours;
-* the **geometric scale** ℓ_w = 1/κ_w, κ_w the curvature of a degree-2 fit on about 200
-  neighbours (robust to noise), at most the diameter of the data;
+* the **geometric scale** ℓ_w = 1/κ_w, κ_w the curvature of a degree-2 fit on 64 neighbours
+  (on about 200 where the data are noisy), the median over w's nearest neighbours, at most
+  the diameter of the data;
 * for each candidate (degree q, K nearest neighbours, Gaussian weights reaching e^{−c} at the
   K-th): its noise factor ‖row‖₂ and its probes, the row applied to the monomials of degree
   q + 1 and q + 2, which measure how far from exact it is on what it does not reproduce.
@@ -39,8 +40,8 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from .errors import MeshError, MeshWarning
-from .geometry.validation import check_vertices
-from .highorder import RowFit, knn_pattern, monomials, pointwise_rows
+from .geometry import check_points
+from .highorder import RowFit, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error"]
 
@@ -51,6 +52,8 @@ _C_COMPACT, _C_WIDE = 8.0, 3.0
 # Neighbours of the compact rows, per monomial count, and of the noise and curvature fits
 _K_PER_MONOMIAL = 1.7
 _K_NOISE, _K_CURVATURE = 64, 200
+# noise/spacing above which the scale is taken from the wider curvature fit
+_NOISY = 1e-3
 # The ladder of wide stencils: K grows by this factor up to max_neighbors
 _LADDER = 2.5
 
@@ -125,13 +128,18 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
     return err
 
 
-def _candidate(P, tree, K, degree, c, k, normals, centers, noise_dof=True):
-    indptr, indices, dist = knn_pattern(P, K, centers=centers, tree=tree)
-    dK = dist.reshape(len(centers), K)[:, -1]
-    h = np.maximum(dK, 1e-300) ** 2 / (4.0 * c)
-    fit = pointwise_rows(P, indptr, indices, h, degree, k=k, normals=normals, centers=centers,
-                         return_fit=True, noise_dof=noise_dof)
-    return fit, dist
+def _candidate(P, idx, dist, degree, c, k, normals, centers, noise_dof=True):
+    # rows of the given degree on the K nearest neighbours (idx, dist: (rows, K), ascending)
+    rows, K = idx.shape
+    h = np.maximum(dist[:, -1], 1e-300) ** 2 / (4.0 * c)
+    indptr = np.arange(rows + 1, dtype=np.int64) * K
+    return pointwise_rows(P, indptr, np.ascontiguousarray(idx).ravel(), h, degree, k=k, normals=normals,
+                          centers=centers, return_fit=True, noise_dof=noise_dof)
+
+
+def _nearest(tree: cKDTree, P: np.ndarray, K: int, centers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    dist, idx = tree.query(P[centers], k=K, workers=-1)
+    return np.asarray(idx, dtype=np.int64).reshape(len(centers), K), np.asarray(dist).reshape(len(centers), K)
 
 
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
@@ -171,7 +179,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     >>> bool(np.abs(L @ x**2 - (2 - 6 * x**2)).max() < 1e-4), int(np.median(choice.degree))
     (True, 6)
     """
-    P = np.ascontiguousarray(check_vertices(P, "P"), dtype=np.float64)
+    P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     n, d = P.shape
     if isinstance(max_degree, bool) or not isinstance(max_degree, (int, np.integer)) \
             or not 2 <= max_degree <= 6:
@@ -192,17 +200,24 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     degrees = sorted({max_degree, *range(2, max_degree + 1, 2)}, reverse=True)
     cands: list[tuple[RowFit, int]] = []
     sig = np.full(n, np.inf)
-    for q in degrees:
-        K = min(n, int(round(_K_PER_MONOMIAL * count[q] + 4)))
-        fit, _ = _candidate(P, tree, K, q, _C_COMPACT, k, normals, everyone)
+    Ks = [min(n, int(round(_K_PER_MONOMIAL * count[q] + 4))) for q in degrees]
+    Kn = min(n, _K_NOISE)
+    # one query serves every compact candidate: the K nearest are a prefix of the Kq nearest
+    idx_all, dist_all = _nearest(tree, P, max(Ks + [Kn]), everyone)
+    for q, K in zip(degrees, Ks, strict=True):
+        fit = _candidate(P, idx_all[:, :K], dist_all[:, :K], q, _C_COMPACT, k, normals, everyone)
         cands.append((fit, K))
         sig = np.minimum(sig, fit.residual)
-    Kn = min(n, _K_NOISE)
-    fit, _ = _candidate(P, tree, Kn, 2, _C_WIDE, k, normals, everyone)
+    fit = _candidate(P, idx_all[:, :Kn], dist_all[:, :Kn], 2, _C_WIDE, k, normals, everyone)
     cands.append((fit, Kn))
     sig = np.minimum(sig, fit.residual)
-    Kc = min(n, _K_CURVATURE, max(Kn, n // 10))
-    curv_fit, _ = _candidate(P, tree, Kc, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
+    # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
+    # are clean, on ~200 where noise would inflate the curvature of a small fit
+    curv_fit = fit
+    if np.median(sig[np.isfinite(sig)]) > _NOISY * spacing if np.isfinite(sig).any() else False:
+        Kc = min(n, _K_CURVATURE, max(Kn, n // 10))
+        idx, dist = _nearest(tree, P, Kc, everyone)
+        curv_fit = _candidate(P, idx, dist, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
     # neighbourhood medians: one noisy fit does not decide a point's row
     _, nb = tree.query(P, k=min(16, n), workers=-1)
     nb = np.asarray(nb, dtype=np.int64).reshape(n, -1)
@@ -243,8 +258,9 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     while len(active) and K < Kmax:
         K = min(Kmax, int(round(K * _LADDER)))
         grown = []
+        idx, dist = _nearest(tree, P, K, active)
         for q in (2, 4) if max_degree >= 4 else (2,):
-            fit, _ = _candidate(P, tree, K, q, _C_WIDE, k, normals, active, noise_dof=False)
+            fit = _candidate(P, idx, dist, q, _C_WIDE, k, normals, active, noise_dof=False)
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
     capped = len(active) and Kmax < n

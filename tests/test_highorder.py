@@ -105,6 +105,13 @@ def test_curves_and_volumes():
     assert np.abs(L @ f - lap).max() < 1e-10 * np.abs(L).sum(axis=1).max()
 
 
+def test_three_sphere_in_r4():
+    # k = 3 in R⁴: Δx = −3x on S³
+    P = meshlap.samples.three_sphere_points(3000, seed=1)
+    L, choice = rowchoice.choose_rows(P, k=3, max_degree=4)
+    assert e2(L @ P[:, 0], -3 * P[:, 0]) < 4e-3  # measured 1.1e-3 at 4,000 points
+
+
 def fixed_rows_k(P, K, degree, k):
     indptr, indices, dist = highorder.knn_pattern(P, K)
     h = dist.reshape(len(P), K)[:, -1] ** 2 / 32

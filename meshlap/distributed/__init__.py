@@ -1,7 +1,7 @@
 """The same operator over the ranks of an MPI communicator (PETSc matrices, SLEPc spectra).
 
 :func:`laplacian` builds a :class:`DistributedLaplacian`; :mod:`~.solvers` holds its uses.
-Requires mpi4py, petsc4py and (for :func:`eigs`) slepc4py; the rest of meshlap never
+Requires mpi4py, petsc4py and (for ``eigs(method="shift-invert")``) slepc4py; the rest of meshlap never
 imports this package.
 """
 
