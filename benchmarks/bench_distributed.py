@@ -41,7 +41,8 @@ def rank_job(per_rank: int) -> None:
     from mpi4py import MPI
 
     import meshlap
-    from meshlap import distributed, kernel
+    from meshlap import distributed
+    from meshlap.assembly import grid as kernel
 
     comm = MPI.COMM_WORLD
     size, rank = comm.Get_size(), comm.Get_rank()
@@ -76,16 +77,17 @@ def rank_job(per_rank: int) -> None:
 
     # warm the compiled code and PETSc on a small problem so that the memory and time below
     # are the operator's, not the first call's
-    distributed.laplacian(V[:200], mass=mass[:200], h=h, comm=comm, scattered=True)
+    distributed.laplacian(V[:200], mass=mass[:200], correction="none", h=h, comm=comm, scattered=True)
     rss0 = _rss_now()
-    t_build, op = timed(lambda: distributed.laplacian(V, mass=mass, h=h, comm=comm, scattered=True), 1)
+    t_build, op = timed(lambda: distributed.laplacian(V, mass=mass, correction="none", h=h, comm=comm,
+                                                        scattered=True), 1)
     build_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 - rss0
     # glibc keeps the build's freed temporaries for reuse; hand them back to see what stays
     ctypes.CDLL("libc.so.6").malloc_trim(0)
     kept = _rss_now() - rss0
     rss1 = _rss_now()
-    t_free_build, free = timed(lambda: distributed.laplacian(V, mass=mass, h=h, comm=comm, scattered=True,
-                                                             matrix_free=True), 1)
+    t_free_build, free = timed(lambda: distributed.laplacian(V, mass=mass, correction="none", h=h, comm=comm,
+                                                             scattered=True, matrix_free=True), 1)
     ctypes.CDLL("libc.so.6").malloc_trim(0)
     free_kept = _rss_now() - rss1
     x, y = op.L.createVecs()

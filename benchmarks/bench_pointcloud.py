@@ -22,11 +22,12 @@ import scipy.sparse.linalg as sla
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from meshlap.neumann import neumann_normalized  # noqa: E402
 from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
-from meshlap import pointcloud, samples, spectral  # noqa: E402
-from meshlap.neumann import neumann_normalized  # noqa: E402
+from meshlap import samples, spectral  # noqa: E402
+from meshlap.geometry import pointcloud  # noqa: E402
 
 L_SPHERE = np.repeat(np.arange(4), 2 * np.arange(4) + 1)
 EIG_SPHERE = (L_SPHERE * (L_SPHERE + 1)).astype(float)

@@ -2,6 +2,11 @@
 
 Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 
+The operator is built along one pipeline, the same for meshes, point clouds, curves,
+volumes and the rows of one MPI rank:
+
+    input → geometry (Geometry) → widths → assembly (Kernel) → corrections → operator → uses
+
 >>> import meshlap
 >>> V, F = meshlap.shapes.sphere(500, seed=0)
 >>> op = meshlap.laplacian(V, F, h=0.01)
@@ -10,32 +15,27 @@ Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008.
 """
 
 from . import (
+    assembly,
     baselines,
+    corrections,
     curvature,
     geometry,
     heat,
     io,
-    pointcloud,
+    pipeline,
     reproduce,
     samples,
     shapes,
     smoothing,
     spectral,
-    topology,
+    widths,
 )
-from .geometry import Geometry, Polygons
-from .mass import face_areas, vertex_mass
-from .operator import (
-    DEFAULT_TOL,
-    MeshLaplacian,
-    OperatorTooLargeError,
-    default_h,
-    laplacian,
-    mesh_laplacian,
-    truncation_bound,
-)
-from .pointcloud import point_cloud_laplacian
-from .validation import MeshError, MeshWarning
+from .builders import laplacian, mesh_laplacian, point_cloud_laplacian, point_cloud_matrices
+from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .geometry import Geometry, Polygons, topology, validation
+from .geometry.mass import face_areas, vertex_mass
+from .operator import DEFAULT_TOL, MeshLaplacian, truncation_bound
+from .widths import default_h
 
 __version__ = "0.1.0"
 
@@ -45,25 +45,30 @@ __all__ = [
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
+    "OperatorTooLargeError",
+    "Polygons",
+    "assembly",
     "baselines",
+    "corrections",
     "curvature",
+    "default_h",
+    "face_areas",
     "geometry",
     "heat",
     "io",
-    "reproduce",
-    "samples",
-    "smoothing",
-    "spectral",
-    "OperatorTooLargeError",
-    "Polygons",
-    "default_h",
-    "face_areas",
     "laplacian",
     "mesh_laplacian",
+    "pipeline",
     "point_cloud_laplacian",
-    "pointcloud",
+    "point_cloud_matrices",
+    "reproduce",
+    "samples",
     "shapes",
+    "smoothing",
+    "spectral",
     "topology",
     "truncation_bound",
+    "validation",
     "vertex_mass",
+    "widths",
 ]

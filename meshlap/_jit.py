@@ -78,7 +78,7 @@ def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
 
     Examples
     --------
-    >>> from meshlap import kernel
+    >>> from meshlap.assembly import grid as kernel
     >>> cache_dir() in Path(kernel._fill_rows._cache._cache_path).parents
     True
     """

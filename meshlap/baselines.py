@@ -17,68 +17,15 @@ from typing import Any
 import igl
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import LinearOperator
 from scipy.spatial import cKDTree
 
-from .mass import _vertex_mass
-from .operator import DEFAULT_TOL, _LumpedLaplacian, default_h
-from .validation import MeshError, check_faces, check_function, check_h, check_tol, check_vertices
+from .geometry.mass import _vertex_mass
+from .geometry.validation import MeshError, check_faces, check_h, check_tol, check_vertices
+from .lumped import SparseLaplacian
+from .operator import DEFAULT_TOL
+from .widths import default_h
 
 __all__ = ["SparseLaplacian", "bsw_scipy", "cotangent", "intrinsic_delaunay", "uniform_graph"]
-
-
-class SparseLaplacian(_LumpedLaplacian):
-    """A Laplacian ``L`` with a diagonal mass ``M``: the common surface of every operator.
-
-    ``L`` approximates +Δ (negative semidefinite), ``S = M L`` is symmetric, and
-    ``op @ f`` applies ``L``, exactly as for :class:`~meshlap.MeshLaplacian`.
-
-    Parameters
-    ----------
-    L : sparse matrix
-        The operator, (n, n).
-    mass : (n,) array_like
-        Diagonal of the mass matrix.
-    name : str
-        Short label used in tables and plots.
-    S : sparse matrix, optional
-        ``M @ L`` when it is known exactly (e.g. the cotangent matrix itself).
-
-    Examples
-    --------
-    >>> import numpy as np, scipy.sparse as sp
-    >>> op = SparseLaplacian(sp.csr_matrix(np.array([[-1.0, 1.0], [1.0, -1.0]])), [1.0, 1.0])
-    >>> op @ np.array([0.0, 1.0])
-    array([ 1., -1.])
-    """
-
-    def __init__(self, L: Any, mass: Any, name: str = "custom", S: Any = None) -> None:
-        self.L = sp.csr_matrix(L)
-        self.mass = np.asarray(mass, dtype=np.float64)
-        self.name = name
-        self._S = None if S is None else sp.csr_matrix(S)
-
-    @property
-    def n_vertices(self) -> int:
-        return self.L.shape[0]
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.L.shape
-
-    @property
-    def nnz(self) -> int:
-        return int(self.L.nnz)
-
-    def __matmul__(self, f: Any) -> np.ndarray:
-        return np.asarray(self.L @ check_function(f, self.n_vertices))
-
-    def as_linear_operator(self) -> LinearOperator:
-        """``L`` as a :class:`scipy.sparse.linalg.LinearOperator`."""
-        return sp.linalg.aslinearoperator(self.L)
-
-    def __repr__(self) -> str:
-        return f"SparseLaplacian({self.name}, vertices={self.n_vertices:,}, nnz={self.nnz:,})"
 
 
 def cotangent(V: Any, F: Any) -> SparseLaplacian:

@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from .errors import MeshError
+from .geometry.validation import check_faces
 from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
-from .validation import MeshError, check_faces
 
 __all__ = ["main"]
 
@@ -51,8 +52,7 @@ def _is_cloud(cells: Any) -> bool:
 
 
 def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -> Any:
-    from .operator import laplacian
-    from .pointcloud import point_cloud_laplacian
+    from .builders import laplacian, point_cloud_laplacian
 
     dtype = np.float32 if getattr(args, "float32", False) else np.float64
     # the library's default operator (the one notebooks and scripts get), unless --correction
@@ -132,9 +132,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(_table(rows))
         return 0
     from . import geometry
+    from .geometry import point_cloud_geometry
+    from .geometry.topology import diagnose
     from .operator import DEFAULT_TOL, MeshLaplacian
-    from .pointcloud import point_cloud_geometry
-    from .topology import diagnose
 
     V, cells, k = _read(args)
     tol = DEFAULT_TOL if args.tol is None else args.tol
@@ -228,9 +228,9 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 def cmd_smooth(args: argparse.Namespace) -> int:
     """Smooth a surface by implicit mean curvature flow and write the result."""
     from .io import write_mesh
-    from .operator import default_h
     from .progress import make_progress
     from .smoothing import mean_curvature_flow
+    from .widths import default_h
 
     V, F = read_mesh(args.input)
     out = Path(args.output)
@@ -272,7 +272,7 @@ def cmd_smooth(args: argparse.Namespace) -> int:
 
 
 def _laplacian(V: np.ndarray, F: Any, h: float, tol: float) -> Any:
-    from .operator import laplacian
+    from .builders import laplacian
 
     # smoothing is a filter at the scale of the edges: the paper's operator is the one wanted
     return laplacian(V, F, h=h, tol=tol, correction="none")

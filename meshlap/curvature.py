@@ -14,7 +14,8 @@ from typing import Any
 import igl
 import numpy as np
 
-from .validation import MeshError, check_faces, check_vertices
+from .errors import MeshError
+from .geometry.validation import check_faces, check_vertices
 
 __all__ = ["mean_curvature_normal", "mean_curvature"]
 

@@ -26,6 +26,8 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
+from .errors import MeshError
+from .geometry.validation import check_function
 from .spectral import (
     _SPARSE_ROW_MAX,
     _check_mass,
@@ -36,8 +38,8 @@ from .spectral import (
     _restricted_S,
     apply_block,
     eigs,
+    symmetric_L,
 )
-from .validation import MeshError, check_function
 
 __all__ = ["heat_flow", "ImplicitHeat", "implicit_heat"]
 
@@ -114,7 +116,7 @@ def heat_flow(
         if getattr(op, "matrix_free", False):
             raise MeshError("method='krylov' needs a stored L; use method='spectral' for a matrix-free "
                             "operator")
-        L = sp.csr_matrix(op.L, dtype=np.float64)
+        L = sp.csr_matrix(symmetric_L(op), dtype=np.float64)
         order = np.argsort(tt, kind="stable")
         out = np.empty((len(tt), *f.shape))
         u, now = f, 0.0
@@ -142,7 +144,7 @@ def _chebyshev_coefficients(rho: float, times: np.ndarray) -> np.ndarray:
 
 def _chebyshev_heat(op: Any, f: np.ndarray, times: np.ndarray) -> np.ndarray:
     """exp(tL) f for every t in ``times`` from one Chebyshev recurrence in L."""
-    L = sp.csr_matrix(op.L, dtype=np.float64)
+    L = sp.csr_matrix(symmetric_L(op), dtype=np.float64)
     rho = float(abs(L).sum(axis=1).max())  # Gershgorin: the spectrum of L lies in [-rho, 0]
     out = np.zeros((len(times), *f.shape))
     if rho == 0:
@@ -220,13 +222,13 @@ class ImplicitHeat:
         self.Z = np.setdiff1d(np.arange(n), self.P)
         matrix_free = getattr(op, "matrix_free", False)
         if solver == "auto":
-            solver = "direct" if not matrix_free and op.L.nnz <= _SPARSE_ROW_MAX * n else "cg"
+            solver = "direct" if not matrix_free and symmetric_L(op).nnz <= _SPARSE_ROW_MAX * n else "cg"
         self.solver = solver
         if solver == "direct":
             S = _restricted_S(op, self.P)
             self._lu = _factor(sp.diags(self.m) - tau * 0.5 * (S + S.T))
         else:
-            diag = self.m / op.h if matrix_free else -self.m * np.asarray(op.L.diagonal())[self.P]
+            diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             self._jacobi = 1.0 / (self.m + tau * diag)
             geo = _mesh_of(op, mesh)
             K = None if geo is None else _cot_stiffness(geo[0], geo[1], self.P)

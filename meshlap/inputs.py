@@ -27,9 +27,10 @@ from typing import Any
 
 import numpy as np
 
+from .errors import MeshError
 from .geometry import Polygons
+from .geometry.validation import check_faces, check_vertices, existing_file
 from .io import MESH_FORMATS, POINT_FORMATS, read_mesh, read_points, read_polyline, read_tetrahedra
-from .validation import MeshError, check_faces, check_vertices, existing_file
 
 __all__ = ["TETGEN_FORMATS", "as_geometry_input", "boundary_triangles", "read_input"]
 

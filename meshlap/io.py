@@ -23,9 +23,10 @@ from typing import Any
 
 import numpy as np
 
+from .errors import MeshError
 from .geometry import Polygons
+from .geometry.validation import check_faces, check_vertices, existing_file
 from .store import FORMAT_VERSION, OperatorFormatError, SavedLaplacian, load_operator, save_operator
-from .validation import MeshError, check_faces, check_vertices, existing_file
 
 __all__ = [
     "FORMAT_VERSION",

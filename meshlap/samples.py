@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
+from .errors import MeshError
 from .shapes import _check_count, fibonacci_sphere
-from .validation import MeshError
 
 __all__ = [
     "CLOUD_KINDS",

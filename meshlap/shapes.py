@@ -21,7 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
-from .validation import MeshError
+from .errors import MeshError
 
 __all__ = [
     "NOISE_FRACTION",

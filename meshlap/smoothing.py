@@ -15,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from .errors import MeshError
+from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
-from .validation import MeshError, check_faces, check_vertices
 
 __all__ = ["smooth_function", "mean_curvature_flow", "enclosed_volume"]
 
@@ -140,8 +141,8 @@ def mean_curvature_flow(
     if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
         raise MeshError(f"steps must be a non-negative integer; got {steps!r}")
     if laplacian is None:
-        from .operator import default_h
-        from .operator import laplacian as bsw
+        from .builders import laplacian as bsw
+        from .widths import default_h
 
         h = default_h(X, faces) if h is None else h
 

@@ -39,7 +39,8 @@ from scipy.integrate import quad
 from scipy.special import eval_legendre
 
 from ._jit import jit
-from .validation import MeshError, check_faces, check_k, check_vertices
+from .errors import MeshError
+from .geometry.validation import check_faces, check_k, check_vertices
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 
@@ -78,8 +79,15 @@ def _spmm(indptr, indices, data, X, Y):  # pragma: no cover - compiled
             Y[i, c] = acc[c]
 
 
+def symmetric_L(op: Any) -> Any:
+    """The L of the operator's symmetric pencil (``op.L_sym``; ``op.L`` for operators that
+    keep one matrix): what spectra and heat flow iterate with."""
+    return getattr(op, "L_sym", op.L)
+
+
 def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
-    """``L @ X`` for a block of functions, with a parallel CSR product when L is stored.
+    """``L_sym @ X`` (the symmetric pencil's L) for a block of functions, with a parallel CSR
+    product when L is stored.
 
     scipy's sparse-times-dense product runs on one thread; this one splits rows over
     numba's threads and accepts CSR rows in any column order (the operator stores its
@@ -96,7 +104,7 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
     X = np.asarray(X, dtype=np.float64)
     vector = X.ndim == 1
     X2 = np.ascontiguousarray(X.reshape(len(X), -1))
-    L = None if getattr(op, "matrix_free", False) else op.L
+    L = None if getattr(op, "matrix_free", False) else symmetric_L(op)
     if not sp.issparse(L) or L.format != "csr":
         Y = np.asarray(op @ X2)
     else:
@@ -164,7 +172,7 @@ def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
         return V, check_faces(F, len(V), "mesh[1]").triangles()
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
         return op.V, op.faces.triangles()
-    # a point cloud's local Delaunay triangles (meshlap.pointcloud) serve as well
+    # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud) serve as well
     cells = getattr(getattr(op, "geometry", None), "cells", None)
     if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:
         return op.V, cells
@@ -354,7 +362,7 @@ def eigs(
     if method == "auto":
         if n_p <= _DENSE_MAX:
             method = "dense"
-        elif not matrix_free and op.L.nnz <= _SPARSE_ROW_MAX * op.n_vertices:
+        elif not matrix_free and symmetric_L(op).nnz <= _SPARSE_ROW_MAX * op.n_vertices:
             method = "shift-invert"
         else:
             method = "lobpcg"
@@ -405,7 +413,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed):
     if getattr(op, "matrix_free", False):
         diag = m / op.h
     else:
-        diag = -m * np.asarray(op.L.diagonal())[P]
+        diag = -m * np.asarray(symmetric_L(op).diagonal())[P]
     sigma = _scale_shift(m)
     geo = _mesh_of(op, mesh)
     K = None if geo is None else _cot_stiffness(geo[0], geo[1], P)
@@ -452,7 +460,7 @@ def sphere_eigenvalue(l: int, h: float) -> float:  # noqa: E741 - l is the harmo
     """
     if isinstance(l, (bool, np.bool_)) or not isinstance(l, (int, np.integer)) or l < 0:
         raise MeshError(f"l must be a non-negative integer; got {l!r}")
-    from .validation import check_h
+    from .geometry.validation import check_h
 
     h = check_h(h)
     if l == 0:

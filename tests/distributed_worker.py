@@ -21,7 +21,7 @@ def serial_L(V, mass, h, tol):
     """The single-machine assembly (MeshLaplacian._assemble) for a point set with masses."""
     import scipy.sparse as sp
 
-    from meshlap import kernel
+    from meshlap.assembly import grid as kernel
 
     grid = kernel.build_grid(V, mass, kernel.cutoff_radius(h, tol))
     counts = kernel.count_entries(V, grid)
@@ -64,24 +64,26 @@ class Checks:
         from meshlap import distributed
 
         V, F = meshlap.shapes.sphere(3000, seed=1)
-        op = distributed.laplacian(V, F, h=0.004, comm=self.comm)
+        op = distributed.laplacian(V, F, correction="none", h=0.004, comm=self.comm)
         A = op.to_scipy()
         info = op.L.getInfo()
         assert info["nz_allocated"] == info["nz_used"], info  # exact preallocation
         # rows handed to PETSc in many small blocks
         saved, distributed._BLOCK_ENTRIES = distributed._BLOCK_ENTRIES, 30_000
         try:
-            B = distributed.laplacian(V, F, h=0.004, comm=self.comm).to_scipy()
+            B = distributed.laplacian(V, F, correction="none", h=0.004, comm=self.comm).to_scipy()
         finally:
             distributed._BLOCK_ENTRIES = saved
         # scattered input in uneven chunks (rank q passes a share growing with q)
         cuts = np.round(len(V) * np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum())
         a, b = int(cuts[self.rank]), int(cuts[self.rank + 1])
         mass = meshlap.vertex_mass(V, F)
-        C = distributed.laplacian(V[a:b], mass=mass[a:b], h=0.004, comm=self.comm, scattered=True).to_scipy()
+        C = distributed.laplacian(V[a:b], mass=mass[a:b], correction="none", h=0.004, comm=self.comm,
+                                  scattered=True).to_scipy()
         # and the faces scattered too (other chunks than the points'): masses computed in parts
         fc = np.linspace(0, len(F), self.size + 1).astype(int)
-        D = distributed.laplacian(V[a:b], F[fc[self.rank]:fc[self.rank + 1]], h=0.004, comm=self.comm,
+        D = distributed.laplacian(V[a:b], F[fc[self.rank]:fc[self.rank + 1]], correction="none", h=0.004,
+                                  comm=self.comm,
                                   scattered=True).to_scipy()
         if self.rank == 0:
             same_entries(D, meshlap.laplacian(V, F, h=0.004, correction="none").L)
@@ -118,7 +120,8 @@ class Checks:
     def thin(self):
         """Slabs a third of r wide dealt round the ranks, and one rank left empty."""
         import meshlap
-        from meshlap import distributed, kernel
+        from meshlap import distributed
+        from meshlap.assembly import grid as kernel
 
         V, F = meshlap.shapes.sphere(2000, seed=2)
         h = 0.01
@@ -126,11 +129,12 @@ class Checks:
         slab = np.floor((V[:, 0] + 1.0) / (r / 3)).astype(np.int64)
         owners = [q for q in range(self.size) if q != 1] if self.size > 2 else list(range(self.size))
         part = np.array(owners)[slab % len(owners)]
-        op = distributed.laplacian(V, F, h=h, comm=self.comm, partition=part)
+        op = distributed.laplacian(V, F, correction="none", h=h, comm=self.comm, partition=part)
         A = op.to_scipy()
         counts = self.comm.gather(op.n_local)
         # the shell, heat flow and an implicit step on the same partition (one rank empty)
-        free = distributed.laplacian(V, F, h=h, comm=self.comm, partition=part, matrix_free=True)
+        free = distributed.laplacian(V, F, correction="none", h=h, comm=self.comm, partition=part,
+                                     matrix_free=True)
         Ys, Yf = op.gather(op.apply(op.local(V))), free.gather(free.apply(free.local(V)))
         Us = op.gather(distributed.heat_flow(op, op.local(V[:, 0]), 0.1))
         Uf = free.gather(distributed.heat_flow(free, free.local(V[:, 0]), 0.1))
@@ -148,7 +152,8 @@ class Checks:
     def r_apart(self):
         """A lattice with spacing exactly r (the kernel's d² <= r² decided at the tie), a
         duplicate point, zero-mass points, and a scattered, uneven input."""
-        from meshlap import distributed, kernel
+        from meshlap import distributed
+        from meshlap.assembly import grid as kernel
 
         h, tol = 0.01, 1e-8
         r = kernel.cutoff_radius(h, tol)
@@ -160,10 +165,12 @@ class Checks:
         L0 = serial_L(V, mass, h, tol)
         # rank 0 passes everything, the others nothing: the partition moves the points
         mine = slice(None) if self.rank == 0 else slice(0, 0)
-        op = distributed.laplacian(V[mine], mass=mass[mine], h=h, tol=tol, comm=self.comm, scattered=True)
+        op = distributed.laplacian(V[mine], mass=mass[mine], correction="none", h=h, tol=tol, comm=self.comm,
+                                   scattered=True)
         A = op.to_scipy()
         # and the untruncated operator (tol = 0: every rank's halo is every point with mass)
-        full = distributed.laplacian(V[mine], mass=mass[mine], h=h, tol=0, comm=self.comm, scattered=True)
+        full = distributed.laplacian(V[mine], mass=mass[mine], correction="none", h=h, tol=0, comm=self.comm,
+                                     scattered=True)
         B = full.to_scipy()
         if self.rank == 0:
             offdiag = (L0 - __import__("scipy").sparse.diags(L0.diagonal())).nnz
@@ -177,7 +184,7 @@ class Checks:
         from meshlap import distributed
 
         V, F = meshlap.shapes.sphere(3000, kind="nonuniform", seed=5)
-        op = distributed.laplacian(V, F, h=0.003, comm=self.comm)
+        op = distributed.laplacian(V, F, correction="none", h=0.003, comm=self.comm)
         entries = self.comm.gather(int(op._counts.sum()))
         A = op.to_scipy()
         if self.rank == 0:
@@ -192,8 +199,8 @@ class Checks:
         from meshlap import distributed
 
         V, F = meshlap.shapes.sphere(n, seed=3)
-        stored = distributed.laplacian(V, F, h=h, comm=self.comm)
-        free = distributed.laplacian(V, F, h=h, comm=self.comm, matrix_free=True)
+        stored = distributed.laplacian(V, F, correction="none", h=h, comm=self.comm)
+        free = distributed.laplacian(V, F, correction="none", h=h, comm=self.comm, matrix_free=True)
         return V, F, h, stored, free
 
     def apply(self):
@@ -237,13 +244,76 @@ class Checks:
             self.report("implicit", f"backward Euler (KSP CG) vs serial: stored {e1:.1e}, "
                         f"matrix-free {e2:.1e}")
 
+    # -- the corrected default ----------------------------------------------------------------
+    def _corrected(self, name, geo_or_V, F, serial):
+        """The default on the ranks against the single machine's default: gathered L (the
+        point-wise rows) and L_sym to 1e-12 relative, the first 20 eigenvalues to 1e-10."""
+        from meshlap import distributed, spectral
+
+        op = distributed.laplacian(geo_or_V, F, comm=self.comm)
+        A, B = op.to_scipy(), op.to_scipy(symmetric=True)
+        lam, _ = distributed.eigs(op, 20)
+        if self.rank == 0:
+            assert op.correction == serial.correction == "richardson", (op.correction, serial.correction)
+            e_L = abs(A - serial.L).max() / abs(serial.L).max()
+            e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
+            D = abs(B - serial.L_sym)
+            where = np.unravel_index(D.argmax(), D.shape)
+            assert A.nnz == serial.L.nnz and max(e_L, e_S) <= 1e-12, (A.nnz, serial.L.nnz, e_L, e_S, where,
+                                                                      B[where], serial.L_sym[where])
+            lam0, _ = spectral.eigs(serial, 20, tol=1e-10)
+            scale = np.maximum(np.abs(lam0), lam0[1])
+            err = float((np.abs(lam - lam0) / scale).max())
+            assert err <= 1e-10, (lam, lam0, err)
+            self.report(name, f"L {e_L:.1e}, L_sym {e_S:.1e} ({A.nnz} entries, boundary rows "
+                        f"{serial.boundary_rows}, moment scale {op.moment_scale:.6f}); 20 eigenvalues "
+                        f"{err:.1e}")
+
+    def corrected_plane(self):
+        import meshlap
+
+        V, F = meshlap.shapes.plane(1500, seed=2)  # boundary: mirror images and one-sided rows
+        self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F))
+
+    def corrected_scattered(self):
+        """Scattered input (each rank a chunk of the points and a share of the faces, no rank the
+        whole mesh): the same default from global reductions."""
+        import meshlap
+        from meshlap import distributed
+
+        V, F = meshlap.shapes.plane(1500, seed=2)
+        V = V.copy()
+        V[:, 2] = 0.15 * np.sin(3 * V[:, 0])  # bent: normals turn, the curvature cap acts
+        cuts = np.round(len(V) * np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum())
+        a, b = int(cuts[self.rank]), int(cuts[self.rank + 1])
+        fc = np.linspace(0, len(F), self.size + 1).astype(int)
+        op = distributed.laplacian(V[a:b], F[fc[self.rank]:fc[self.rank + 1]], scattered=True, comm=self.comm)
+        A, B = op.to_scipy(), op.to_scipy(symmetric=True)
+        if self.rank == 0:
+            serial = meshlap.laplacian(V, F)
+            assert serial.h_vertex is not None  # the cap narrowed some widths
+            e_L = abs(A - serial.L).max() / abs(serial.L).max()
+            e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
+            assert A.nnz == serial.L.nnz and max(e_L, e_S) <= 1e-12, (A.nnz, serial.L.nnz, e_L, e_S)
+            self.report("corrected_scattered", f"L {e_L:.1e}, L_sym {e_S:.1e} ({A.nnz} entries, widths "
+                        f"{serial.h_vertex.min():.3g}-{serial.h_vertex.max():.3g})")
+
+    def corrected_cloud(self):
+        import meshlap
+
+        rng = np.random.default_rng(3)
+        P = rng.standard_normal((1500, 3))
+        P /= np.linalg.norm(P, axis=1, keepdims=True)
+        geo = meshlap.geometry.point_cloud_geometry(P)
+        self._corrected("corrected_cloud", geo, None, meshlap.MeshLaplacian(geo))
+
     # -- eigenpairs -----------------------------------------------------------------------
     def _eigs(self, name, V, F, h, k, **kw):
         import meshlap
         from meshlap import distributed, spectral
 
         t0 = time.perf_counter()
-        op = distributed.laplacian(V, F, h=h, comm=self.comm)
+        op = distributed.laplacian(V, F, correction="none", h=h, comm=self.comm)
         lam, phi = distributed.eigs(op, k)
         t1 = time.perf_counter()
         lam_blr, _ = distributed.eigs(op, k, blr=1e-10) if k <= 10 else (lam, None)

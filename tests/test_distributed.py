@@ -56,6 +56,16 @@ def test_matrix_equals_serial_exactly(n):
 
 
 @needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
+def test_corrected_default_equals_serial(n):
+    """The single machine's default (Richardson kernel, curvature-capped widths, arc distances,
+    mirror images, moment scale, point-wise rows) on n ranks: gathered matrices to 1e-12
+    relative, eigenvalues to 1e-10, for a mesh with boundary and a point cloud; and from scattered
+    input (chunks of points, shares of the faces) by global reductions."""
+    mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered")
+
+
+@needs_mpi
 def test_example_job():
     """examples/distributed_job.py, the whole job, on 2 ranks (stored and matrix-free)."""
     env = dict(os.environ, NUMBA_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
@@ -95,7 +105,8 @@ def test_global_grid_matches_kernel():
     """The distributed visiting order rests on reproducing kernel.build_grid's lo/cell/dims."""
     from mpi4py import MPI
 
-    from meshlap import distributed, kernel
+    from meshlap import distributed
+    from meshlap.assembly import grid as kernel
 
     rng = np.random.default_rng(0)
     for n, radius in [(50, 0.3), (2000, 0.01), (10, 1e-6), (300, np.inf)]:
@@ -115,13 +126,13 @@ def test_clear_errors():
 
     V, F = meshlap.shapes.sphere(100, seed=0)
     with pytest.raises(meshlap.MeshError, match="pass F"):
-        distributed.laplacian(V, h=0.01, comm=MPI.COMM_SELF)
+        distributed.laplacian(V, correction="none", h=0.01, comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="h is required"):
-        distributed.laplacian(V, mass=np.ones(100), comm=MPI.COMM_SELF)
+        distributed.laplacian(V, mass=np.ones(100), correction="none", comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="zero mass"):
-        distributed.laplacian(V, mass=np.zeros(100), h=0.01, comm=MPI.COMM_SELF)
+        distributed.laplacian(V, mass=np.zeros(100), correction="none", h=0.01, comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="partition"):
-        distributed.laplacian(V, F, h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
+        distributed.laplacian(V, F, correction="none", h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
 
 
 def test_rest_of_meshlap_never_imports_it():
@@ -136,13 +147,14 @@ def test_missing_stack_names_the_install(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "petsc4py", None)  # import fails as if absent
     with pytest.raises(ImportError, match="install-mpi"):
-        distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), h=0.1)
+        distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), correction="none", h=0.1)
 
 
 def test_kernel_row_subsets_match_full_build():
     """kernel.fill_csr(rows=...) and kernel.apply(rows=...), which each rank uses for its own
     rows, give exactly the full build's rows."""
-    from meshlap import kernel, shapes
+    from meshlap import shapes
+    from meshlap.assembly import grid as kernel
 
     V, _ = shapes.sphere(800, seed=0)
     mass = np.random.default_rng(0).random(len(V)) * (np.arange(len(V)) % 7 > 0)

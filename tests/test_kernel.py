@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import meshlap
-import meshlap.operator as operator_module
-from meshlap import kernel, shapes
+from meshlap import assembly, shapes
+from meshlap.assembly import grid as kernel
 
 
 def brute_force_L(V, mass, h, tol):
@@ -87,7 +87,7 @@ def test_int64_indices_give_the_same_matrix(monkeypatch):
     small = meshlap.laplacian(V, F, h=0.01, correction="none")
     assert small.L.indptr.dtype == np.int32 and small.L.indices.dtype == np.int32
     # pretend int32 overflows: the int64 path must be taken and give identical arrays
-    monkeypatch.setattr(operator_module, "_INT32_MAX", small.nnz - 1)
+    monkeypatch.setattr(assembly, "_INT32_MAX", small.nnz - 1)
     big = meshlap.laplacian(V, F, h=0.01, correction="none")
     assert big.L.indptr.dtype == np.int64 and big.L.indices.dtype == np.int64
     assert np.array_equal(big.L.indptr, small.L.indptr)

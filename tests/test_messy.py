@@ -11,7 +11,7 @@ import scipy.sparse as sp
 import meshlap
 from meshlap import shapes, topology
 from meshlap.geometry import Polygons
-from meshlap.validation import MeshWarning, check_faces, check_k, check_positive
+from meshlap.geometry.validation import MeshWarning, check_faces, check_k, check_positive
 
 
 def dense(op):

@@ -7,7 +7,8 @@ from pathlib import Path
 import numba
 
 import meshlap
-from meshlap import _jit, kernel, spectral
+from meshlap import _jit, spectral
+from meshlap.assembly import grid as kernel
 
 PACKAGE = Path(meshlap.__file__).resolve().parent
 

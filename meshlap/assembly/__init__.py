@@ -1,0 +1,252 @@
+"""Stages 3 and 4 of the pipeline: the kernel, and its rows assembled into CSR.
+
+:class:`Kernel` says what each pair's weight is (intrinsic dimension k for the normalization
+1/(h (4πh)^{k/2}), plain Gaussian or difference of Gaussians, Euclidean or arc distance, the
+tolerance that cuts it off); :func:`assemble` evaluates it for positions, masses and widths
+and knows nothing else about where they came from. Three paths, one result:
+
+* :mod:`~meshlap.assembly.grid`: a cell grid for points in at most 3 dimensions, the
+  paper's operator at one h (count, then fill; also the matrix-free product);
+* :mod:`~meshlap.assembly.variable`: the same grid with per-point widths, the difference of
+  Gaussians and arc distances;
+* :mod:`~meshlap.assembly.pairs`: a k-d tree's close pairs for points in R^d, d > 3.
+
+A memory guard counts the entries before anything is allocated.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import OperatorTooLargeError
+from ..widths import Widths
+from . import grid, pairs, variable
+from .grid import cutoff_radius, normalization
+
+__all__ = ["Kernel", "MatrixFree", "MemoryGuard", "assemble", "available_memory", "csr", "cutoff_radius",
+           "fmt_bytes", "grid", "normalization", "pairs", "variable"]
+
+_INT32_MAX = np.iinfo(np.int32).max
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """What a pair's weight is: k, plain or difference of Gaussians, distances, cut-off."""
+
+    dim: int
+    dog: bool = False
+    normals: np.ndarray | None = None
+    tol: float = 1e-8
+
+    @property
+    def plain(self) -> bool:
+        """The paper's kernel: one Gaussian of Euclidean distance."""
+        return not self.dog and self.normals is None
+
+
+def available_memory() -> int:
+    """Bytes of memory available to this process now (MemAvailable on Linux)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+def fmt_bytes(b: float) -> str:
+    """``1536`` → ``'1.5 KiB'``."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if b < 1024 or unit == "TiB":
+            return f"{b:.1f} {unit}" if unit != "B" else f"{int(b)} B"
+        b /= 1024
+    return f"{b:.1f} TiB"
+
+
+def csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, n: int) -> sp.csr_matrix:
+    """Wrap CSR arrays without copying them. scipy's constructor would copy int64 index arrays
+    down to int32 when their contents fit; setting the arrays directly keeps the type chosen
+    here. Rows start with their diagonal, so the indices are not sorted."""
+    L = sp.csr_matrix((n, n), dtype=data.dtype)
+    L.data, L.indices, L.indptr = data, indices, indptr
+    L.check_format(full_check=False)
+    L.has_sorted_indices = False
+    return L
+
+
+@dataclass
+class MemoryGuard:
+    """Refuses, before allocating, a build whose matrices would exceed ``max_memory`` bytes.
+
+    ``matrices`` is how many value arrays of one sparsity pattern the build keeps (the
+    symmetric L and, with point-wise rows, their values), so the guard counts everything.
+    """
+
+    n: int
+    dtype: np.dtype
+    max_memory: int
+    h: float
+    matrices: int = 1
+
+    def bytes_for(self, nnz: float) -> float:
+        """Bytes of ``matrices`` CSR value arrays sharing one index structure."""
+        idx = 4 if (nnz <= _INT32_MAX and self.n <= _INT32_MAX) else 8
+        return nnz * (self.matrices * self.dtype.itemsize + idx) + (self.n + 1) * idx
+
+    def __call__(self, nnz: float, estimated: bool = False) -> None:
+        need = self.bytes_for(nnz)
+        if need > self.max_memory:
+            how = "at least about" if estimated else "exactly"
+            raise OperatorTooLargeError(
+                f"the operator would hold {how} {int(nnz):,} entries ({fmt_bytes(need)}), more than "
+                f"max_memory={fmt_bytes(self.max_memory)}; use a smaller h (now {self.h:.4g}) or "
+                f"tol, dtype=float32, or matrix_free=True")
+
+
+def sample_counts(points: np.ndarray, g: grid.Grid, sample: int = 512, seed: int = 0) -> tuple[float, float]:
+    """Mean total entries and its standard error from ``sample`` rows drawn with replacement:
+    O(sample) memory and O(sample × row length) time, even when the matrix would be dense."""
+    n = len(points)
+    if n <= sample:
+        return float(grid.count_entries(points, g).sum()), 0.0
+    rows = np.random.default_rng(seed).integers(0, n, size=sample)
+    counts = grid.count_entries(points, g, rows=rows).astype(np.float64)
+    return counts.mean() * n, counts.std(ddof=1) / math.sqrt(sample) * n
+
+
+def pad3(P: np.ndarray) -> np.ndarray:
+    """The grid bins three coordinates: points in fewer dimensions get zeros."""
+    return P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
+
+
+def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel, *,
+             dtype=np.float64, guard: MemoryGuard | None = None,
+             progress: Callable[[float, str], None] | None = None) -> sp.csr_matrix:
+    """The kernel operator L = (K M − diag(K m)) · normalization, as CSR (rows start with
+    their diagonal).
+
+    Parameters
+    ----------
+    points : (n, d) ndarray
+        Positions (d ≤ 3 on the cell grid; larger d on the k-d tree path).
+    mass : (n,) ndarray
+        Masses; points of mass 0 are rows but never sources.
+    widths : Widths
+        One h, or one per point (pair width (h_w + h_p)/2).
+    kernel : Kernel
+        Dimension, kernel type, distances and tolerance.
+    dtype : numpy dtype, default float64
+    guard : MemoryGuard, optional
+        Called with the entry count before the arrays are allocated.
+    progress : callable, optional
+        ``progress(fraction, stage)``.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap.widths import Widths
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> g = meshlap.geometry.from_mesh(V, F)
+    >>> L = assemble(g.points, g.mass, Widths(0.01, None, False), Kernel(dim=2))
+    >>> bool(np.allclose(L @ np.ones(500), 0))
+    True
+    """
+    n = len(points)
+    radius = cutoff_radius(widths.largest, kernel.tol)
+    if points.shape[1] > 3:
+        if guard is not None:
+            guard(pairs.count_entries(points, radius))
+        if kernel.plain and widths.h_vertex is None:
+            return pairs.assemble(points, mass, widths.h, radius, kernel.dim, dtype)
+        return pairs.assemble_variable(points, mass, widths.per_point(n), kernel.tol, kernel.dim,
+                                       kernel.dog, kernel.normals, dtype)
+    P = pad3(points)
+    g = grid.build_grid(P, mass, radius)
+    mean, err = sample_counts(P, g)
+    if guard is not None:
+        # fail fast only when the sample leaves no doubt; the exact count decides otherwise
+        guard(max(mean - 4.0 * err, 0.0), estimated=True)
+    index_dtype = np.int32 if n <= _INT32_MAX else np.int64
+    if kernel.plain and widths.h_vertex is None:
+        count_cb = None if progress is None else (lambda f: progress(0.3 * f, "count"))
+        fill_cb = None if progress is None else (lambda f: progress(0.3 + 0.7 * f, "fill"))
+        counts = grid.count_entries(P, g, progress=count_cb, expected_nnz=mean)
+        nnz = int(counts.sum())
+        if guard is not None:
+            guard(nnz)
+        if nnz > _INT32_MAX:
+            index_dtype = np.int64
+        indptr = np.zeros(n + 1, dtype=index_dtype)
+        np.cumsum(counts, out=indptr[1:])
+        _warn_lonely(counts, mass, radius, widths.h)
+        indices, data = grid.fill_csr(P, g, widths.h, indptr, index_dtype, np.dtype(dtype),
+                                      progress=fill_cb, dim=kernel.dim)
+        return csr(data, indices, indptr, n)
+
+    def check(nnz: int) -> None:
+        if guard is not None:
+            guard(nnz)
+        if nnz > _INT32_MAX:
+            raise OperatorTooLargeError(f"{nnz:,} entries need 64-bit indices; use a smaller h")
+
+    normals = None if kernel.normals is None else pad3(kernel.normals)
+    if progress is not None:
+        progress(0.0, "kernel rows")
+    indptr, indices, data = variable.variable_csr(P, g, widths.per_point(n), kernel.tol, normals,
+                                                  kernel.dog, index_dtype, np.dtype(dtype), max_nnz=check,
+                                                  dim=kernel.dim)
+    variable.sort_rows(indptr, indices, data)
+    L = csr(data, indices, indptr, n)
+    L.has_sorted_indices = True
+    return L
+
+
+@dataclass
+class MatrixFree:
+    """The kernel operator applied without storing it: the grid is built once, each product
+    recomputes the weights (one h; the Richardson kernel as 2 L_{h/2} − L_h, both cut at
+    r(h), the pairs of the assembled operator)."""
+
+    points: np.ndarray
+    grid: grid.Grid
+    h: float
+    dim: int
+    dog: bool
+    scale: float = 1.0
+
+    @classmethod
+    def build(cls, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel) -> MatrixFree:
+        """Bin the points for the cut-off of ``widths.h``."""
+        P = pad3(points)
+        return cls(P, grid.build_grid(P, mass, cutoff_radius(widths.h, kernel.tol)), widths.h, kernel.dim,
+                   kernel.dog)
+
+    def __call__(self, f: np.ndarray) -> np.ndarray:
+        P, g, h = self.points, self.grid, self.h
+        if not self.dog:
+            return grid.apply(P, g, h, f, self.dim)
+        return self.scale * (2.0 * grid.apply(P, g, 0.5 * h, f, self.dim) - grid.apply(P, g, h, f, self.dim))
+
+    def count_entries(self, sample: int = 512, seed: int = 0) -> float:
+        """Estimated entries of the operator it does not store (:func:`sample_counts`)."""
+        return sample_counts(self.points, self.grid, sample, seed)[0]
+
+
+def _warn_lonely(counts: np.ndarray, mass: np.ndarray, radius: float, h: float) -> None:
+    lonely = np.flatnonzero((counts == 1) & (mass > 0))
+    if len(lonely):
+        warnings.warn(f"{len(lonely)} of {len(counts)} vertices have no neighbour within the cut-off "
+                      f"radius {radius:.3g} (h={h:.3g}); L is 0 there. Use a larger h.", RuntimeWarning,
+                      stacklevel=4)

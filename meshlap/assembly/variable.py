@@ -1,0 +1,200 @@
+"""Assembly with per-point widths, the difference-of-Gaussians kernel and arc distances.
+
+The corrected operator's kernel: pair (w, p) has width h_wp = (h_w + h_p)/2 and is kept when
+its distance d² (times the squared arc/chord ratio of the pair's normals, when given) is at
+most 4 h_wp ln(1/tol). Every quantity is symmetric in (w, p), so the kept pairs and K are
+symmetric. The same two passes (count, then fill) as :mod:`meshlap.assembly.grid`, whose
+neighbour search they reuse.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numba
+import numpy as np
+from numba import prange
+
+from .._jit import jit
+from ._intrinsics import _exp_neg, _fetch_add
+from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
+
+__all__ = ["dog_factor", "sort_rows", "variable_csr"]
+
+
+@jit(inline="always")
+def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
+    # (α/2)/sin(α/2) squared, α the angle between the unit normals: the squared ratio of arc
+    # to chord for a circle through both points with those normals (1 for parallel normals)
+    c = nw0 * np0 + nw1 * np1 + nw2 * np2
+    t = min(max(0.5 * (1.0 - c), 0.0), 1.0)  # sin²(α/2)
+    if t <= 0.1:
+        # asin(s)/s as a series in t = s² (truncation below 2e-8): no libm call for the
+        # nearly parallel normals of most pairs
+        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
+                                                                         + t * 63.0 / 2816.0))))
+    else:
+        sn = math.sqrt(t)
+        q = math.asin(sn) / sn
+    return q * q
+
+
+@jit(inline="always")
+def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols, sj, sd, sh):
+    # like _gather, with the per-pair cut-off; sh receives h_wp
+    pos = 0
+    for i in range(ncols):
+        for j in range(cols[i, 0], cols[i, 1]):
+            dx = xs[j] - x
+            dy = ys[j] - y
+            dz = zs[j] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            if use_normals:
+                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
+            hp = 0.5 * (hw + hs[j])
+            sj[pos] = j
+            sd[pos] = d2
+            sh[pos] = hp
+            pos += np.int64((d2 <= lnt4 * hp) & (j != sw))
+    return pos
+
+
+@jit(parallel=True)
+def _var_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell, full,
+              max_columns, chunk, n_workers, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k,
+              fill, indptr, indices, data, counts, status):
+    # fill=False: counts[w] = entries of row w; fill=True: write the row into CSR
+    n_rows = len(rows)
+    n_chunks = (n_rows + chunk - 1) // chunk
+    next_chunk = np.zeros(1, dtype=np.int64)
+    for _ in prange(n_workers):
+        cols = np.empty((max_columns, 2), dtype=np.int64)
+        sj = np.empty(1024, dtype=np.int64)
+        sd = np.empty(1024, dtype=np.float64)
+        sh = np.empty(1024, dtype=np.float64)
+        while True:
+            c = _fetch_add(next_chunk, 0, 1)
+            if c >= n_chunks:
+                break
+            for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
+                w = rows[k]
+                x, y, z = V[w, 0], V[w, 1], V[w, 2]
+                hw = hv[w]
+                r = math.sqrt(lnt4 * 0.5 * (hw + hmax)) if not full else math.inf
+                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
+                need = _candidates(cols, ncols)
+                if need > len(sj):
+                    sj = np.empty(2 * need, dtype=np.int64)
+                    sd = np.empty(2 * need, dtype=np.float64)
+                    sh = np.empty(2 * need, dtype=np.float64)
+                cnt = _gather_var(x, y, z, self_slot[w], hw, nv[w], xs, ys, zs, hs, ns, lnt4,
+                                  use_normals, cols, ncols, sj, sd, sh)
+                if not fill:
+                    counts[w] = cnt + 1
+                    continue
+                start = indptr[w]
+                if cnt != indptr[w + 1] - start - 1:
+                    status[0] = 1
+                    cnt = min(cnt, indptr[w + 1] - start - 1)
+                first = start + 1
+                for i in range(cnt):
+                    j = sj[i]
+                    hp = sh[i]
+                    e = _exp_neg(-sd[i] / (4.0 * hp))
+                    kern = e * (dogc * e - 1.0) if dogc != 0.0 else e
+                    indices[first + i] = src_index[j]
+                    if half_k == 1.0:  # surfaces, rounded as the plain operator is
+                        data[first + i] = m[j] * kern / (4.0 * math.pi * hp * hp)
+                    else:
+                        data[first + i] = m[j] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
+                indices[start] = w
+                data[start] = -_sum(data, first, cnt)
+
+
+def dog_factor(dim: int) -> float:
+    """c_k of the Richardson kernel 2K_{h/2} − K_h = (c_k e^{−d²/2h} − e^{−d²/4h}) / (h (4πh)^{k/2}):
+    c_k = 2^{2+k/2} (8 on surfaces).
+
+    Examples
+    --------
+    >>> dog_factor(2), round(dog_factor(1), 4)
+    (8.0, 5.6569)
+    """
+    return 8.0 if dim == 2 else 2.0 ** (2.0 + 0.5 * dim)
+
+
+def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
+                 dog: bool, index_dtype, value_dtype,
+                 max_nnz: Callable[[int], None] | None = None, dim: int = 2,
+                 rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR arrays (indptr, indices, data) of L with per-vertex widths ``hv``.
+
+    Pair width h_wp = (h_w + h_p)/2 with the matching factor 1/(h_wp (4π h_wp)^{k/2}), so the
+    second moment of every pair's kernel is that of the Gaussian of width h_wp; ``dog`` gives
+    the Richardson kernel 2K_{h/2} − K_h, (2^{2+k/2} e^{−d²/2h} − e^{−d²/4h}) per pair;
+    ``normals`` multiplies d² by the squared arc/chord ratio of the pair. ``grid`` must be
+    built for the largest radius. ``max_nnz`` is called with the exact count before the
+    arrays are allocated (a memory guard). ``rows`` (default all) fills only those rows; the
+    others stay empty (one MPI rank's own rows).
+    """
+    n = len(V)
+    lnt4 = math.inf if tol == 0 else 4.0 * math.log(1.0 / tol)
+    hv = np.ascontiguousarray(hv, dtype=np.float64)
+    hs = np.ascontiguousarray(hv[grid.src_index])
+    use_normals = normals is not None
+    nv = np.ascontiguousarray(normals if use_normals else np.zeros((n, 3)), dtype=np.float64)
+    ns = np.ascontiguousarray(nv[grid.src_index])
+    hmax = float(hv.max())
+    counts = np.zeros(n, dtype=np.int64)
+    status = np.zeros(1, dtype=np.int64)
+    geo = (grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns,
+           _CHUNK_ROWS, numba.get_num_threads())
+    head = (grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
+            grid.self_slot)
+    tail = (hv, hs, nv, ns, use_normals, lnt4, hmax, dog_factor(dim) if dog else 0.0, 0.5 * dim)
+    if rows is not None:
+        head = (np.ascontiguousarray(rows, dtype=np.int64),) + head[1:]
+    # the count pass takes index arrays of the fill pass's type: one compiled specialization
+    # serves both (a fresh cache compiles it once, about 5 s, instead of twice)
+    dummy_i = np.zeros(1, dtype=index_dtype)
+    _var_rows(*head, *geo, *tail, False, dummy_i, dummy_i, np.zeros(1), counts, status)
+    nnz = int(counts.sum())
+    if max_nnz is not None:
+        max_nnz(nnz)
+    indptr = np.zeros(n + 1, dtype=index_dtype)
+    np.cumsum(counts, out=indptr[1:])
+    indices = np.empty(nnz, dtype=index_dtype)
+    data = np.empty(nnz, dtype=np.float64)
+    _var_rows(*head, *geo, *tail, True, indptr, indices, data, counts, status)
+    if status[0]:
+        raise RuntimeError("meshlap internal error: the count and fill passes found different "
+                           "neighbourhoods; please report this with the mesh")
+    return indptr, indices, data.astype(value_dtype, copy=False)
+
+
+@jit(parallel=True)
+def _sort_rows(indptr, indices, data):  # pragma: no cover - compiled
+    for w in prange(len(indptr) - 1):
+        a, b = indptr[w], indptr[w + 1]
+        if b - a > 1:
+            order = np.argsort(indices[a:b])
+            indices[a:b] = indices[a:b][order]
+            data[a:b] = data[a:b][order]
+
+
+def sort_rows(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> None:
+    """Sort every CSR row by column, in place (the fill writes the diagonal first).
+
+    Matrices that share one index array (the symmetric L and the point-wise rows) must be
+    canonical: scipy sorts unsorted rows in place, which would reorder the shared indices
+    under the other matrix's values.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ip, ind, dat = np.array([0, 3]), np.array([0, 2, 1]), np.array([1.0, 3.0, 2.0])
+    >>> sort_rows(ip, ind, dat); ind.tolist(), dat.tolist()
+    ([0, 1, 2], [1.0, 2.0, 3.0])
+    """
+    _sort_rows(indptr, indices, data)

@@ -1,0 +1,139 @@
+"""The corrected operator on one rank: the single machine's stages 4 and 5 on its own rows.
+
+Stages 1 and 2 (geometry, widths) give every point its attributes: width h_w, normal n_w (arc
+distances), and, near the boundary, its nearest boundary sample b_w with the outward
+conormal ν_w (mirror images). :class:`PointAttributes` packs them into one array that
+travels with the points to their owner and into the halos, so that a rank holds, for its
+own rows and for every source within the cut-off, exactly what the single machine holds.
+:func:`local_rows` then runs the same kernel (:mod:`meshlap.assembly.variable`), the same
+mirror images and the same moment corrections (:mod:`meshlap.corrections`) on the rank's
+rows; the global quantities (the second-moment scale, the semidefiniteness check) are
+reduced over the ranks.
+
+The semidefiniteness check on many ranks is the check of each rank's principal block
+(own rows and columns of −S): a principal submatrix of a semidefinite matrix is
+semidefinite, so a negative eigenvalue there proves −S indefinite and every rank falls back
+to the plain kernel, as the single machine does. A negative mode that no rank's block holds
+is not caught (the single machine's check on the whole pencil would).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import assembly, corrections
+from ..geometry import Geometry
+from ..pipeline import Options
+from ..widths import Widths
+
+__all__ = ["PointAttributes", "attributes", "local_rows"]
+
+
+@dataclass(frozen=True)
+class PointAttributes:
+    """What the corrected kernel reads of each point besides position and mass, as columns
+    of one (n, 2 + 3d) array: h_w, the band flag, n_w (d), b_w (d), ν_w (d)."""
+
+    table: np.ndarray
+    dim: int  # intrinsic dimension k
+    dog: bool
+    arc: bool
+    neumann: bool
+    pointwise: bool
+    check_psd: bool
+    tol: float
+
+    @property
+    def d(self) -> int:
+        return (self.table.shape[1] - 2) // 3
+
+    def columns(self, T: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(h, band, normals, b, ν) of a table with these columns (this one's rows or a halo's)."""
+        d = self.d
+        return (np.ascontiguousarray(T[:, 0]), T[:, 1] > 0, np.ascontiguousarray(T[:, 2:2 + d]),
+                np.ascontiguousarray(T[:, 2 + d:2 + 2 * d]), np.ascontiguousarray(T[:, 2 + 2 * d:]))
+
+
+def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
+    """Stage 1-2 results of the whole geometry as per-point columns (every rank the same)."""
+    # the ranks work in three coordinates: lower dimensions are padded with zeros, which
+    # leaves distances, normals and reflections as they are
+    n, d0 = geo.points.shape
+    d = 3
+    T = np.zeros((n, 2 + 3 * d))
+    T[:, 0] = widths.per_point(n)
+    radius = assembly.cutoff_radius(widths.largest, opts.tol)
+    frames = geo.boundary_frames(radius) if (opts.neumann or not opts.plain) else None
+    if frames is not None:
+        band, b, nu = frames
+        T[band, 1] = 1.0
+        T[band, 2 + d:2 + d + d0] = b
+        T[band, 2 + 2 * d:2 + 2 * d + d0] = nu
+    if opts.arc_distance:
+        T[:, 2:2 + d0] = geo.normals()
+    return PointAttributes(T, geo.dim, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
+                           opts.check_psd, opts.tol)
+
+
+def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) -> sp.csr_matrix:
+    n = len(P)
+    indptr, indices, data = assembly.variable.variable_csr(
+        P, g, hv, attrs.tol, normals if attrs.arc else None, dog, np.int64, np.float64, dim=attrs.dim,
+        rows=rows)
+    assembly.variable.sort_rows(indptr, indices, data)  # as the single machine's
+    L = assembly.csr(data, indices, indptr, n)
+    L.has_sorted_indices = True
+    return L
+
+
+def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: int, g, rows: np.ndarray,
+               attrs: PointAttributes) -> tuple[sp.csr_matrix, sp.csr_matrix, dict]:
+    """The own rows (local indices < n_own) of L_sym and of the point-wise L over the local
+    points P (own, then halo) with their attribute ``table`` (collective: reductions).
+
+    Returns CSR matrices over all local points (rows beyond n_own empty) and a dict with the
+    correction in effect, the moment scale, the PSD margin and the fallback reason.
+    """
+    from mpi4py import MPI
+
+    hv, band, normals, b, nu = attrs.columns(table)
+    frames = (np.flatnonzero(band), b[band], nu[band]) if band.any() else None
+    info: dict = {"correction": "richardson" if attrs.dog else "none", "moment_scale": 1.0,
+                  "psd_margin": None, "fallback_reason": None}
+
+    def stage(dog: bool) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        free = _rows_csr(P, mass, g, rows, hv, attrs, normals, dog)
+        L = corrections.neumann_images(free, P, frames, mass, hv, dog, attrs.dim) if attrs.neumann else free
+        return free, L
+
+    free, L = stage(attrs.dog)
+    if attrs.dog and attrs.check_psd:
+        block = sp.csr_matrix(L[:n_own, :n_own])
+        margin, reason = (0.0, None) if n_own == 0 else corrections.psd.check(
+            block, mass[:n_own], P[:n_own], None, "geometry")
+        worst = comm.allreduce(margin, op=MPI.MIN)
+        info["psd_margin"] = worst
+        failed = comm.allreduce(reason is not None, op=MPI.LOR)
+        if failed:
+            info["fallback_reason"] = reason or (
+                f"the Richardson operator is not negative semidefinite on another rank's block "
+                f"(margin {worst:.3g}); using the plain kernel (O(h) bias)")
+            info["correction"] = "none"
+            free, L = stage(False)
+    if info["correction"] != "none":
+        Y = free @ np.column_stack([(P**2).sum(axis=1), P])
+        mu = Y[:n_own, 0] - 2.0 * (P[:n_own] * Y[:n_own, 1:]).sum(axis=1)
+        use = (mass[:n_own] > 0) & ~band[:n_own]
+        num = comm.allreduce(float((mu[use] * mass[:n_own][use]).sum()), op=MPI.SUM)
+        den = comm.allreduce(float(mass[:n_own][use].sum()), op=MPI.SUM)
+        mean = num / den if den > 0 else 0.0
+        info["moment_scale"] = scale = 2.0 * attrs.dim / mean if mean > 0 else 1.0
+        L.data *= scale
+    Lp = L
+    if attrs.pointwise:
+        Lp, _ = corrections.moment_correction(free, P, attrs.dim)
+    return L, Lp, info
+

@@ -1,0 +1,98 @@
+"""Face areas and the lumped vertex mass m_p = sum_{t ∋ p} Area(t) / #t."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import igl
+import numpy as np
+
+from .polygons import Polygons
+from .validation import check_faces, check_vertices
+
+__all__ = ["face_areas", "vertex_mass"]
+
+
+def _face_areas(V: np.ndarray, faces: Polygons) -> np.ndarray:
+    if faces.uniform_size == 3:
+        return 0.5 * igl.doublearea(V, faces.as_array())
+    # Vector (Newell) area: exact for planar polygons and independent of the fan's apex.
+    # Corners are taken relative to each face's first corner so that large coordinates
+    # do not cancel.
+    first = np.repeat(faces.indices[faces.offsets[:-1]], faces.sizes)
+    rel = V[faces.indices] - V[first]
+    nxt = np.arange(1, len(faces.indices) + 1)
+    nxt[faces.offsets[1:] - 1] = faces.offsets[:-1]
+    cross = np.cross(rel, rel[nxt])
+    vec = np.add.reduceat(cross, faces.offsets[:-1], axis=0)
+    return 0.5 * np.linalg.norm(vec, axis=1)
+
+
+def face_areas(V: Any, F: Any) -> np.ndarray:
+    """Area of every face.
+
+    Triangles use libigl's ``doublearea``; other polygons their vector area, which is the
+    exact area of a planar polygon.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like
+        Vertex positions.
+    F : (m, k) array_like or list of sequences
+        Faces, all of one size or polygons of mixed sizes.
+
+    Returns
+    -------
+    (m,) ndarray
+        Face areas.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> face_areas(V, [[0, 1, 2, 3]])
+    array([1.])
+    """
+    V = check_vertices(V)
+    return _face_areas(V, check_faces(F, len(V)))
+
+
+def _mean_edge_length(V: np.ndarray, faces: Polygons) -> float:
+    e = faces.edges()
+    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+
+
+def _vertex_mass(V: np.ndarray, faces: Polygons, areas: np.ndarray | None = None) -> np.ndarray:
+    if areas is None:
+        areas = _face_areas(V, faces)
+    share = np.repeat(areas / faces.sizes, faces.sizes)
+    return np.bincount(faces.indices, weights=share, minlength=len(V))
+
+
+def vertex_mass(V: Any, F: Any) -> np.ndarray:
+    """Lumped vertex mass of Belkin, Sun and Wang (2008): m_p = Σ_{t ∋ p} Area(t) / #t.
+
+    Each face hands an equal share of its area to each of its #t corners, so the masses
+    sum to the surface area. Vertices that no face uses get mass 0.
+
+    Parameters
+    ----------
+    V : (n, 3) array_like
+        Vertex positions.
+    F : (m, k) array_like or list of sequences
+        Faces of any size.
+
+    Returns
+    -------
+    (n,) ndarray
+        Vertex masses.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5]], float)
+    >>> vertex_mass(V, [[0, 1, 2]])
+    array([0.16666667, 0.16666667, 0.16666667, 0.        ])
+    """
+    V = check_vertices(V)
+    return _vertex_mass(V, check_faces(F, len(V)))

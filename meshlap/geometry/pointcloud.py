@@ -1,0 +1,322 @@
+"""The heat-kernel Laplacian of a point cloud: masses from the points alone.
+
+Belkin, Sun and Wang, "Constructing Laplace operator from point clouds in R^d" (SODA 2009),
+weight each point by the measure of its cell in a local Delaunay/Voronoi structure built in
+the estimated tangent space, and normalize the Gaussian by 1/(h (4πh)^{k/2}) for intrinsic
+dimension k. One mass per point (as Liu, Prabhakaran and Guo, 2012, do with Voronoi areas)
+keeps S = M L symmetric and -S positive semidefinite, exactly as for a mesh.
+
+For each point p, with its K nearest neighbours:
+
+1. the tangent space is the span of the k leading principal axes of the neighbourhood;
+2. the neighbours are projected onto it, relative to p;
+3. the local Delaunay star of p in that k-plane gives the mass: the measure of the
+   simplices around p divided by k + 1 — the lumped mass of a mesh, without a mesh.
+
+For k = 2 the star comes from clipping p's Voronoi cell by the bisectors of its projected
+neighbours (convex polygon clipping, O(K²) per point, compiled): two consecutive edges of the
+cell, cut by neighbours a and b, meet at the circumcentre of the Delaunay triangle (p, a, b).
+For k = 1 the star is the two nearest neighbours along the tangent line, so the mass is half
+the gap between them. For k ≥ 3 scipy's Delaunay triangulates each projected neighbourhood.
+A star is only trusted when no point outside the K neighbours can reach it: every Delaunay
+circumcircle must lie within half the distance of the farthest neighbour; otherwise K grows.
+
+On 16,000 i.i.d. random points of the unit sphere these masses are within a few percent of
+the barycentric masses of the points' true triangulation (their convex hull), which is what
+the Laplacian's accuracy depends on (see the README's point-cloud section for numbers).
+
+Messy input has defined behaviour, each with a :class:`~meshlap.validation.MeshWarning`:
+
+* duplicate and near-coincident points (closer than ``merge_tol`` times the median
+  neighbour distance) are merged for the mass estimate and share the merged point's mass;
+* outliers (a nearest neighbour more than ``outlier_ratio`` times farther than is usual
+  around it) get mass 0: they are rows of L but never sources of its sums;
+* points whose neighbourhood has no k-dimensional extent (collinear neighbours for k = 2)
+  take the median mass of their neighbours;
+* fewer than k + 2 distinct points, or d < k, raise :class:`~meshlap.validation.MeshError`.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from pykdtree.kdtree import KDTree
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import MeshError, MeshWarning
+from .core import Geometry, check_points
+from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
+
+__all__ = ["point_cloud_geometry", "point_masses", "project_to_tangent"]
+
+# First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
+# does not secure, up to _MAX_NEIGHBORS.
+_NEIGHBORS = {1: 8, 2: 16, 3: 32}
+_MAX_NEIGHBORS = 256
+
+# -- the driver ----------------------------------------------------------------------------------
+def _merge_duplicates(P: np.ndarray, merge_tol: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Representative of each point (points within merge_tol·median spacing share one)."""
+    n = len(P)
+    kk = min(8, n)
+    dist, idx = KDTree(P).query(P, k=kk)
+    dist, idx = np.asarray(dist, np.float64), np.asarray(idx, np.int64)
+    spacing = float(np.median(dist[:, 1])) if kk > 1 else 0.0
+    if spacing == 0.0:  # more than half the points coincide with another: use the mean
+        spacing = float(dist[:, 1].mean()) if kk > 1 else 0.0
+    close = (dist <= merge_tol * spacing) & (idx != np.arange(n)[:, None]) & (idx < n)
+    if not close.any():
+        return np.arange(n), np.ones(n, dtype=np.int64), spacing
+    rows = np.repeat(np.arange(n), kk)[close.ravel()]
+    G = sp.coo_matrix((np.ones(len(rows)), (rows, idx.ravel()[close.ravel()])), shape=(n, n))
+    _, label = connected_components(G, directed=False)
+    # representative: the first point of each group
+    first = np.full(label.max() + 1, n, dtype=np.int64)
+    np.minimum.at(first, label, np.arange(n))
+    rep = first[label]
+    return rep, np.bincount(rep, minlength=n)[rep], spacing
+
+
+def _neighbours(tree: KDTree, Q: np.ndarray, K: int) -> tuple[np.ndarray, np.ndarray]:
+    dist, idx = tree.query(Q, k=K + 1)
+    return np.asarray(dist, np.float64), np.asarray(idx, np.int64)
+
+
+def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol: float = 1e-6,
+                 outlier_ratio: float = 10.0) -> tuple[np.ndarray, dict[str, Any]]:
+    """Mass of every point of a cloud sampling a k-manifold: its local Delaunay star / (k + 1).
+
+    Parameters
+    ----------
+    P : (n, d) array_like
+        Points, d ≥ k.
+    k : int, default 2
+        Intrinsic dimension of the sampled manifold.
+    neighbors : int, optional
+        First neighbourhood size K (8, 16, 32 for k = 1, 2, 3), also the one that gives the
+        tangent space; it grows (up to 256) where the local Delaunay star
+        needs more neighbours.
+    merge_tol : float, default 1e-6
+        Points closer than ``merge_tol`` times the median nearest-neighbour distance are one.
+    outlier_ratio : float, default 10
+        A point whose nearest neighbour is this many times farther than its neighbours'
+        typical distance to their 8 nearest neighbours (the median of the means) is an
+        outlier and gets mass 0.
+
+    Returns
+    -------
+    mass : (n,) ndarray
+        The masses; they sum to about the measure (length, area, volume) of the manifold.
+    info : dict
+        ``spacing`` (equivalent lattice spacing), ``duplicates``, ``outliers``,
+        ``degenerate``, ``insecure`` (point counts), ``boundary`` ((n,) bool: cells that
+        stay open, e.g. on the rim of an open surface), ``triangles`` (k = 2: the local
+        Delaunay triangles, each once from its corner of smallest index; a triangle soup,
+        not a manifold mesh, used to precondition eigensolvers).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> P = meshlap.shapes.fibonacci_sphere(2000)
+    >>> m, info = point_masses(P)
+    >>> bool(abs(m.sum() - 4 * np.pi) < 0.01 * 4 * np.pi)
+    True
+    """
+    P = check_points(P)
+    n, d = P.shape
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise MeshError(f"k (the intrinsic dimension) must be a positive integer; got {k!r}")
+    k = int(k)
+    if d < k:
+        raise MeshError(f"points in R^{d} cannot sample a {k}-dimensional manifold (k={k} > d={d})")
+    rep, share, spacing0 = _merge_duplicates(P, merge_tol)
+    uniq = np.flatnonzero(rep == np.arange(n))
+    n_dup = n - len(uniq)
+    if len(uniq) < k + 2:
+        raise MeshError(f"a point cloud of intrinsic dimension {k} needs at least {k + 2} distinct "
+                        f"points; got {len(uniq)}")
+    Q = np.ascontiguousarray(P[uniq])
+    nu = len(Q)
+    tree = KDTree(Q)
+    K = min(neighbors or _NEIGHBORS.get(k, 20 * k), nu - 1)
+    # the tangent space comes from the first neighbourhood, however far the star search grows
+    kt = K
+    if K < k + 1:
+        raise MeshError(f"neighbors must be at least k + 1 = {k + 1}; got {K}")
+    mass = np.zeros(nu)
+    status = np.full(nu, _INSECURE, dtype=np.int64)
+    open_cell = np.zeros(nu, dtype=bool)
+    nn1 = np.zeros(nu)
+    star_parts: list[tuple[int, np.ndarray]] = []
+    last = np.zeros(nu, dtype=np.int64)
+    todo = np.arange(nu)
+    for it in range(64):
+        if not len(todo):
+            break
+        dist, idx = _neighbours(tree, Q[todo], K)
+        if it == 0:
+            nn1[:] = dist[:, 1]
+            reach8 = dist[:, 1:9].mean(axis=1)
+        # drop each point itself from its list (it is the first hit: duplicates are merged)
+        not_self = idx != todo[:, None]
+        order = np.argsort(~not_self, axis=1, kind="stable")
+        nbr = np.ascontiguousarray(np.take_along_axis(idx, order, axis=1)[:, :K])
+        if it == 0:
+            first_nbr = nbr
+        counts = np.full(len(todo), K, dtype=np.int64)
+        if k == 1:
+            m, st, ends = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
+            _masses1(Q, nbr, counts, kt, todo, m, st, ends)
+            open_cell[todo] = ends
+        elif k == 2:
+            m, vor, st, flat = (np.zeros(len(todo)), np.zeros(len(todo)),
+                                np.zeros(len(todo), np.int64), np.zeros(len(todo)))
+            tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
+            _masses2(Q, nbr, counts, kt, todo, m, vor, st, flat, tri)
+            open_cell[todo] = ~np.isfinite(vor)
+            # each triangle of the local stars once, from its corner of smallest index
+            r, slot = np.nonzero(tri[:, :, 0] >= 0)
+            a = nbr[r, tri[r, slot, 0]]
+            b = nbr[r, tri[r, slot, 1]]
+            own = (todo[r] < a) & (todo[r] < b)
+            last[todo] = it
+            star_parts.append((it, np.column_stack([todo[r], a, b])[own]))
+        elif k == 3:
+            m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
+            _masses3(Q, nbr, counts, kt, todo, m, st, hull)
+            # cospherical neighbours: Qhull (with its joggle) decides the star
+            tie = np.flatnonzero(st == _DEGENERATE)
+            if len(tie):
+                m[tie], st[tie], hull[tie] = _masses_k(Q, nbr[tie], counts[tie], kt, todo[tie], k)
+            open_cell[todo] = hull
+        else:
+            m, st, hull = _masses_k(Q, nbr, counts, kt, todo, k)
+            open_cell[todo] = hull
+        mass[todo], status[todo] = m, st
+        if K >= min(_MAX_NEIGHBORS, nu - 1):
+            break
+        todo = todo[st == _INSECURE]
+        K = min(2 * K, _MAX_NEIGHBORS, nu - 1)
+    # outliers: isolated far beyond the spacing usual around them
+    _, idx = _neighbours(tree, Q, min(8, nu - 1))
+    local = np.median(reach8[idx[:, 1:]], axis=1)
+    outlier = nn1 > outlier_ratio * np.maximum(local, 1e-300)
+    degenerate = (status == _DEGENERATE) & ~outlier
+    if degenerate.all():
+        raise MeshError(f"no point has a {k}-dimensional neighbourhood (all are "
+                        f"{'collinear' if k == 2 else 'degenerate'}); is k={k} the right dimension?")
+    if degenerate.any():
+        good = np.where(degenerate | outlier, np.nan, mass)
+        with warnings.catch_warnings():  # rows without a good neighbour: the global median
+            warnings.simplefilter("ignore", RuntimeWarning)
+            fill = np.nanmedian(good[idx[degenerate, 1:]], axis=1)
+        mass[degenerate] = np.where(np.isfinite(fill), fill, np.nanmedian(good))
+    mass[outlier] = 0.0
+    # next to an open cell, a star that stays insecure is the local one by design: the global
+    # Delaunay triangulation would add long slivers across the boundary
+    near_open = open_cell.copy()
+    for _ in range(4):  # four rings of neighbours
+        near_open |= near_open[first_nbr].any(axis=1)
+    insecure = int(((status == _INSECURE) & ~outlier & ~near_open).sum())
+    problems = []
+    if n_dup:
+        problems.append(f"{n_dup} duplicate or near-coincident point(s) (within {merge_tol:g} of the "
+                        "median spacing) share the mass of the point they coincide with")
+    if outlier.any():
+        problems.append(f"{int(outlier.sum())} outlier(s) (nearest neighbour more than {outlier_ratio:g}x "
+                        "farther than usual around them) get mass 0")
+    if degenerate.any():
+        problems.append(f"{int(degenerate.sum())} point(s) have no {k}-dimensional neighbourhood "
+                        "(collinear or flat neighbours) and take their neighbours' median mass")
+    if insecure:
+        problems.append(f"{insecure} point(s) kept an unresolved local Delaunay star after "
+                        f"{_MAX_NEIGHBORS} neighbours")
+    if problems:
+        warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
+    # a recomputed star replaces the earlier one
+    tris = [t[last[t[:, 0]] == it] for it, t in star_parts]
+    triangles = uniq[np.concatenate(tris)] if tris else np.zeros((0, 3), np.int64)
+    full = mass[np.searchsorted(uniq, rep)] / share
+    boundary = open_cell[np.searchsorted(uniq, rep)]
+    positive = full[full > 0]
+    mean_mass = float(positive.mean()) if len(positive) else 0.0
+    info = {
+        "spacing": _lattice_spacing(mean_mass, k) if mean_mass > 0 else spacing0,
+        "duplicates": n_dup,
+        "outliers": int(outlier.sum()),
+        "degenerate": int(degenerate.sum()),
+        "insecure": insecure,
+        "boundary": boundary,
+        "triangles": triangles,
+    }
+    return full, info
+
+
+def _lattice_spacing(mass: float, k: int) -> float:
+    # neighbour distance of the densest lattice whose cells have this measure: points a apart
+    # on a line; a triangular lattice ((√3/2) a² per point); the FCC lattice (a³/√2)
+    if k == 1:
+        return mass
+    if k == 2:
+        return math.sqrt(2.0 * mass / math.sqrt(3.0))
+    if k == 3:
+        return (math.sqrt(2.0) * mass) ** (1.0 / 3.0)
+    return mass ** (1.0 / k)
+
+
+def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.ndarray:
+    """Move every point onto the k-plane fitted (PCA) to it and its nearest neighbours.
+
+    One step of local plane projection: noise normal to the manifold drops from σ to about
+    σ/sqrt(K), at the price of a shrink of about the neighbourhood's sagitta on curved
+    parts (0.1% of the radius for 16,000 points on the unit sphere).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> P = meshlap.samples.sphere_points(4000, "noisy", seed=0)
+    >>> r = np.linalg.norm(project_to_tangent(P), axis=1)
+    >>> bool(r.std() < 0.5 * np.linalg.norm(P, axis=1).std())
+    True
+    """
+    P = check_points(P)
+    K = min(neighbors or _NEIGHBORS.get(k, 20 * k), len(P) - 1)
+    _, idx = KDTree(P).query(P, k=K + 1)
+    out = np.empty_like(P)
+    for a in range(0, len(P), 65536):  # blocks bound the (block, K+1, d) temporaries
+        nb = P[np.asarray(idx[a:a + 65536], np.int64)]
+        c = nb.mean(axis=1)
+        X = nb - c[:, None]
+        _, v = np.linalg.eigh(np.einsum("nki,nkj->nij", X, X))
+        T = v[:, :, -k:]  # (block, d, k) tangent basis
+        rel = P[a:a + 65536] - c
+        out[a:a + 65536] = c + np.einsum("ndk,nk->nd", T, np.einsum("ndk,nd->nk", T, rel))
+    return out
+
+
+def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool = False, **kwargs: Any) -> Geometry:
+    """The :class:`~meshlap.geometry.Geometry` of a point cloud: points, masses from
+    :func:`point_masses`, intrinsic dimension k, open cells as boundary.
+
+    ``denoise=True`` first moves the points onto their local tangent planes
+    (:func:`project_to_tangent`); the kernel then sees distances without most of the normal
+    noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = point_cloud_geometry(meshlap.shapes.fibonacci_sphere(1000))
+    >>> g.dim, g.source, round(g.spacing, 3)
+    (2, 'point cloud', 0.12)
+    """
+    P = check_points(P)
+    if denoise:
+        P = project_to_tangent(P, k, kwargs.get("neighbors"))
+    mass, info = point_masses(P, k, **kwargs)
+    cells = info.get("triangles") if k == 2 else None
+    return Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
+                    source="point cloud")

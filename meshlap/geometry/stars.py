@@ -1,0 +1,314 @@
+"""Compiled local Delaunay stars of a point cloud: the measure each point's star gives it.
+
+:func:`meshlap.geometry.pointcloud.point_masses` projects each neighbourhood onto its
+tangent space and asks these kernels for the star of the point: k = 1 half the gaps to the
+neighbours on each side, k = 2 the Voronoi cell by half-plane clipping, k = 3 the Delaunay
+tetrahedra from the Voronoi cell's vertices, k ≥ 4 Qhull.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import prange
+from scipy.spatial import Delaunay, QhullError
+
+from .._jit import jit
+
+# A neighbourhood whose k-th principal variance is below this fraction of the first has no
+# k-dimensional extent.
+_FLAT = 1e-10
+# Triangles kept per star (a star in a Delaunay triangulation has 6 on average).
+_STAR_SLOTS = 24
+# status codes of one point's star
+_OK, _INSECURE, _DEGENERATE = 0, 1, 2
+
+
+# -- tangent spaces --------------------------------------------------------------------------
+@jit()
+def _tangent(P, p, nbr, kdim, T):
+    # T[:kdim] <- the k leading principal axes of {p} ∪ neighbours; returns λ_k / λ_1
+    d = P.shape[1]
+    K = len(nbr)
+    mean = P[p].copy()
+    for j in range(K):
+        mean += P[nbr[j]]
+    mean /= K + 1
+    C = np.zeros((d, d))
+    for j in range(-1, K):
+        q = p if j < 0 else nbr[j]
+        for a in range(d):
+            xa = P[q, a] - mean[a]
+            for b in range(d):
+                C[a, b] += xa * (P[q, b] - mean[b])
+    w, v = np.linalg.eigh(C)
+    for a in range(kdim):
+        for b in range(d):
+            T[a, b] = v[b, d - 1 - a]
+    return w[d - kdim] / max(w[d - 1], 1e-300)
+
+
+@jit()
+def _project(P, p, nbr, T, U):
+    kdim = T.shape[0]
+    for j in range(len(nbr)):
+        for a in range(kdim):
+            s = 0.0
+            for b in range(P.shape[1]):
+                s += (P[nbr[j], b] - P[p, b]) * T[a, b]
+            U[j, a] = s
+
+
+# -- k = 2: the Voronoi cell by half-plane clipping ---------------------------------------------
+@jit()
+def _clip(px, py, gen, nv, ax, ay, b, label, qx, qy, qgen):
+    # Clip the convex polygon (px, py)[:nv] by a·x <= b; gen[i] labels the edge from vertex i
+    # to vertex i+1. Writes the result to (qx, qy, qgen) and returns its size.
+    m = 0
+    for i in range(nv):
+        i1 = i + 1 if i + 1 < nv else 0
+        si = ax * px[i] + ay * py[i] - b
+        s1 = ax * px[i1] + ay * py[i1] - b
+        if si <= 0.0:
+            qx[m] = px[i]
+            qy[m] = py[i]
+            qgen[m] = gen[i]
+            m += 1
+            if s1 > 0.0:  # leaving: the cut point starts an edge on the clipping line
+                t = si / (si - s1)
+                qx[m] = px[i] + t * (px[i1] - px[i])
+                qy[m] = py[i] + t * (py[i1] - py[i])
+                qgen[m] = label
+                m += 1
+        elif s1 <= 0.0:  # entering: the cut point starts the rest of edge i
+            t = si / (si - s1)
+            qx[m] = px[i] + t * (px[i1] - px[i])
+            qy[m] = py[i] + t * (py[i1] - py[i])
+            qgen[m] = gen[i]
+            m += 1
+    return m
+
+
+@jit()
+def _star2(U, K, tri):
+    # (Delaunay star area / 3, Voronoi area, status) of the origin among the points U[:K];
+    # tri[i] <- the neighbour pairs (a, b) of the star's triangles, -1 after the last
+    far = 0.0
+    for j in range(K):
+        far = max(far, math.hypot(U[j, 0], U[j, 1]))
+    # far enough that the circumcentres of the thin triangles along an open boundary are kept
+    box = 1e3 * far + 1e-300
+    cap = K + 5
+    px = np.empty(cap)
+    py = np.empty(cap)
+    gen = np.empty(cap, dtype=np.int64)
+    qx = np.empty(cap)
+    qy = np.empty(cap)
+    qgen = np.empty(cap, dtype=np.int64)
+    px[0], py[0], px[1], py[1] = -box, -box, box, -box
+    px[2], py[2], px[3], py[3] = box, box, -box, box
+    gen[:4] = -1
+    nv = 4
+    for j in range(K):
+        ax, ay = U[j, 0], U[j, 1]
+        b = 0.5 * (ax * ax + ay * ay)
+        if b <= 0.0:
+            continue
+        nv = _clip(px, py, gen, nv, ax, ay, b, j, qx, qy, qgen)
+        px, qx = qx, px
+        py, qy = qy, py
+        gen, qgen = qgen, gen
+    voronoi = 0.0
+    star = 0.0
+    reach = 0.0
+    bounded = True
+    nt = 0
+    tri[:] = -1
+    for i in range(nv):
+        i1 = i + 1 if i + 1 < nv else 0
+        voronoi += px[i] * py[i1] - px[i1] * py[i]
+        g0 = gen[i - 1] if i > 0 else gen[nv - 1]
+        g1 = gen[i]
+        if g1 < 0:
+            bounded = False
+        if g0 >= 0 and g1 >= 0 and g0 != g1:
+            # vertex i is the circumcentre of the Delaunay triangle (origin, U[g0], U[g1])
+            star += abs(U[g0, 0] * U[g1, 1] - U[g0, 1] * U[g1, 0])
+            reach = max(reach, math.hypot(px[i], py[i]))
+            if nt < tri.shape[0]:
+                tri[nt, 0] = g0
+                tri[nt, 1] = g1
+                nt += 1
+    status = _OK if (bounded and 2.0 * reach < far) else _INSECURE
+    if not bounded:
+        voronoi = math.inf
+    return star / 6.0, 0.5 * abs(voronoi), status
+
+
+@jit(parallel=True)
+def _masses2(P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
+    d = P.shape[1]
+    for r in prange(len(rows)):
+        p = rows[r]
+        K = counts[r]
+        T = np.empty((2, d))
+        U = np.empty((K, 2))
+        flat[r] = _tangent(P, p, nbr[r, :kt], 2, T)
+        if flat[r] < _FLAT:
+            status[r] = _DEGENERATE
+            continue
+        _project(P, p, nbr[r, :K], T, U)
+        out_star[r], out_vor[r], status[r] = _star2(U, K, tri[r])
+
+
+# -- k = 1: half the gap to the nearest neighbours on each side ---------------------------------
+@jit(parallel=True)
+def _masses1(P, nbr, counts, kt, rows, out, status, ends):
+    d = P.shape[1]
+    for r in prange(len(rows)):
+        p = rows[r]
+        K = counts[r]
+        T = np.empty((1, d))
+        U = np.empty((K, 1))
+        if _tangent(P, p, nbr[r, :kt], 1, T) <= 0.0:
+            status[r] = _DEGENERATE
+            continue
+        _project(P, p, nbr[r, :K], T, U)
+        left = -math.inf
+        right = math.inf
+        far = 0.0
+        for j in range(K):
+            s = U[j, 0]
+            far = max(far, abs(s))
+            if s < 0.0:
+                left = max(left, s)
+            elif s > 0.0:
+                right = min(right, s)
+        one_side = not (math.isfinite(left) and math.isfinite(right))
+        ends[r] = one_side
+        gap = (0.0 if not math.isfinite(right) else right) - (0.0 if not math.isfinite(left) else left)
+        out[r] = 0.5 * gap
+        status[r] = _INSECURE if one_side else _OK
+
+
+# -- k = 3: the Delaunay tetrahedra around the origin from the Voronoi cell's vertices ---------------
+@jit()
+def _star3(U, K):
+    # Each vertex of the origin's Voronoi cell is where three bisector planes u·x = |u|²/2
+    # meet without violating any other; it is the circumcentre of the Delaunay tetrahedron
+    # (origin, u_a, u_b, u_c). Returns (Σ volumes / 4, status, open): the solid angles of the
+    # tetrahedra at the origin add up to 4π when its star is closed; more than that means
+    # cospherical neighbours (a vertex on four planes), which the caller resolves by Qhull.
+    far = 0.0
+    for j in range(K):
+        far = max(far, math.sqrt(U[j, 0] ** 2 + U[j, 1] ** 2 + U[j, 2] ** 2))
+    vol = 0.0
+    omega = 0.0
+    reach = 0.0
+    for a in range(K):
+        ax, ay, az = U[a, 0], U[a, 1], U[a, 2]
+        ba = 0.5 * (ax * ax + ay * ay + az * az)
+        for b in range(a + 1, K):
+            bx, by, bz = U[b, 0], U[b, 1], U[b, 2]
+            bb = 0.5 * (bx * bx + by * by + bz * bz)
+            for c in range(b + 1, K):
+                cx, cy, cz = U[c, 0], U[c, 1], U[c, 2]
+                bc = 0.5 * (cx * cx + cy * cy + cz * cz)
+                # the cross products give the solution by Cramer's rule
+                x1, y1, z1 = by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx
+                x2, y2, z2 = cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax
+                x3, y3, z3 = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+                det = ax * x1 + ay * y1 + az * z1
+                if abs(det) <= 1e-12 * (ba * bb * bc) ** 0.5 * 8.0:
+                    continue
+                vx = (ba * x1 + bb * x2 + bc * x3) / det
+                vy = (ba * y1 + bb * y2 + bc * y3) / det
+                vz = (ba * z1 + bb * z2 + bc * z3) / det
+                ok = True
+                for j in range(K):
+                    if j == a or j == b or j == c:
+                        continue
+                    uj2 = U[j, 0] ** 2 + U[j, 1] ** 2 + U[j, 2] ** 2
+                    if U[j, 0] * vx + U[j, 1] * vy + U[j, 2] * vz > 0.5 * uj2 * (1.0 + 1e-10):
+                        ok = False
+                        break
+                if not ok:
+                    continue
+                vol += abs(det) / 6.0
+                reach = max(reach, math.sqrt(vx * vx + vy * vy + vz * vz))
+                # solid angle at the origin (Van Oosterom and Strackee)
+                la = math.sqrt(2.0 * ba)
+                lb = math.sqrt(2.0 * bb)
+                lc = math.sqrt(2.0 * bc)
+                dab = ax * bx + ay * by + az * bz
+                dac = ax * cx + ay * cy + az * cz
+                dbc = bx * cx + by * cy + bz * cz
+                omega += 2.0 * math.atan2(abs(det), la * lb * lc + dab * lc + dac * lb + dbc * la)
+    full = 4.0 * math.pi
+    if omega > full * (1.0 + 1e-6):
+        return vol / 4.0, _DEGENERATE, False
+    closed = omega > full * (1.0 - 1e-6)
+    status = _OK if (closed and 2.0 * reach < far) else _INSECURE
+    return vol / 4.0, status, not closed
+
+
+@jit(parallel=True)
+def _masses3(P, nbr, counts, kt, rows, out, status, hull):
+    d = P.shape[1]
+    for r in prange(len(rows)):
+        p = rows[r]
+        K = counts[r]
+        T = np.empty((3, d))
+        U = np.empty((K, 3))
+        if _tangent(P, p, nbr[r, :kt], 3, T) < _FLAT:
+            status[r] = _DEGENERATE
+            continue
+        _project(P, p, nbr[r, :K], T, U)
+        out[r], status[r], hull[r] = _star3(U, K)
+
+
+# -- k >= 4 (and cospherical k = 3 neighbourhoods): Qhull's Delaunay of each neighbourhood -------
+def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
+    X = np.vstack([np.zeros((1, k)), U])
+    try:
+        tri = Delaunay(X)
+    except QhullError:
+        return 0.0, _DEGENERATE, False
+    around = tri.simplices[(tri.simplices == 0).any(axis=1)]
+    if not len(around):
+        return 0.0, _DEGENERATE, False
+    E = X[around[:, 1:]] - X[around[:, :1]]
+    vol = np.abs(np.linalg.det(E)) / math.factorial(k)
+    # circumcentres c of the simplices around the origin: 2 c·(x_i) = |x_i|², relative to x_0 = 0
+    hull = bool(np.isin(0, tri.convex_hull))
+    reach = 0.0
+    for s in around:
+        A = X[s]
+        B = 2.0 * (A[1:] - A[0])
+        rhs = (A[1:] ** 2).sum(axis=1) - (A[0] ** 2).sum()
+        try:
+            c = np.linalg.solve(B, rhs)
+        except np.linalg.LinAlgError:
+            continue
+        reach = max(reach, float(np.linalg.norm(c)))
+    far = float(np.linalg.norm(U, axis=1).max())
+    status = _OK if (not hull and 2.0 * reach < far) else _INSECURE
+    return float(vol.sum()) / (k + 1), status, hull
+
+
+def _masses_k(P: np.ndarray, nbr: np.ndarray, counts: np.ndarray, kt: int, rows: np.ndarray, k: int):
+    n = len(rows)
+    out = np.zeros(n)
+    status = np.zeros(n, dtype=np.int64)
+    hull = np.zeros(n, dtype=bool)
+    T = np.empty((k, P.shape[1]))
+    for r, p in enumerate(rows):
+        K = counts[r]
+        nb = nbr[r, :K]
+        if _tangent(P, p, nb[:kt], k, T) < _FLAT:
+            status[r] = _DEGENERATE
+            continue
+        U = (P[nb] - P[p]) @ T.T
+        out[r], status[r], hull[r] = _star_k(U, k)
+    return out, status, hull

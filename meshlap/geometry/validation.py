@@ -1,0 +1,291 @@
+"""Input checks shared by every public entry point.
+
+Each check either returns a clean, canonical array or raises an error that names the
+argument and the problem, so that bad input never reaches numpy, scipy, libigl or the
+compiled kernels.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshError, MeshWarning
+from .polygons import Polygons
+
+__all__ = [
+    "MeshError",
+    "MeshWarning",
+    "check_vertices",
+    "check_faces",
+    "check_h",
+    "check_k",
+    "check_positive",
+    "check_tol",
+    "check_function",
+    "existing_file",
+]
+
+# Beyond these magnitudes squared distances and 1/(4πh²) leave the float64 range.
+_MAX_COORD = 1e150
+_H_RANGE = (1e-150, 1e150)
+# libigl's doublearea squares 2D double areas: below this extent they underflow to zero.
+_MIN_SPAN = 1e-60
+
+
+def _as_real_array(x: Any, name: str) -> np.ndarray:
+    try:
+        a = np.asarray(x)
+    except Exception as exc:  # ragged lists and foreign objects
+        raise MeshError(f"{name} could not be read as an array: {exc}") from exc
+    if a.dtype == object:
+        raise MeshError(
+            f"{name} must be a numeric array; got an object array (rows of different lengths, "
+            "None, or integers beyond the int64 range)"
+        )
+    if a.dtype.kind == "c":
+        raise MeshError(f"{name} must be real; got complex dtype {a.dtype}")
+    if a.dtype.kind not in "fiub":
+        raise MeshError(f"{name} must be numeric; got dtype {a.dtype}")
+    return a
+
+
+def _first_nonfinite(a: np.ndarray) -> tuple[int, tuple[int, ...]]:
+    bad = ~np.isfinite(a)
+    return int(bad.sum()), tuple(int(i) for i in np.argwhere(bad)[0])
+
+
+def check_vertices(V: Any, name: str = "V") -> np.ndarray:
+    """Return vertex positions as a C-contiguous float64 (n, 3) array.
+
+    Planar (n, 2) input gets z = 0. Raises :class:`MeshError` for other shapes, an empty
+    array, non-numeric dtypes and NaN or infinite coordinates.
+    """
+    a = _as_real_array(V, name)
+    if a.dtype.kind == "b":
+        raise MeshError(f"{name} must hold coordinates; got a boolean array")
+    if a.ndim != 2 or a.shape[1] not in (2, 3):
+        hint = " (the transpose of what is expected?)" if a.ndim == 2 and a.shape[0] in (2, 3) else ""
+        raise MeshError(f"{name} must have shape (n, 3) or (n, 2); got {a.shape}{hint}")
+    if a.shape[0] == 0:
+        raise MeshError(f"{name} is empty: the mesh has no vertices")
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if not np.isfinite(a).all():
+        count, where = _first_nonfinite(a)
+        raise MeshError(f"{name} has {count} NaN or infinite coordinate(s), first at {name}{list(where)}")
+    big = float(np.abs(a).max())
+    if big > _MAX_COORD:
+        raise MeshError(
+            f"{name} has coordinates up to {big:.3g}: squared distances would overflow float64; "
+            f"rescale the mesh (the operator scales as L(sV, s²h) = L(V, h)/s²)"
+        )
+    span = float(np.max(a.max(axis=0) - a.min(axis=0)))
+    if 0 < span < _MIN_SPAN:
+        raise MeshError(
+            f"{name} spans only {span:.3g}: face areas would underflow float64; rescale the mesh "
+            f"(the operator scales as L(sV, s²h) = L(V, h)/s²)"
+        )
+    if a.shape[1] == 2:
+        a = np.ascontiguousarray(np.column_stack([a, np.zeros(len(a))]))
+    return a
+
+
+def _integral(a: np.ndarray, name: str) -> np.ndarray:
+    if a.dtype.kind == "u" and a.size and a.max() > np.iinfo(np.int64).max:
+        raise MeshError(f"{name} holds index {a.max()}, beyond the int64 range of vertex indices")
+    if a.dtype.kind in "iu":
+        return a.astype(np.int64, copy=False)
+    if a.dtype.kind == "b":
+        raise MeshError(f"{name} must hold vertex indices; got a boolean array")
+    if not np.isfinite(a).all():
+        raise MeshError(f"{name} holds NaN or infinite values; face entries must be vertex indices")
+    if np.any(a != np.round(a)):
+        raise MeshError(f"{name} must hold integer vertex indices; got non-integral {a.dtype} values")
+    return a.astype(np.int64)
+
+
+def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
+    """Return faces as :class:`Polygons` after checking them against ``n_vertices``.
+
+    Accepts an (m, k) integer array (k >= 3: triangles, quads, ...), a list of index
+    sequences of mixed sizes, or a :class:`Polygons`. Integral float arrays are converted;
+    anything else, faces with fewer than 3 corners and indices outside [0, n_vertices)
+    raise :class:`MeshError`.
+
+    A corner repeated at the next position of its face (a triangle stored as the quad
+    ``[a, b, c, c]``) is dropped: the operator's #t counts the face's distinct vertices.
+    Faces left with fewer than 3 corners have zero area and are kept as given.
+
+    Examples
+    --------
+    >>> check_faces([[0, 1, 2, 2], [0, 2, 3, 4]], 5).sizes
+    array([3, 4])
+    """
+
+    if isinstance(F, (str, bytes)):
+        raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got a string")
+    if isinstance(F, Polygons):
+        indices = np.asarray(F.indices, dtype=np.int64)
+        offsets = np.asarray(F.offsets, dtype=np.int64)
+        if offsets.ndim != 1 or len(offsets) < 2:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        if offsets[0] != 0 or offsets[-1] != len(indices) or np.any(np.diff(offsets) < 3):
+            raise MeshError(f"{name} has inconsistent offsets: they must start at 0, end at "
+                            f"len(indices) and step by at least 3 corners per face")
+    elif isinstance(F, np.ndarray) or (
+        isinstance(F, Sequence) and len(F) and not isinstance(F[0], (Sequence, np.ndarray))
+    ):
+        a = _as_real_array(F, name)
+        if a.ndim != 2:
+            raise MeshError(f"{name} must have shape (m, k) with k >= 3 corners per face; got {a.shape}")
+        if a.shape[0] == 0:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        if a.shape[1] < 3:
+            raise MeshError(f"faces need at least 3 corners; {name} has shape {a.shape}")
+        a = _integral(a, name)
+        indices = np.ascontiguousarray(a.reshape(-1))
+        offsets = np.arange(0, a.size + 1, a.shape[1], dtype=np.int64)
+    elif isinstance(F, Sequence):
+        if len(F) == 0:
+            raise MeshError(f"{name} is empty: the mesh has no faces")
+        sizes = np.fromiter((len(f) for f in F), dtype=np.int64, count=len(F))
+        if sizes.min() < 3:
+            i = int(np.argmin(sizes))
+            raise MeshError(f"face {i} of {name} has {sizes[i]} corner(s); faces need at least 3")
+        flat = _as_real_array(np.concatenate([np.asarray(f).reshape(-1) for f in F]), name)
+        indices = _integral(flat, name)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    else:
+        raise MeshError(f"{name} must be an (m, k) index array or a list of polygons; got {type(F).__name__}")
+    if len(indices):
+        lo, hi = int(indices.min()), int(indices.max())
+        if lo < 0 or hi >= n_vertices:
+            bad = np.flatnonzero((indices < 0) | (indices >= n_vertices))[0]
+            face = int(np.searchsorted(offsets, bad, side="right") - 1)
+            raise MeshError(
+                f"{name} refers to vertex {int(indices[bad])} in face {face}, but vertex indices must "
+                f"lie in [0, {n_vertices - 1}] for {n_vertices} vertices"
+            )
+    return _drop_repeated_corners(indices, offsets)
+
+
+def _drop_repeated_corners(indices: np.ndarray, offsets: np.ndarray) -> Polygons:
+
+    sizes = np.diff(offsets)
+    nxt = np.arange(1, len(indices) + 1)
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    keep = indices != indices[nxt]
+    if keep.all():
+        return Polygons(indices=indices, offsets=offsets)
+    new_sizes = np.add.reduceat(keep.astype(np.int64), offsets[:-1])
+    short = new_sizes < 3  # degenerate faces: zero area whatever their corners
+    keep[np.repeat(short, sizes)] = True
+    new_sizes = np.where(short, sizes, new_sizes)
+    offsets = np.concatenate([[0], np.cumsum(new_sizes)]).astype(np.int64)
+    return Polygons(indices=np.ascontiguousarray(indices[keep]), offsets=offsets)
+
+
+def _real_scalar(value: Any, name: str, what: str) -> float:
+    if isinstance(value, (bool, np.bool_)):
+        raise MeshError(f"{name} must be {what}; got the boolean {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name} must be {what}; got {value!r}") from exc
+
+
+def check_positive(value: Any, name: str) -> float:
+    """Return ``value`` as a float after checking that it is finite and > 0.
+
+    Examples
+    --------
+    >>> check_positive(2, "t")
+    2.0
+    """
+    x = _real_scalar(value, name, "a positive number")
+    if not math.isfinite(x) or x <= 0:
+        raise MeshError(f"{name} must be finite and > 0; got {x}")
+    return x
+
+
+def check_h(h: Any, name: str = "h") -> float:
+    """Return the kernel width ``h`` as a float.
+
+    It must be finite, positive and within [1e-150, 1e150], where the kernel's factor
+    1/(4πh²) is a finite, non-zero float64 (rescale meshes outside that range).
+
+    Examples
+    --------
+    >>> check_h(0.01)
+    0.01
+    """
+    value = check_positive(h, name)
+    if not _H_RANGE[0] <= value <= _H_RANGE[1]:
+        raise MeshError(
+            f"{name} = {value:.3g} is outside [{_H_RANGE[0]:g}, {_H_RANGE[1]:g}], where 1/(4πh²) "
+            "stays a finite, non-zero float64; rescale the mesh"
+        )
+    return value
+
+
+def check_k(k: Any, n: int, name: str = "k") -> int:
+    """Return the number of eigenpairs ``k`` as an int in [1, n - 1].
+
+    ``n`` is the size of the eigenproblem (vertices with positive mass, for a generalized
+    problem with a singular M): ARPACK's ``eigsh`` needs k < n.
+
+    Examples
+    --------
+    >>> check_k(10, 500)
+    10
+    """
+    if isinstance(k, (bool, np.bool_)) or not isinstance(k, numbers.Integral):
+        raise MeshError(f"{name} must be an integer number of eigenpairs; got {k!r}")
+    k = int(k)
+    if n < 2:
+        raise MeshError(f"the eigenproblem has size {n}: eigenpairs need at least 2 vertices with mass")
+    if not 1 <= k <= n - 1:
+        raise MeshError(f"{name} must lie in [1, {n - 1}] for an eigenproblem of size {n}; got {k}")
+    return k
+
+
+def check_tol(tol: Any) -> float:
+    """Return the kernel tolerance; 0 means untruncated, otherwise it must lie in (0, 1)."""
+    value = _real_scalar(tol, "tol", "a number in (0, 1), or 0 for the exact operator")
+    if not (value == 0 or 0 < value < 1):
+        raise MeshError(f"tol must lie in (0, 1), or be 0 for the exact operator; got {value}")
+    return value
+
+
+def check_function(f: Any, n: int, name: str = "f") -> np.ndarray:
+    """Return a per-vertex function as float64 of shape (n,) or (n, k)."""
+    a = _as_real_array(f, name)
+    if a.ndim not in (1, 2) or a.shape[0] != n:
+        raise MeshError(f"{name} must have shape ({n},) or ({n}, k), one value per vertex; got {a.shape}")
+    a = np.asarray(a, dtype=np.float64)
+    if not np.isfinite(a).all():
+        count, where = _first_nonfinite(a)
+        raise MeshError(f"{name} has {count} NaN or infinite value(s), first at {name}{list(where)}")
+    return a
+
+
+def existing_file(path: str | os.PathLike, what: str) -> Path:
+    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file.
+
+    Examples
+    --------
+    >>> existing_file("no-such.obj", "mesh")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: no such mesh file: no-such.obj
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such {what} file: {path}")
+    return path

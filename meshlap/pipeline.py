@@ -1,0 +1,195 @@
+"""The data flow from a Geometry to the operator's matrices, one stage after the other.
+
+    Geometry ─▶ widths.choose ─▶ Kernel ─▶ assembly.assemble ─▶ corrections ─▶ Built
+
+:class:`Options` resolves what the caller asked for against what the geometry allows (one
+default for every input: the Richardson kernel, arc distances and the curvature cap where
+normals exist, mirror images where there is a boundary, point-wise rows); :func:`build` runs
+the stages and returns :class:`Built`, which the operator only holds. Every stage reads the
+Geometry's points, masses, dimension and frames, never where they came from, so meshes,
+clouds, curves, volumes and one MPI rank's rows go through the same code.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import assembly, corrections
+from .assembly import Kernel, MemoryGuard, cutoff_radius
+from .errors import MeshError
+from .geometry import Geometry
+from .geometry.validation import check_positive, check_tol
+from .widths import CURVATURE_LIMIT, Widths
+
+__all__ = ["CORRECTIONS", "Built", "Options", "build"]
+
+#: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
+CORRECTIONS = ("richardson", "none")
+
+
+@dataclass(frozen=True)
+class Options:
+    """The resolved choices of one build (see :class:`meshlap.MeshLaplacian` for each)."""
+
+    correction: str
+    arc_distance: bool
+    pointwise: bool
+    neumann: bool
+    adaptive: bool
+    curvature_limit: float
+    check_psd: bool
+    matrix_free: bool
+    tol: float
+    dtype: np.dtype
+    max_memory: int
+
+    @property
+    def plain(self) -> bool:
+        """The paper's operator: no correction of any kind."""
+        return self.correction == "none"
+
+    @classmethod
+    def resolve(cls, geo: Geometry, h: Any, *, correction: str | None = None, adaptive: bool = False,
+                arc_distance: bool | None = None, pointwise: bool | None = None,
+                neumann: bool | None = None, curvature_limit: float | None = None,
+                check_psd: bool = True, matrix_free: bool = False, tol: float = 1e-8,
+                exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None) -> Options:
+        """Defaults for this geometry, and a clear error for a combination it cannot have."""
+        correction = "richardson" if correction is None else correction
+        if correction not in CORRECTIONS:
+            raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
+        try:
+            dt = np.dtype(dtype)
+        except TypeError as exc:
+            raise MeshError(f"dtype must be float64 or float32; got {dtype!r}") from exc
+        if dt not in (np.float64, np.float32):
+            raise MeshError(f"dtype must be float64 or float32; got {dt}")
+        on = correction != "none" and not matrix_free
+        has_normals = geo.codim == 1
+        if arc_distance and not has_normals:
+            raise MeshError(f"arc_distance needs normals (codimension 1); this {geo.source} has k={geo.dim} "
+                            f"in R^{geo.ambient_dim}")
+        arc_distance = on and has_normals if arc_distance is None else bool(arc_distance)
+        pointwise = on if pointwise is None else bool(pointwise)
+        neumann = on if neumann is None else bool(neumann)
+        if curvature_limit is None:
+            curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals) else 0.0
+        elif curvature_limit:
+            check_positive(curvature_limit, "curvature_limit")
+        if matrix_free and (adaptive or arc_distance or pointwise or neumann or curvature_limit
+                            or np.ndim(h) == 1):
+            raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: pass "
+                            "adaptive=False, arc_distance=False, pointwise=False, neumann=False, "
+                            "curvature_limit=0")
+        if matrix_free and geo.ambient_dim > 3:
+            raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "
+                            f"{geo.ambient_dim}")
+        if correction == "none" and np.ndim(h) == 1:
+            raise MeshError("a per-point h needs the corrected kernel; correction='none' is the paper's "
+                            "operator at one h")
+        from .assembly import available_memory
+
+        return cls(correction, arc_distance, pointwise, neumann, bool(adaptive), float(curvature_limit),
+                   bool(check_psd), bool(matrix_free), 0.0 if exact else check_tol(tol), dt,
+                   int(available_memory() * 0.8) if max_memory is None
+                   else int(check_positive(max_memory, "max_memory")))
+
+
+@dataclass
+class Built:
+    """The matrices and facts of one build: ``L_sym`` (symmetric pencil's L, None when
+    matrix-free), ``L`` (what ``op @ f`` applies: the point-wise rows, or ``L_sym``), the
+    correction in effect and what the corrections measured."""
+
+    L_sym: sp.csr_matrix | None
+    L: sp.csr_matrix | None
+    correction: str
+    moment_scale: float = 1.0
+    psd_margin: float | None = None
+    fallback_reason: str | None = None
+    pointwise_unchanged: np.ndarray | None = None
+    boundary_rows: int = 0
+    matrix_free: assembly.MatrixFree | None = None
+
+
+def _psd_faces(geo: Geometry) -> Any:
+    # triangles in R³ precondition the check's eigensolver: a mesh's faces, a cloud's local
+    # Delaunay triangles
+    if geo.ambient_dim != 3:
+        return None
+    if geo.faces is not None:
+        return geo.faces
+    if geo.cells is not None and geo.cells.shape[1] == 3:
+        return geo.cells
+    return None
+
+
+def build(geo: Geometry, widths: Widths, opts: Options,
+          report: Callable[[float, str], None] | None = None) -> Built:
+    """Stages 3-5 for one geometry and its widths: kernel, assembly, corrections.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import widths
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(800, seed=0))
+    >>> opts = Options.resolve(g, None)
+    >>> b = build(g, widths.choose(g, None, plain=False, curvature_limit=opts.curvature_limit), opts)
+    >>> b.correction, b.fallback_reason, bool(np.allclose(b.L @ np.ones(800), 0))
+    ('richardson', None, True)
+    """
+    radius = cutoff_radius(widths.largest, opts.tol)
+    dog = not opts.plain
+    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance else None, tol=opts.tol)
+    frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
+    band = None if frames is None else frames[0]
+    if opts.matrix_free:
+        apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern)
+        if dog:
+            apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
+        return Built(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply)
+    guard = MemoryGuard(geo.n_points, opts.dtype, opts.max_memory, widths.h,
+                        matrices=2 if opts.pointwise else 1)
+    hv = widths.per_point(geo.n_points)
+
+    def stage(k: Kernel, what: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
+                                 progress=None if report is None else (lambda f, s: report(0.6 * f, s)))
+        if report is not None:
+            report(0.6, "boundary images")
+        L = (corrections.neumann_images(free, geo.points, frames, geo.mass, hv, k.dog, geo.dim)
+             if opts.neumann else free)
+        return free, L
+
+    free, L = stage(kern, "kernel rows")
+    out = Built(L, L, opts.correction, boundary_rows=0 if frames is None or not opts.neumann else len(band))
+    if dog and opts.check_psd:
+        if report is not None:
+            report(0.7, "semidefinite check")
+        what = "mesh" if geo.faces is not None else geo.source
+        out.psd_margin, out.fallback_reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo),
+                                                                    what)
+        if out.fallback_reason is not None:
+            out.correction = "none"
+            free, L = stage(replace(kern, dog=False), "plain kernel rows")
+            out.L_sym = out.L = L
+    if out.correction != "none":
+        if report is not None:
+            report(0.8, "moment scale")
+        out.moment_scale = corrections.second_moment_scale(lambda X: free @ X, geo.points, geo.mass, band,
+                                                           geo.dim)
+        L.data *= out.moment_scale
+    if opts.pointwise:
+        if report is not None:
+            report(0.9, "point-wise rows")
+        # from the operator without mirror images: f need not satisfy Neumann conditions, and
+        # the moment correction handles the one-sided rows
+        out.L, out.pointwise_unchanged = corrections.moment_correction(free, geo.points, geo.dim)
+    if report is not None:
+        report(1.0, "done")
+    return out
