@@ -6,10 +6,10 @@ those of the saved one. What is stored:
 
 * the matrix ``op @ f`` applies, in scipy's own CSR layout (``format``, ``shape``, ``data``,
   ``indices``, ``indptr``), so that :func:`scipy.sparse.load_npz` reads it too;
-* the symmetric pencil's L (``S = M L``) when it differs: only its values when it has the
-  same sparsity pattern (the default surface operator's point-wise rows do), else the whole
-  matrix;
-* ``S`` itself for operators whose S is not ``M @ L`` to the bit (the cotangent Laplacian);
+* the symmetric pencil's ``L_sym`` (``S = M L_sym``) when it differs from ``L``: only its
+  values when it has the same sparsity pattern (the default operator's point-wise rows do),
+  else the whole matrix;
+* ``S`` itself for operators whose S is not ``M @ L_sym`` to the bit (the cotangent Laplacian);
 * the masses, the kernel parameters (h, tol, radius, correction, the moment factor,
   per-vertex widths) and the geometry (points, faces or cells, boundary, intrinsic
   dimension), unless ``mesh=False``;
