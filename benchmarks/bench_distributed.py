@@ -195,14 +195,125 @@ def projection(one: dict) -> list[str]:
     return lines
 
 
+# -- the distributed eigensolver (issue 19) --------------------------------------------------
+def _eigs_mesh(n: int):
+    import meshlap
+
+    return meshlap.shapes.sphere(n, kind="random", seed=0)
+
+
+def eigs_job(n: int, k: int, serial: bool) -> None:
+    """One eigensolver run on a random n-vertex sphere at the paper's default h, JSON on stdout:
+    ``spectral.eigs`` on the single-machine operator (``serial``), or the distributed LOBPCG
+    on all ranks of COMM_WORLD."""
+    import meshlap
+
+    V, F = _eigs_mesh(n)
+    t0 = time.perf_counter()
+    if serial:
+        from meshlap import spectral
+
+        op = meshlap.laplacian(V, F, correction="none")
+        nnz, rank, size = op.L.nnz, 0, 0
+    else:
+        from mpi4py import MPI
+
+        from meshlap import distributed
+        from meshlap.distributed import lobpcg as distributed_eigs
+
+        comm = MPI.COMM_WORLD
+        op = distributed.laplacian(V, F, correction="none", comm=comm)
+        nnz = comm.allreduce(int(op.L.getInfo()["nz_used"]), op=MPI.SUM)
+        rank, size = comm.Get_rank(), comm.Get_size()
+        comm.Barrier()
+    t1 = time.perf_counter()
+    info: dict = {}
+    if serial:
+        lam, _ = spectral.eigs(op, k)
+    else:
+        lam, _ = distributed_eigs.eigs(op, k, mesh=(V, F), info=info)
+        comm.Barrier()
+    t2 = time.perf_counter()
+    row = {"n": n, "k": k, "ranks": size, "rank": rank, "h": float(op.h), "nnz": int(nnz), "t_build": t1 - t0,
+           "t_eigs": t2 - t1, "iterations": info.get("iterations"), "lam": [float(x) for x in lam],
+           "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
+    rows = [row] if serial else comm.gather(row)
+    if rank == 0:
+        print(json.dumps(rows))
+
+
+def run_eigs(n: int, k: int, ranks: int) -> list[dict]:
+    """``eigs_job`` in a subprocess: ranks = 0 for the single machine (numba on every core),
+    else mpiexec with one numba thread per rank."""
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    job = [sys.executable, __file__, "--eigs-job", str(n), str(k)]
+    if ranks == 0:
+        cmd = [*job, "--serial"]
+    else:
+        env.update(NUMBA_NUM_THREADS="1", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+        cmd = ["mpiexec", "--oversubscribe", "-n", str(ranks), *job]
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def eigs_section(n: int, k: int) -> list[str]:
+    """Single machine, 1 and 2 ranks on the same operator; the table and the projection."""
+    uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    runs = {r: run_eigs(n, k, r) for r in (0, 1, 2)}
+    uptime_after = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    lam0 = np.array(runs[0][0]["lam"])
+    scale = np.maximum(np.abs(lam0), lam0[1])
+    one = runs[0][0]
+    lines = [f"`python benchmarks/bench_distributed.py --eigs {n} --k {k}`: {k} eigenpairs of the paper's "
+             f"operator (`correction=\"none\"`, default h = {one['h']:.3g}) on a random {n:,}-vertex unit "
+             f"sphere, {one['nnz'] / n:.0f} entries per row ({one['nnz'] / 1e6:.0f} M). Single machine: "
+             "`spectral.eigs` with numba on both cores; distributed: `distributed.lobpcg.eigs(op, k, "
+             "mesh=(V, F))`, one numba thread per rank.", "",
+             f"Load: before `{uptime}`; after `{uptime_after}`.", "",
+             "| run | rank | build | eigs | iterations | eigs per iteration | max rel. eigenvalue diff "
+             "vs single machine | peak RSS |", "|---|---|---|---|---|---|---|---|"]
+    for r, res in runs.items():
+        for row in res:
+            err = float((np.abs(np.array(row["lam"]) - lam0) / scale).max())
+            it = row["iterations"]
+            per = f"{row['t_eigs'] / it:.2f} s" if it else "–"
+            name = "single machine" if r == 0 else f"{r} rank" + ("s" if r > 1 else "")
+            lines.append(f"| {name} | {row['rank'] if r else '–'} | {row['t_build']:.1f} s | "
+                         f"{row['t_eigs']:.1f} s | {it or '–'} | {per} | {err:.1e} | "
+                         f"{row['rss'] / 2**30:.2f} GiB |")
+    t0, t2 = one["t_eigs"], max(row["t_eigs"] for row in runs[2])
+    it2 = runs[2][0]["iterations"]
+    cost = t2 / it2 / (one["nnz"] / 2)
+    lines += ["", f"2 ranks / single machine: {t2 / t0:.2f}×; 1 rank / single machine: "
+              f"{runs[1][0]['t_eigs'] / t0:.2f}×. Cost per iteration on 2 ranks: {t2 / it2:.2f} s, "
+              f"{1e9 * cost:.1f} ns per stored entry of a rank's rows ({k + max(4, k // 10)} vectors)."]
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--per-rank", type=int, default=40_000)
     ap.add_argument("--rank-job", type=int)
+    ap.add_argument("--eigs", type=int, help="eigensolver benchmark on a random sphere of this size")
+    ap.add_argument("--k", type=int, default=50)
+    ap.add_argument("--eigs-job", type=int, nargs=2)
+    ap.add_argument("--serial", action="store_true")
     args = ap.parse_args()
     if args.rank_job:
         rank_job(args.rank_job)
+        return
+    if args.eigs_job:
+        eigs_job(*args.eigs_job, serial=args.serial)
+        return
+    if args.eigs:
+        lines = eigs_section(args.eigs, args.k)
+        print("\n".join(lines))
+        if not args.quick:
+            sys.path.insert(0, str(HERE))
+            from results_file import write_section
+
+            write_section("Distributed eigensolver (issue 19)", lines)
         return
     per_rank = 5_000 if args.quick else args.per_rank
     run(1, 2000)  # warm numba's cache before timing anything

@@ -53,17 +53,8 @@ def _plain_text_bars(app, what, name, obj, options, lines):
             lines[i] = line.replace("|", "\\|")
 
 
-def _skip_imported(app, what, name, obj, skip, options):
-    # modules without __all__: names they import (Path, Sequence, numba's prange) are not theirs
-    module = getattr(obj, "__module__", None)
-    if callable(obj) and isinstance(module, str) and not module.startswith("meshlap"):
-        return True
-    return None
-
-
 def setup(app):
     app.connect("autodoc-process-docstring", _plain_text_bars, priority=100)  # before numpydoc
-    app.connect("autodoc-skip-member", _skip_imported)
 
 
 # the notebooks, as committed

@@ -141,7 +141,9 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     True
     """
     if not isinstance(P, (np.ndarray, list)):  # open3d, pyvista, trimesh point clouds (or meshes)
-        P = _held_input(P, None)[0]
+        from .inputs import as_geometry_input
+
+        P = as_geometry_input(P)[0]
     geo = point_cloud_geometry(P, k, denoise=denoise, neighbors=neighbors, merge_tol=merge_tol,
                                outlier_ratio=outlier_ratio)
     return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)

@@ -6,10 +6,10 @@ those of the saved one. What is stored:
 
 * the matrix ``op @ f`` applies, in scipy's own CSR layout (``format``, ``shape``, ``data``,
   ``indices``, ``indptr``), so that :func:`scipy.sparse.load_npz` reads it too;
-* the symmetric pencil's ``L_sym`` (``S = M L_sym``) when it differs from ``L``: only its
-  values when it has the same sparsity pattern (the default operator's point-wise rows do),
-  else the whole matrix;
-* ``S`` itself for operators whose S is not ``M @ L_sym`` to the bit (the cotangent Laplacian);
+* the symmetric pencil's L (``S = M L``) when it differs: only its values when it has the
+  same sparsity pattern (the default surface operator's point-wise rows do), else the whole
+  matrix;
+* ``S`` itself for operators whose S is not ``M @ L`` to the bit (the cotangent Laplacian);
 * the masses, the kernel parameters (h, tol, radius, correction, the moment factor,
   per-vertex widths) and the geometry (points, faces or cells, boundary, intrinsic
   dimension), unless ``mesh=False``;
@@ -24,13 +24,14 @@ rank 0 (:meth:`~meshlap.distributed.DistributedLaplacian.to_scipy`) and saved th
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
-from .assembly import csr
+from .assembly import csr as _csr
 from .errors import MeshError
 from .geometry import Geometry, Polygons
 from .geometry.validation import check_faces, check_function, existing_file
@@ -43,12 +44,20 @@ __all__ = ["FORMAT_VERSION", "OperatorFormatError", "SavedLaplacian", "load_oper
 FORMAT_VERSION = 2
 
 _PARAMS = ("h", "tol", "radius", "moment_scale")
-#: What a matrix-free operator is rebuilt with, beside the geometry and h.
-_OPTIONS = ("correction", "arc_distance", "pointwise", "neumann", "adaptive", "curvature_limit", "tol")
 
 
 class OperatorFormatError(MeshError):
     """A saved operator file of a layout this version of meshlap does not read."""
+
+
+def _symmetric(op: Any) -> sp.spmatrix:
+    # the symmetric pencil's L (S = M L_sym); operators with one matrix have no L_sym
+    return getattr(op, "L_sym", op.L)
+
+
+def _applied(op: Any) -> sp.spmatrix:
+    # the matrix op @ f applies
+    return op.L
 
 
 class SavedLaplacian(LumpedLaplacian):
@@ -99,6 +108,13 @@ class SavedLaplacian(LumpedLaplacian):
     def L_sym(self) -> sp.csr_matrix:
         """The symmetric pencil's L: ``S = M @ L_sym``."""
         return self._sym
+
+    @property
+    def S(self) -> sp.csr_matrix:
+        """``M @ L_sym``: symmetric and negative semidefinite."""
+        if self._S is None:
+            self._S = sp.csr_matrix(self.M @ self._sym)
+        return self._S
 
     @property
     def n_vertices(self) -> int:
@@ -173,18 +189,13 @@ def _distributed_arrays(op: Any) -> dict[str, Any] | None:
     # collective: every rank calls it; rank 0 gets the arrays, the others None
     if op.matrix_free:
         raise MeshError("a matrix-free distributed operator stores no matrix to save")
-    L, L_sym = op.to_scipy(root=0), op.to_scipy(root=0, symmetric=True)
-    mass, V = op.gather(op.mass, root=0), op.gather(op.V, root=0)
+    L, mass, V = op.to_scipy(root=0), op.gather(op.mass, root=0), op.gather(op.V, root=0)
     if L is None:
         return None
     out = _csr_arrays("", L)
-    if not (np.array_equal(L.indptr, L_sym.indptr) and np.array_equal(L.indices, L_sym.indices)):
-        out.update(_csr_arrays("sym_", L_sym))
-    elif not np.array_equal(L.data, L_sym.data):
-        out["sym_data"] = L_sym.data
     out.update(mass=mass, h=np.array(op.h), tol=np.array(op.tol), radius=np.array(op.radius),
-               moment_scale=np.array(op.moment_scale), correction=np.array(op.correction), points=V,
-               dim=np.array(2), spacing=np.array(0.0), source=np.array("distributed"))
+               correction=np.array("none"), points=V, dim=np.array(2), spacing=np.array(0.0),
+               source=np.array("distributed"))
     return out
 
 
@@ -243,9 +254,8 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
             if not mesh:
                 raise MeshError("a matrix-free operator is rebuilt from its geometry: save it with mesh=True")
             arrays.update(matrix_free=np.array(True), dtype=np.array(np.dtype(op.dtype).name))
-            arrays.update({f"option_{key}": np.array(getattr(op.options, key)) for key in _OPTIONS})
         else:
-            applied, sym = op.L, getattr(op, "L_sym", op.L)
+            applied, sym = _applied(op), _symmetric(op)
             arrays.update(_csr_arrays("", sp.csr_matrix(applied)))
             if sym is not applied:
                 applied, sym = sp.csr_matrix(applied), sp.csr_matrix(sym)
@@ -277,7 +287,7 @@ def _matrix(data: Any, prefix: str, n_check: int, name: str) -> sp.csr_matrix:
     shape = tuple(int(s) for s in data[f"{prefix}shape"])
     if shape != (n_check, n_check):
         raise MeshError(f"{name}: a stored matrix has shape {shape}, expected ({n_check}, {n_check})")
-    return csr(data[f"{prefix}data"], data[f"{prefix}indices"], data[f"{prefix}indptr"], n_check)
+    return _csr(data[f"{prefix}data"], data[f"{prefix}indices"], data[f"{prefix}indptr"], n_check)
 
 
 def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
@@ -293,13 +303,13 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
                     cells=data["cells"] if "cells" in data else None, source=str(data["source"]))
 
 
-def _rebuild_matrix_free(geo: Geometry | None, data: Any, params: dict[str, Any], name: str) -> MeshLaplacian:
+def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:
     if geo is None:
         raise MeshError(f"{name}: a matrix-free operator saved without its geometry")
-    # the same choices again: an automatic width is chosen again from the same geometry
-    h = None if params["h_auto"] else params.get("h_vertex", params["h"])
-    options = {key: data[f"option_{key}"].item() for key in _OPTIONS}
-    return MeshLaplacian(geo, h=h, matrix_free=True, dtype=np.dtype(params["dtype"]), **options)
+    op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True,
+                       correction=params["correction"], dtype=np.dtype(params["dtype"]))
+    op.widths = replace(op.widths, h_auto=bool(params["h_auto"]))  # as it was built
+    return op
 
 
 def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
@@ -357,11 +367,11 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
             params["h_vertex"] = data["h_vertex"]
         geo = _geometry(data, mass, path.name)
         if "matrix_free" in data:
-            return _rebuild_matrix_free(geo, data, params, path.name)
+            return _rebuild_matrix_free(geo, params, path.name)
         applied = _matrix(data, "", n, path.name)
         sym = applied
         if "sym_data" in data:
-            sym = csr(data["sym_data"], applied.indices, applied.indptr, n)
+            sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
         elif "sym_shape" in data:
             sym = _matrix(data, "sym_", n, path.name)
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None

@@ -161,6 +161,12 @@ def curvature_h(P: np.ndarray, edges: np.ndarray, normals: np.ndarray, h: np.nda
     return _ring_average(n, e, np.minimum(hv, capped), smoothing)
 
 
+def _neighbour_edges(geo: Geometry) -> np.ndarray:
+    # a mesh's face sides, each interior edge once per face (so twice), as the widths were
+    # measured with; the geometry's neighbour edges (cells, nearest neighbours) otherwise
+    return geo.faces.edges() if geo.faces is not None else geo.edges()
+
+
 def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
            curvature_limit: float = 0.0) -> Widths:
     """The widths of a build: an explicit ``h`` (a number or one per point) always wins;
@@ -193,7 +199,7 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     else:
         h0 = check_h(h_scale(geo) * geo.spacing**2, f"the automatic h = {h_scale(geo):g}·(spacing)²")
     if adaptive:
-        h_vertex = local_h(geo.points, geo.edges(), h_scale(geo))
+        h_vertex = local_h(geo.points, _neighbour_edges(geo), h_scale(geo))
         check_h(float(h_vertex.min()), "the smallest local h")
         check_h(float(h_vertex.max()), "the largest local h")
         h0 = float(np.median(h_vertex[geo.mass > 0])) if (geo.mass > 0).any() else h0
@@ -202,7 +208,7 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     if normals is not None:
         beta = check_positive(curvature_limit, "curvature_limit")
         base = h0 if h_vertex is None else h_vertex
-        hv = curvature_h(geo.points, geo.edges(), normals, base, beta)
+        hv = curvature_h(geo.points, _neighbour_edges(geo), normals, base, beta)
         if (hv != base).any():
             check_h(float(hv.min()), "the smallest curvature-limited h")
             h_vertex = hv

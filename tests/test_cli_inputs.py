@@ -57,7 +57,8 @@ def test_eigs_of_tetrahedra_tetgen_and_meshio(capsys, tets, tmp_path):
     V, T = meshlap.samples.cube_tetrahedra(6)
     ref = meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 4)[0]
     np.testing.assert_allclose(lam[1:], ref[1:], rtol=1e-5)
-    assert np.allclose(lam[1:4], np.pi**2, rtol=0.1)  # the unit cube's threefold first Neumann mode
+    # the unit cube's threefold first Neumann eigenvalue π²: on 7³ vertices within 7.1% (measured)
+    assert np.abs(lam[1:4] / np.pi**2 - 1).max() < 0.1
     meshio = pytest.importorskip("meshio")
     for suffix in (".vtk", ".vtu", ".msh"):
         path = tmp_path / f"cube{suffix}"

@@ -93,6 +93,41 @@ def test_eigenpairs_small():
 
 
 @needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
+def test_lobpcg_matches_serial(n):
+    """meshlap.distributed.lobpcg (no factorization) against spectral.eigs on the gathered
+    matrix: a mesh with boundary, a matrix-free point cloud, a mesh with 208 zero-mass
+    vertices; eigenvalues to 1e-8 relative, residuals recomputed to 2e-8."""
+    mpirun(n, "lobpcg_plane", "lobpcg_cloud", "lobpcg_zero_mass")
+
+
+@needs_mpi
+def test_lobpcg_clear_errors():
+    from mpi4py import MPI
+
+    import meshlap
+    from meshlap import distributed
+    from meshlap.distributed import lobpcg as distributed_eigs
+
+    V, F = meshlap.shapes.sphere(300, seed=0)
+    op = distributed.laplacian(V, F, h=0.02, comm=MPI.COMM_SELF)  # the default
+    with pytest.raises(meshlap.MeshError, match="mesh has 10 vertices"):
+        distributed_eigs.eigs(op, 4, mesh=(V[:10], F))
+    with pytest.raises(meshlap.MeshError, match="mesh must be"):
+        distributed_eigs.eigs(op, 4, mesh=V)
+    with pytest.raises(meshlap.MeshError, match="tol"):
+        distributed_eigs.eigs(op, 4, tol=2.0)
+    with pytest.raises(meshlap.MeshError, match="method"):
+        distributed.eigs(op, 4, method="krylov")
+    with pytest.raises(meshlap.MeshError, match="shift-invert"):
+        distributed.eigs(op, 4, blr=1e-10)
+    zero = distributed.laplacian(V, mass=np.where(np.arange(300) < 3, 1.0, 0.0), correction="none", h=0.02,
+                                 comm=MPI.COMM_SELF)
+    with pytest.raises(meshlap.MeshError, match="k"):
+        distributed_eigs.eigs(zero, 4)
+
+
+@needs_mpi
 @pytest.mark.slow
 def test_eigenpairs_sphere_and_bunny():
     """First 20 eigenvalues of a 16,000-vertex sphere and of the bunny (1,113 zero-mass
@@ -113,7 +148,7 @@ def test_global_grid_matches_kernel():
         V = rng.standard_normal((n, 3))
         mass = rng.random(n) * (rng.random(n) > 0.2)
         g = kernel.build_grid(V, mass, radius)
-        lo, cell, dims = distributed._global_grid(MPI.COMM_SELF, V, mass, radius)
+        lo, cell, dims = distributed.comm._global_grid(MPI.COMM_SELF, V, mass, radius)
         assert np.array_equal(lo, g.lo) and cell == g.cell and np.array_equal(dims, g.dims)
 
 

@@ -1,4 +1,5 @@
-"""The README's Python examples run as written (from the repository root, as a user would)."""
+"""The Python examples of the README and of the guides in docs/ run as written (from the
+repository root, as a user would)."""
 
 import importlib.util
 import re
@@ -7,11 +8,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-BLOCKS = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+BLOCKS = [(page.relative_to(ROOT), code) for page in PAGES
+          for code in re.findall(r"```python\n(.*?)```", page.read_text(), re.S)]
 
 
 def _params():
-    for i, code in enumerate(BLOCKS):
+    for i, (page, code) in enumerate(BLOCKS):
         first = code.strip().splitlines()[0]
         marks = []
         if "trimesh_mesh" in code:
@@ -21,7 +24,7 @@ def _params():
         uses_mpi = "meshlap.distributed" in code or "from meshlap import distributed" in code
         if uses_mpi and importlib.util.find_spec("petsc4py") is None:
             marks.append(pytest.mark.skip(reason="petsc4py absent: install it with .ci/install-mpi"))
-        yield pytest.param(code, id=f"block{i}-{first[:30]}", marks=marks)
+        yield pytest.param(code, id=f"{page.stem}-block{i}-{first[:30]}", marks=marks)
 
 
 def test_readme_has_examples():

@@ -11,6 +11,8 @@ from numba.extending import intrinsic
 
 from .._jit import jit
 
+__all__ = []
+
 
 @intrinsic
 def _bits_as_float(typingctx, bits):

@@ -13,6 +13,9 @@ from .._jit import jit
 from ..errors import MeshError
 from ..geometry.validation import check_faces
 
+# private plumbing of meshlap.distributed: nothing here is public
+__all__: list[str] = []
+
 _INSTALL = ("meshlap.distributed needs mpi4py, petsc4py and slepc4py: `pip install 'meshlap[mpi]'` "
             "gives mpi4py; petsc4py/slepc4py build against PETSc/SLEPc (Debian: apt-get install "
             "libpetsc-real-dev libslepc-real-dev, then PETSC_DIR=$(pkg-config --variable=prefix PETSc) "

@@ -9,7 +9,7 @@ faces each rank holds, in the same formulas as :mod:`meshlap.geometry` and
   owners of its corners, which add them up;
 * the automatic width 4ē²: ē from the sum and count of the face sides, over all ranks;
 * the curvature cap: κ_w² from the sides at w (normals fetched from their owners), then the
-  ring averages over the unique edges, each pass one fetch and one scatter;
+  ring averages over the sides, each pass one fetch and one scatter;
 * the boundary: every side goes to the owner of its smaller vertex, which finds the sides
   that occur once and samples them; the samples (a curve's worth) are shared with all ranks,
   and each rank finds its points' nearest one.
@@ -147,16 +147,12 @@ def _curvature_widths(ch: _Chunks, gi: np.ndarray, d2: np.ndarray, normals: np.n
     if not ch.comm.allreduce(bool((capped < h0).any()), op=MPI.LOR):
         return np.full(ch.n_local, h0)
     x = np.minimum(h0, capped)
-    # the unique undirected edges, each held by the owner of its smaller vertex
-    key = np.sort(gi, axis=1)
-    key = key[key[:, 0] != key[:, 1]]
-    lo, hi = _exchange(ch.comm, ch.owner(key[:, 0]), key[:, 0], key[:, 1])
-    U = np.unique(np.stack([lo, hi], axis=1), axis=0) if len(lo) else np.zeros((0, 2), np.int64)
-    a = U[:, 0] - ch.start
-    deg = np.bincount(a, minlength=ch.n_local) + ch.add(U[:, 1], np.ones(len(U)))
-    for _ in range(3):  # the ring averages of meshlap.widths._ring_average
-        x = (x + np.bincount(a, weights=ch.fetch(U[:, 1], x), minlength=ch.n_local)
-             + ch.add(U[:, 1], x[a])) / (deg + 1)
+    # the ring averages of meshlap.widths._ring_average over the face sides (each interior
+    # edge once per face): each side adds each end's value to the other end
+    deg = ch.add(gi[:, 0], np.ones(len(gi))) + ch.add(gi[:, 1], np.ones(len(gi)))
+    for _ in range(3):
+        xa, xb = ch.fetch(gi[:, 0], x), ch.fetch(gi[:, 1], x)
+        x = (x + ch.add(gi[:, 0], xb) + ch.add(gi[:, 1], xa)) / (deg + 1)
     return x
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..geometry.validation import check_k
-from .comm import _mpi, _reduce, _slepc
+from .comm import _mpi, _slepc
 from .operator import DistributedLaplacian
 
 __all__ = ["eigs", "heat_flow", "implicit_heat", "mean_curvature_normal"]
@@ -169,10 +169,14 @@ class _ImplicitContext:
         dvec.setArray(self.d - self.tau * self.op.mass * self.op.diagonal())
 
 
-def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: float | None = None,
-         maxiter: int = 500, solver: str = "auto",
-         blr: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    r"""The k smallest eigenpairs of ``-S φ = λ M φ`` with SLEPc (collective).
+def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh: Any = None,
+         tol: float | None = None, sigma: float | None = None, maxiter: int | None = None,
+         solver: str = "auto", blr: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    r"""The k smallest eigenpairs of ``-S φ = λ M φ`` (collective).
+
+    ``method="lobpcg"`` (default): :func:`meshlap.distributed.lobpcg.eigs`, a distributed LOBPCG
+    that never factors the operator (``mesh``, ``tol`` and ``maxiter`` go to it; its defaults
+    1e-8 and 300). ``method="shift-invert"``: the rest of this docstring.
 
     Krylov–Schur with shift-and-invert around a small negative shift σ. As in
     :func:`meshlap.spectral.eigs`, the problem lives on the points with mass and the
@@ -184,6 +188,10 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: fl
         A stored operator.
     k : int, default 20
         Number of eigenpairs.
+    method : {"lobpcg", "shift-invert"}
+        The solver (see above).
+    mesh : (V, F), optional
+        The whole mesh, for LOBPCG's cotangent preconditioner.
     tol : float, default 1e-12
         SLEPc's relative residual tolerance.
     sigma : float, optional
@@ -217,8 +225,20 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: fl
     >>> np.round(lam, 1) + 0.0     # l(l+1) = 0, 2, 6 with multiplicities 1, 3, 5
     array([0. , 2. , 2. , 2. , 5.9, 5.9, 5.9, 5.9, 5.9])
     """
+    if method == "lobpcg":
+        from .lobpcg import eigs as lobpcg
+
+        if sigma is not None or blr is not None or solver != "auto":
+            raise MeshError("sigma, solver and blr set up shift-and-invert: pass method='shift-invert'")
+
+        return lobpcg(op, k, mesh=mesh, **{key: v for key, v in (("tol", tol), ("maxiter", maxiter))
+                                           if v is not None})
+    if method != "shift-invert":
+        raise MeshError(f"method must be 'lobpcg' or 'shift-invert'; got {method!r}")
     MPI, PETSc = _mpi()
     SLEPc = _slepc()
+    tol = 1e-12 if tol is None else tol
+    maxiter = 500 if maxiter is None else maxiter
     if op.matrix_free:
         raise MeshError("eigs needs the stored operator (matrix_free=False): shift-and-invert factors it")
     comm = op.comm
@@ -280,30 +300,6 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, tol: float = 1e-12, sigma: fl
         vecs[:, i] = xr.getArray()
     order = np.argsort(lam)[:k]
     lam, vecs = lam[order], vecs[:, order]
-    # M-normalize (SLEPc's GHEP vectors are B-normalized already; this removes rounding)
-    norms = np.sqrt(_reduce(comm, (m[P, None] * vecs * vecs).sum(axis=0), MPI.SUM))
-    vecs /= norms
-    phi = np.zeros((op.n_local, k))
-    phi[P] = vecs
-    Z = np.flatnonzero(m == 0)
-    if comm.allreduce(len(Z), op=MPI.SUM):
-        ind = np.zeros((op.n_local, 1))
-        ind[P] = 1.0
-        LY = op.apply(np.hstack([phi, ind]), symmetric=True)[Z]
-        den = LY[:, -1]
-        big = comm.allreduce(float(np.abs(den).max()) if len(Z) else 0.0, op=MPI.MAX)
-        ok = den > 1e-12 * max(big, 1e-300)
-        phi[Z[ok]] = LY[ok, :-1] / den[ok, None]
-    # signs: the entry of largest magnitude positive (ties: the lowest vertex index)
-    amax = np.abs(phi).max(axis=0) if op.n_local else np.zeros(k)
-    gmax = _reduce(comm, amax, MPI.MAX)
-    cand = np.where(np.abs(phi) == gmax, op.ids[:, None], np.iinfo(np.int64).max) if op.n_local \
-        else np.full((1, k), np.iinfo(np.int64).max)
-    first = _reduce(comm, cand.min(axis=0), MPI.MIN)
-    sign = np.zeros(k)
-    for j in range(k):
-        hit = np.flatnonzero(op.ids == first[j])
-        if len(hit):
-            sign[j] = 1.0 if phi[hit[0], j] >= 0 else -1.0
-    sign = _reduce(comm, sign, MPI.SUM)
-    return lam, phi * np.where(sign == 0, 1.0, sign)
+    from .lobpcg import finish
+
+    return finish(op, P, lam, vecs)

@@ -16,6 +16,8 @@ from scipy.spatial import Delaunay, QhullError
 
 from .._jit import jit
 
+__all__ = []
+
 # A neighbourhood whose k-th principal variance is below this fraction of the first has no
 # k-dimensional extent.
 _FLAT = 1e-10

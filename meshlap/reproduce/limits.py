@@ -13,6 +13,8 @@ from scipy import integrate, special
 from ..errors import MeshError
 from ..geometry.validation import check_h
 
+__all__ = ["sphere_bias", "sphere_heat_limit", "square_heat_limit"]
+
 
 # -- the continuous operator on the square ------------------------------------------------
 def _gauss_moments(w: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -8,6 +8,8 @@ from importlib import resources
 
 from .settings import STRONG_NOISE
 
+__all__ = ["PAPER_METRICS", "PaperCell", "VARIANTS", "paper_tables"]
+
 
 # -- the paper's published numbers ---------------------------------------------------------
 @dataclass(frozen=True)

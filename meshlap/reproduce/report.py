@@ -13,6 +13,8 @@ from .paper import PAPER_METRICS, VARIANTS, paper_tables
 from .results import Reproduction
 from .settings import _SPHERE_TABLES, PLANE_H, PLANE_MARGIN, SPHERE_H, STRONG_NOISE
 
+__all__ = ["format_markdown", "plot_convergence"]
+
 
 # -- output --------------------------------------------------------------------------------
 def _row_table(rep: Reproduction, table: str, h: float, norm: str, methods: Sequence[str]) -> list[str]:

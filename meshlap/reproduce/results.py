@@ -11,6 +11,8 @@ import numpy as np
 
 from .paper import PAPER_METRICS, VARIANTS, PaperCell, paper_tables
 
+__all__ = ["Beside", "Check", "Record", "Reproduction"]
+
 
 # -- results -------------------------------------------------------------------------------
 @dataclass(frozen=True)

@@ -2,6 +2,8 @@
 
 import numpy as np
 
+__all__ = ["FULL_NS", "PLANE_H", "PLANE_MARGIN", "QUICK_NS", "SPHERE_H", "STRONG_NOISE"]
+
 #: Vertex counts of the paper's tables.
 FULL_NS = (500, 2000, 8000, 16000)
 #: Vertex counts of the quick run (``meshlap demo``), a few seconds in all.

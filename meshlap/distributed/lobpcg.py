@@ -1,0 +1,347 @@
+"""Eigenpairs of the distributed heat-kernel Laplacian without a factorization (issue 19).
+
+A distributed LOBPCG: every MPI rank holds its own rows of the blocks of functions (numpy
+arrays of shape (n_local, k)); the operator's product is the only step that talks to other
+ranks' rows (its halo exchange), and the small Rayleigh–Ritz problems are the sums over the
+ranks of the local Gram matrices (one ``Allreduce`` each), so every rank solves the same
+small problem and keeps its share of the Ritz vectors. The iteration is
+:func:`meshlap.spectral.eigs`'s LOBPCG, run on the shares.
+
+The preconditioner is the single machine's, block Jacobi over the ranks: on each rank
+
+    T = (K_r + σM_r)⁻¹ + ½ D_r⁻¹,
+
+with D = diag(-S) (what saturates the heat-kernel symbol at high frequency) and K_r a sparse
+Laplacian of the rank's own rows, factored once by a sparse LU on that rank alone: for a
+mesh, the block of the cotangent stiffness on the own rows (the faces touching them); for a
+point cloud, a graph Laplacian of the own points' nearest neighbours with heat weights,
+scaled to the operator's quadratic form on the coordinate functions. On one rank it is
+exactly the single machine's preconditioner. Memory per rank: the operator's own rows, the
+LU of a sparse matrix with a handful of entries per row, and about a dozen blocks of
+n_local × (k + extra) numbers.
+
+Examples
+--------
+>>> import meshlap, numpy as np
+>>> from meshlap import distributed
+>>> from meshlap.distributed.lobpcg import eigs
+>>> V, F = meshlap.shapes.sphere(2000, seed=0)
+>>> lam, phi = eigs(distributed.laplacian(V, F, h=0.005), 9, mesh=(V, F))
+>>> np.round(lam, 1) + 0.0
+array([0. , 2. , 2. , 2. , 5.9, 5.9, 5.9, 5.9, 5.9])
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import spectral
+from ..errors import MeshError
+from ..geometry.validation import check_faces, check_k, check_vertices
+
+__all__ = ["eigs", "finish"]
+
+# nearest neighbours of the point-cloud preconditioner's graph
+_NEIGHBOURS = 10
+# iterations of the start on the cotangent problem
+_START_ITERATIONS = 20
+
+
+def _allsum(comm):
+    from mpi4py import MPI
+
+    def allsum(a: np.ndarray) -> np.ndarray:
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        out = np.empty_like(a)
+        comm.Allreduce(a, out, op=MPI.SUM)
+        return out
+
+    return allsum
+
+
+def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any):
+    """The cotangent stiffness K on the points with mass: its rows on this rank as a
+    distributed PETSc matrix (columns numbered over the points with mass, rank by rank) and
+    its own × own block for the local factorization; both from the faces touching own rows."""
+    from petsc4py import PETSc
+
+    try:
+        V, F = mesh
+    except (TypeError, ValueError) as exc:
+        raise MeshError("mesh must be (V, F): the whole mesh, in the caller's numbering") from exc
+    V = check_vertices(V, "mesh[0]")
+    if len(V) != op.n_vertices:
+        raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
+    T = check_faces(F, len(V), "mesh[1]").triangles()
+    comm = op.comm
+    own = op.ids[P]
+    # the points with mass, numbered rank by rank (the order of the solver's rows)
+    gid = np.full(len(V), -1, dtype=np.int64)
+    start = 0
+    for part in comm.allgather(own):
+        gid[part] = start + np.arange(len(part))
+        start += len(part)
+    first = int(gid[own[0]]) if len(own) else 0
+    T = T[((gid[T] >= first) & (gid[T] < first + len(own))).any(axis=1)]
+    used = np.union1d(np.unique(T), own)
+    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used))) if len(T) else None
+    # no usable face here (an empty rank, degenerate faces): empty rows, K_r the diagonal term alone
+    K = sp.coo_matrix(sp.csr_matrix((len(own), len(used))) if K is None else sp.csr_matrix(K)[
+        np.searchsorted(used, own)])
+    cols = gid[used][K.col]
+    keep = cols >= 0  # no column for points without mass
+    K = sp.csr_matrix((K.data[keep], (K.row[keep], cols[keep])), shape=(len(own), start))
+    K.eliminate_zeros()
+    sizes = ((len(own), start), (len(own), start))
+    Kg = PETSc.Mat().createAIJ(sizes, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
+                                           K.data), comm=comm)
+    block = sp.csc_matrix(K[:, first:first + len(own)])
+    return (block if block.nnz else None), Kg
+
+
+def _rank_colors(op: Any) -> tuple[np.ndarray, int]:
+    """A colour per rank such that ranks whose points come within the kernel radius differ
+    (greedy, in rank order, on the bounding boxes of the own points)."""
+    V = op.V
+    box = (np.concatenate([V.min(axis=0), V.max(axis=0)]) if len(V)
+           else np.concatenate([np.full(3, np.inf), np.full(3, -np.inf)]))
+    boxes = np.array(op.comm.allgather(box))
+    r = op.radius if math.isfinite(op.radius) else np.inf
+    near = np.all((boxes[:, None, :3] <= boxes[None, :, 3:] + r)
+                  & (boxes[None, :, :3] <= boxes[:, None, 3:] + r), axis=2)
+    colors = np.full(len(boxes), -1)
+    for q in range(len(boxes)):
+        taken = set(colors[near[q]].tolist())
+        colors[q] = next(c for c in range(len(boxes)) if c not in taken)
+    return colors, int(colors.max()) + 1
+
+
+def _leak(op: Any) -> np.ndarray:
+    """-Σ_{j not own} L_ij for the own rows: the coupling that the own block of -S keeps on its
+    diagonal and a graph of the own points lacks (one product of a block of rank colours)."""
+    colors, n_colors = _rank_colors(op)
+    X = np.zeros((op.n_local, n_colors))
+    X[:, colors[op.comm.Get_rank()]] = 1.0
+    return np.maximum(-_product(op, X)[:, colors[op.comm.Get_rank()]], 0.0)
+
+
+def _cloud_block(op: Any, P: np.ndarray, m: np.ndarray, allsum) -> sp.csc_matrix | None:
+    """A k-nearest-neighbour graph Laplacian of the own points, on the operator's scale.
+
+    Weights m_i m_j exp(-d²/ε), ε the mean squared neighbour distance; the scale c makes
+    x·(cG)x equal x·(-S)x summed over the three coordinate functions (smooth, so both forms
+    approximate ∫|∇x|² there). The own block of -S also holds on its diagonal the weights to
+    other ranks' points, m_i Σ_{j not own} (-L_ij); they are added, as in a Dirichlet block.
+    """
+    from pykdtree.kdtree import KDTree
+
+    X = np.ascontiguousarray(op.V[P])
+    nb = min(_NEIGHBOURS + 1, len(X))
+    if nb < 2:
+        G = None
+    else:
+        d, j = KDTree(X).query(X, k=nb)
+        d, j = d[:, 1:], j[:, 1:].astype(np.int64)
+        eps = max(float(np.mean(d * d)), 1e-300)
+        i = np.repeat(np.arange(len(X)), nb - 1)
+        w = (m[i] * m[j.ravel()]) * np.exp(-(d.ravel() ** 2) / eps)
+        W = sp.csr_matrix((w, (i, j.ravel())), shape=(len(X),) * 2)
+        W = W.maximum(W.T)
+        G = sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W
+    Y = np.zeros((op.n_local, 3))
+    Y[P] = op.V[P]
+    SX = -(m[:, None] * _product(op, Y)[P])
+    local = [float(np.sum(Y[P] * SX)), 0.0 if G is None else float(np.sum(X * (G @ X)))]
+    quad_S, quad_G = allsum(np.array(local))
+    leak = m * _leak(op)[P]
+    if G is None or not (quad_G > 0 and quad_S > 0):
+        return sp.diags(leak, format="csc") if leak.any() else None
+    return sp.csc_matrix((quad_S / quad_G) * G + sp.diags(leak))
+
+
+def _product(op: Any, X: np.ndarray) -> np.ndarray:
+    """L X for a local block: one PETSc MatMatMult with a dense block for a stored operator
+    (the matrix is read once, not once per column), the shell's block product otherwise."""
+    return op.apply(X) if op.matrix_free else _matmat(op.L_sym, X)
+
+
+def _matmat(A, X: np.ndarray) -> np.ndarray:
+    """A X for a distributed PETSc matrix and this rank's rows of a dense block."""
+    from petsc4py import PETSc
+
+    (n_local, n), _ = A.getSizes()
+    D = PETSc.Mat().createDense(((n_local, n), (PETSc.DECIDE, X.shape[1])), comm=A.getComm())
+    D.setUp()
+    D.getDenseArray()[:] = X
+    D.assemble()
+    C = A.matMult(D)
+    out = C.getDenseArray().copy()
+    C.destroy()
+    D.destroy()
+    return out
+
+
+def eigs(
+    op: Any,
+    k: int = 20,
+    *,
+    tol: float = 1e-8,
+    maxiter: int = 300,
+    extra: int | None = None,
+    mesh: tuple[Any, Any] | None = None,
+    seed: int = 0,
+    info: dict | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""The k smallest eigenpairs of ``-S φ = λ M φ`` by distributed LOBPCG (collective).
+
+    No factorization of the operator: it is only multiplied (stored or matrix-free), and
+    each rank factors a sparse preconditioner of its own rows (module notes).
+
+    Parameters
+    ----------
+    op : DistributedLaplacian
+        Stored or matrix-free.
+    k : int, default 20
+        Number of eigenpairs.
+    tol : float, default 1e-8
+        Relative residual ``‖-Sφ - λMφ‖_{M⁻¹} ≤ tol · max(λ, λ_k)``, as in
+        :func:`meshlap.spectral.eigs` (eigenvalues then agree to about tol²).
+    maxiter : int, default 300
+        Iterations before giving up with a warning.
+    extra : int, optional
+        Guard vectors; by default as in :func:`meshlap.spectral.eigs` (enough to hold the
+        cluster of the k-th eigenvalue, seen in the cotangent start).
+    mesh : (V, F), optional
+        The whole mesh in the caller's numbering (the same on every rank): the preconditioner
+        is then its cotangent Laplacian; without it, a nearest-neighbour graph of the points.
+    seed : int, default 0
+        Seed of the random start vectors (with the rank).
+    info : dict, optional
+        Filled with ``iterations``, the relative ``residuals`` of the k pairs and the
+        ``block`` width.
+
+    Returns
+    -------
+    lam : (k,) ndarray
+        Eigenvalues, ascending, on every rank.
+    phi : (n_local, k) ndarray
+        This rank's rows of the M-orthonormal eigenvectors (signs as in
+        :func:`meshlap.spectral.eigs`); zero-mass points take the kernel-weighted mean of
+        their row.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import distributed
+    >>> V = meshlap.shapes.sphere(1500, seed=0)[0]
+    >>> op = distributed.laplacian(V, mass=np.full(1500, 4 * np.pi / 1500), h=0.01)
+    >>> lam, _ = eigs(op, 4)
+    >>> np.round(lam, 2) + 0.0
+    array([0., 2., 2., 2.])
+    """
+    from mpi4py import MPI
+
+    comm = op.comm
+    if not (isinstance(tol, (int, float)) and 0 <= tol < 1):
+        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    m_all = np.asarray(op.mass, dtype=np.float64)
+    P = np.flatnonzero(m_all > 0)
+    m = m_all[P]
+    n_p = comm.allreduce(len(P), op=MPI.SUM)
+    if n_p == 0:
+        raise MeshError("every point has zero mass: the operator has no surface")
+    k = check_k(k, n_p)
+    nb = min(k + (max(4, k // 10) if extra is None else int(extra)), n_p)
+    allsum = _allsum(comm)
+    full = len(P) == op.n_local
+
+    def apply_A(Xp: np.ndarray) -> np.ndarray:
+        if full:
+            return -m[:, None] * _product(op, Xp)
+        X = np.zeros((op.n_local, Xp.shape[1]))
+        X[P] = Xp
+        return -m[:, None] * _product(op, X)[P]
+
+    diag = -m * op.diagonal()[P]
+    sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
+    K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
+    T = spectral._CotPreconditioner(K if len(P) else None, m, diag, sigma)
+    adapt = extra is None and Kg is not None
+    width = spectral._start_width(k, nb, n_p) if adapt else nb
+    X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
+    with spectral._one_blas_thread():
+        if Kg is not None:
+            # start from the cotangent eigenvectors, the local factors as preconditioner
+            def local(R: np.ndarray) -> np.ndarray:
+                if T.lu is None:
+                    return R / (sigma * m[:, None])
+                return T.lu.solve(np.asfortranarray(R))
+
+            theta, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,
+                                               _START_ITERATIONS, allsum)
+            nb = spectral._block_size(theta, k, nb) if adapt else nb
+            X0 = X0[:, :nb]
+        lam, X, it, res = spectral._lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum)
+    scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
+    if (res[:k] > tol * scale).any():
+        warnings.warn(f"eigs: distributed LOBPCG stopped after {it} iterations with relative residual "
+                      f"{float((res[:k] / scale).max()):.2e} > tol={tol:g}; raise maxiter or tol",
+                      RuntimeWarning, stacklevel=2)
+    if info is not None:
+        info.update(iterations=it, residuals=res[:k] / scale, block=nb)
+    return finish(op, P, lam[:k], X[:, :k])
+
+
+def finish(op: Any, P: np.ndarray, lam: np.ndarray, vecs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvectors on the own rows with mass ``P`` → all own rows, M-normalized, signed.
+
+    Zero-mass rows take the kernel-weighted mean of their row of L (the single machine's
+    extension); the entry of largest magnitude is made positive, ties to the lowest vertex
+    index (collective).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap import distributed
+    >>> V, F = meshlap.shapes.sphere(300, seed=0)
+    >>> op = distributed.laplacian(V, F, h=0.02)
+    >>> lam, phi = finish(op, np.arange(op.n_local), np.zeros(1), -np.ones((op.n_local, 1)))
+    >>> bool(np.allclose(phi, 1 / np.sqrt(op.mass.sum())))
+    True
+    """
+    from mpi4py import MPI
+
+    comm, m, k = op.comm, op.mass, len(lam)
+    allsum = _allsum(comm)
+    vecs = vecs / np.sqrt(allsum((m[P, None] * vecs * vecs).sum(axis=0)))
+    phi = np.zeros((op.n_local, k))
+    phi[P] = vecs
+    Z = np.setdiff1d(np.arange(op.n_local), P)
+    if comm.allreduce(len(Z), op=MPI.SUM):
+        ind = np.zeros((op.n_local, 1))
+        ind[P] = 1.0
+        LY = op.apply(np.hstack([phi, ind]), symmetric=True)[Z]
+        den = LY[:, -1]
+        big = comm.allreduce(float(np.abs(den).max()) if len(Z) else 0.0, op=MPI.MAX)
+        ok = den > 1e-12 * max(big, 1e-300)
+        phi[Z[ok]] = LY[ok, :-1] / den[ok, None]
+    none = np.iinfo(np.int64).max
+    amax = np.abs(phi).max(axis=0) if op.n_local else np.zeros(k)
+    gmax = np.empty_like(amax)
+    comm.Allreduce(amax, gmax, op=MPI.MAX)
+    cand = (np.where(np.abs(phi) == gmax, op.ids[:, None], none).min(axis=0) if op.n_local
+            else np.full(k, none))
+    first = np.empty_like(cand)
+    comm.Allreduce(cand, first, op=MPI.MIN)
+    sign = np.zeros(k)
+    for j in range(k):
+        hit = np.flatnonzero(op.ids == first[j])
+        if len(hit):
+            sign[j] = 1.0 if phi[hit[0], j] >= 0 else -1.0
+    sign = allsum(sign)
+    return lam, phi * np.where(sign == 0, 1.0, sign)
