@@ -326,8 +326,8 @@ def eigs(
     extra : int, optional
         Guard vectors carried along by LOBPCG. Default: at least ``max(4, k // 10)``, and with
         the cotangent start as many as close the cluster of the k-th eigenvalue (every
-        cotangent eigenvalue within 10% of the k-th, plus two); a block that ends inside a
-        cluster converges slowly.
+        cotangent eigenvalue within 10% of the k-th, plus two; at most k // 4 more); a block
+        that ends inside a cluster converges slowly.
     mesh : (V, F), optional
         Mesh for the cotangent preconditioner when ``op`` does not carry one (e.g.
         :func:`meshlap.baselines.bsw_scipy`). Polygons are fan-triangulated.
@@ -410,8 +410,9 @@ def _shift_invert(op: Any, P: np.ndarray, m: np.ndarray, k: int, tol: float):
 
 
 def _start_width(k: int, least: int, n: int) -> int:
-    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends."""
-    return max(least, min(n // 3, least + max(8, k // 4)))
+    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends
+    (none added for k < 4, e.g. the semidefiniteness check's two vectors)."""
+    return max(least, min(n // 3, least + k // 4))
 
 
 def _block_size(theta: np.ndarray, k: int, least: int) -> int:

@@ -73,11 +73,11 @@ def test_noisy_sphere(monkeypatch, capsys, tmp_path):
     assert bsw == sorted(bsw, reverse=True) and bsw[-1] < cot[-1]
 
 
-def test_readme_conventions_block_runs(capsys):
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = readme.split("\n## Conventions\n", 1)[1].split("\n## ", 1)[0]
+def test_conventions_block_runs(capsys):
+    guide = (ROOT / "docs" / "operator.md").read_text(encoding="utf-8")
+    section = guide.split("\n## Conventions\n", 1)[1].split("\n## ", 1)[0]
     code = section.split("```python\n", 1)[1].split("```", 1)[0]
-    exec(compile(code, "README.md (Conventions)", "exec"), {})
+    exec(compile(code, "docs/operator.md (Conventions)", "exec"), {})
     errors = [float(v) for v in capsys.readouterr().out.split()]
     assert len(errors) == 3 and max(errors) < 5e-3
 

@@ -15,10 +15,13 @@ with D = diag(-S) (what saturates the heat-kernel symbol at high frequency) and 
 Laplacian of the rank's own rows, factored once by a sparse LU on that rank alone: for a
 mesh, the block of the cotangent stiffness on the own rows (the faces touching them); for a
 point cloud, a graph Laplacian of the own points' nearest neighbours with heat weights,
-scaled to the operator's quadratic form on the coordinate functions. On one rank it is
-exactly the single machine's preconditioner. Memory per rank: the operator's own rows, the
-LU of a sparse matrix with a handful of entries per row, and about a dozen blocks of
-n_local × (k + extra) numbers.
+scaled to the operator's quadratic form on the coordinate functions, with the weights of
+each row on other ranks' points on its diagonal. On one rank it is exactly the single
+machine's preconditioner. With a mesh, the start is LOBPCG on the cotangent problem (K as a
+distributed PETSc matrix), whose Ritz values also size the block to hold the k-th
+eigenvalue's cluster, as in :func:`meshlap.spectral.eigs`. Memory per rank: the operator's
+own rows, the LU of a sparse matrix with a handful of entries per row, and about a dozen
+blocks of n_local × (block width) numbers. See docs/distributed.md for the measured figures.
 
 Examples
 --------
