@@ -189,13 +189,18 @@ def _distributed_arrays(op: Any) -> dict[str, Any] | None:
     # collective: every rank calls it; rank 0 gets the arrays, the others None
     if op.matrix_free:
         raise MeshError("a matrix-free distributed operator stores no matrix to save")
+    separate = op.L_sym is not op.L  # the corrected default: point-wise rows and the pencil's L_sym
     L, mass, V = op.to_scipy(root=0), op.gather(op.mass, root=0), op.gather(op.V, root=0)
+    L_sym = op.to_scipy(root=0, symmetric=True) if separate else L
     if L is None:
         return None
     out = _csr_arrays("", L)
+    if L_sym is not L:
+        same = np.array_equal(L.indptr, L_sym.indptr) and np.array_equal(L.indices, L_sym.indices)
+        out.update({"sym_data": L_sym.data} if same else _csr_arrays("sym_", L_sym))
     out.update(mass=mass, h=np.array(op.h), tol=np.array(op.tol), radius=np.array(op.radius),
-               correction=np.array("none"), points=V, dim=np.array(2), spacing=np.array(0.0),
-               source=np.array("distributed"))
+               moment_scale=np.array(op.moment_scale), correction=np.array(op.correction), points=V,
+               dim=np.array(2), spacing=np.array(0.0), source=np.array("distributed"))
     return out
 
 

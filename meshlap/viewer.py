@@ -22,8 +22,9 @@ import numpy as np
 
 from .errors import MeshError
 from .geometry.validation import check_faces, check_function, check_vertices
+from .upright import colour_range, parse_up, to_z_up
 
-__all__ = ["colour_range", "save_html", "show", "show_modes"]
+__all__ = ["save_html", "show", "show_modes"]
 
 # copies in a grid are this many bounding-box sizes apart
 _GAP = 1.3
@@ -43,25 +44,6 @@ def _colormap(k3d: Any, name: str) -> Any:
         if hasattr(maps, key):
             return getattr(maps, key)
     raise MeshError(f"unknown colormap {name!r}; use a matplotlib name such as 'viridis' or 'RdBu_r'")
-
-
-def colour_range(f: np.ndarray, vmin: float | None, vmax: float | None, symmetric: bool) -> list[float]:
-    """The colour range ``[lo, hi]`` of values ``f``: given ends win, ``symmetric`` centres it on 0,
-    and a constant function gets a range of 1 around its value.
-
-    Examples
-    --------
-    >>> colour_range(np.array([-1.0, 3.0]), None, None, True), colour_range(np.ones(3), None, None, False)
-    ([-3.0, 3.0], [0.5, 1.5])
-    """
-    lo = float(np.nanmin(f)) if vmin is None else float(vmin)
-    hi = float(np.nanmax(f)) if vmax is None else float(vmax)
-    if symmetric:
-        hi = max(abs(lo), abs(hi))
-        lo = -hi
-    if hi <= lo:  # a constant function: any non-empty range draws it in one colour
-        lo, hi = lo - 0.5, hi + 0.5
-    return [lo, hi]
 
 
 def show(V: Any, F: Any = None, f: Any = None, *, titles: Sequence[str] | None = None,
@@ -108,14 +90,12 @@ def show(V: Any, F: Any = None, f: Any = None, *, titles: Sequence[str] | None =
     >>> len(plot.objects)
     4
     """
-    from .plot import _parse_up, _to_z_up
-
     k3d = _k3d()
     V = check_vertices(V)
     if V.shape[1] != 3:
         raise MeshError(f"the viewer draws points in 3D; V has {V.shape[1]} columns")
     tris = None if F is None else check_faces(F, len(V)).triangles()
-    P = _to_z_up(V, "+z" if F is None and up == "auto" else _parse_up(up, V, tris))
+    P = to_z_up(V, "+z" if F is None and up == "auto" else parse_up(up, V, tris))
     Phi = None if f is None else check_function(f, len(V), name="f").reshape(len(V), -1)
     m = 1 if Phi is None else Phi.shape[1]
     if titles is not None and len(titles) != m:

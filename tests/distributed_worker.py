@@ -99,7 +99,7 @@ class Checks:
 
     def saved(self):
         """save_operator on every rank writes the gathered operator once (rank 0); it reloads
-        bit for bit: the entries, the masses and the product."""
+        bit for bit: both matrices of the corrected default (L, L_sym), the masses, the product."""
         import tempfile
 
         import meshlap
@@ -109,10 +109,12 @@ class Checks:
         op = distributed.laplacian(V, F, h=0.01, comm=self.comm)
         folder = self.comm.bcast(tempfile.mkdtemp() if self.rank == 0 else None)
         path = io.save_operator(Path(folder) / "dist.npz", op)
-        A = op.to_scipy()
+        A, A_sym = op.to_scipy(), op.to_scipy(symmetric=True)
         if self.rank == 0:
             back = io.load_operator(path)
             detail = same_entries(back.L, A)
+            same_entries(back.L_sym, A_sym)
+            assert abs(A - A_sym).max() > 0 and back.correction == op.correction == "richardson"
             assert np.array_equal(back @ V, A @ V)
             assert np.array_equal(back.mass, meshlap.vertex_mass(V, F)) and np.array_equal(back.V, V)
             self.report("saved", f"{detail} after save_operator/load_operator")

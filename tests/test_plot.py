@@ -76,11 +76,11 @@ def test_up_axis_finds_the_base_whatever_the_orientation(up):
     # a half sphere stands on its flat cut: rotated so that the cut faces -up, it is found
     V, F = meshlap.shapes.sphere(800, seed=2)
     V[:, 2] = np.maximum(V[:, 2], -0.3)
-    R = plot._to_z_up(np.eye(3), up)  # drawing takes W to W @ R, a rotation
+    R = plot.to_z_up(np.eye(3), up)  # drawing takes W to W @ R, a rotation
     assert np.linalg.det(R) == pytest.approx(1.0)
     W = V @ R.T  # the half sphere turned so that it stands on its cut with `up` up
     assert plot.up_axis(W, F) == up
-    np.testing.assert_allclose(plot._to_z_up(W, up), V, atol=1e-12)  # drawn upright again
+    np.testing.assert_allclose(plot.to_z_up(W, up), V, atol=1e-12)  # drawn upright again
 
 
 def test_up_axis_without_a_base_is_z():
