@@ -39,7 +39,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import meshlap
-from meshlap import baselines, highorder, rowchoice, shapes
+from meshlap import baselines, shapes
+from meshlap.corrections import highorder, rowchoice
 
 sys.path.insert(0, str(Path(__file__).parent))
 from results_file import write_section  # noqa: E402

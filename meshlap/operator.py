@@ -98,11 +98,21 @@ class MeshLaplacian(LumpedLaplacian):
         options below unless asked for. docs/accuracy.md has the measurements.
     adaptive : bool, default False
         Per-vertex widths 4ℓ_w² from the local edge lengths.
-    arc_distance, pointwise, neumann : bool, optional
+    arc_distance, neumann : bool, optional
         Default True with the correction (False when matrix-free; ``arc_distance`` only
         where normals exist, codimension 1): distances scaled by the arc/chord ratio of the
-        normals; ``op @ f`` (and ``op.L``) applies the row-wise moment correction; mirror
-        images at the boundary (Neumann spectra) for curves, surfaces, volumes and clouds.
+        normals; mirror images at the boundary (Neumann spectra) for curves, surfaces,
+        volumes and clouds.
+    pointwise : {True, False, "fit"}, optional
+        What ``op @ f`` (``op.L``) applies. Default True with the correction: the kernel's
+        rows corrected to be exact for quadratics (moments). "fit": rows exact for
+        polynomials up to degree 6 in local coordinates of the fitted manifold, their width
+        and degree chosen per point from the data (compact and high degree where clean, wide
+        and low where noisy; :func:`meshlap.corrections.rowchoice.choose_rows`,
+        ``op.pointwise_choice``). False: ``op.L`` is ``op.L_sym``.
+    pointwise_degree : int, optional
+        Rows exact for polynomials of this degree (2-6) fitted on the kernel's own stencil
+        with its Gaussian weights (:func:`meshlap.corrections.highorder.pointwise_rows`).
     curvature_limit : float, optional
         β of h_w = min(h, β/κ_w²); default 0.05 with the correction, automatic h and
         normals, else 0.
@@ -191,12 +201,14 @@ class MeshLaplacian(LumpedLaplacian):
         curvature_limit: float | None = None,
         check_psd: bool = True,
         k: int | None = None,
+        pointwise_degree: int | None = None,
     ) -> None:
         self.geometry = as_geometry(V, F, k)
         self.options = pipeline.Options.resolve(
             self.geometry, h, correction=correction, adaptive=adaptive, arc_distance=arc_distance,
             pointwise=pointwise, neumann=neumann, curvature_limit=curvature_limit, check_psd=check_psd,
-            matrix_free=matrix_free, tol=tol, exact=exact, dtype=dtype, max_memory=max_memory)
+            matrix_free=matrix_free, tol=tol, exact=exact, dtype=dtype, max_memory=max_memory,
+            pointwise_degree=pointwise_degree)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
         self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress))
@@ -228,6 +240,8 @@ class MeshLaplacian(LumpedLaplacian):
     moment_scale = property(lambda self: self._built.moment_scale)
     boundary_rows = property(lambda self: self._built.boundary_rows)
     pointwise_unchanged = property(lambda self: self._built.pointwise_unchanged)
+    pointwise_choice = property(lambda self: self._built.pointwise_choice,
+                                doc="Per-point width and degree of ``pointwise='fit'`` rows, else None.")
 
     @property
     def pointwise(self) -> bool:
@@ -379,7 +393,7 @@ class MeshLaplacian(LumpedLaplacian):
             rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}"))
         rows += [
             ("h", f"{self.h:.6g}{h_note}"),
-            ("correction", self.correction + (" + point-wise moments" if self.pointwise else "")),
+            ("correction", self.correction + self._pointwise_note()),
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
         ]
@@ -389,6 +403,15 @@ class MeshLaplacian(LumpedLaplacian):
             rows += [("nnz", f"{self.nnz:,} ({self.nnz / self.n_vertices:.1f} per row)"),
                      ("memory", f"{fmt_bytes(self.nbytes)} ({self.dtype.name})")]
         return rows
+
+    def _pointwise_note(self) -> str:
+        if not self.pointwise:
+            return ""
+        if self.pointwise_choice is not None:
+            return f" + fitted rows ({self.pointwise_choice.summary()})"
+        if self.options.pointwise_degree is not None:
+            return f" + fitted rows of degree {self.options.pointwise_degree}"
+        return " + point-wise moments"
 
     def __repr__(self) -> str:
         inner = ", ".join(f"{k}={v}" for k, v in self._summary())

@@ -26,10 +26,13 @@ from .geometry import Geometry
 from .geometry.validation import check_positive, check_tol
 from .widths import CURVATURE_LIMIT, Widths
 
-__all__ = ["CORRECTIONS", "Built", "Options", "build"]
+__all__ = ["CORRECTIONS", "POINTWISE", "Built", "Options", "build"]
 
 #: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
 CORRECTIONS = ("richardson", "none")
+#: ``pointwise`` values: the degree-2 moment rows (True), none (False), or rows whose width
+#: and degree are chosen per point from the data ("fit", :mod:`meshlap.corrections.rowchoice`).
+POINTWISE = (True, False, "fit")
 
 
 @dataclass(frozen=True)
@@ -38,7 +41,7 @@ class Options:
 
     correction: str
     arc_distance: bool
-    pointwise: bool
+    pointwise: bool | str
     neumann: bool
     adaptive: bool
     curvature_limit: float
@@ -47,6 +50,7 @@ class Options:
     tol: float
     dtype: np.dtype
     max_memory: int
+    pointwise_degree: int | None = None
 
     @property
     def plain(self) -> bool:
@@ -58,7 +62,8 @@ class Options:
                 arc_distance: bool | None = None, pointwise: bool | None = None,
                 neumann: bool | None = None, curvature_limit: float | None = None,
                 check_psd: bool = True, matrix_free: bool = False, tol: float = 1e-8,
-                exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None) -> Options:
+                exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
+                pointwise_degree: int | None = None) -> Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         if correction not in CORRECTIONS:
@@ -75,7 +80,16 @@ class Options:
             raise MeshError(f"arc_distance needs normals (codimension 1); this {geo.source} has k={geo.dim} "
                             f"in R^{geo.ambient_dim}")
         arc_distance = on and has_normals if arc_distance is None else bool(arc_distance)
-        pointwise = on if pointwise is None else bool(pointwise)
+        if pointwise_degree is not None:
+            if isinstance(pointwise_degree, bool) or pointwise_degree not in range(2, 7):
+                raise MeshError(f"pointwise_degree must be an integer from 2 to 6; got {pointwise_degree!r}")
+            if pointwise is False or pointwise == "fit":
+                raise MeshError("pointwise_degree gives the rows of that degree on the kernel's own "
+                                "stencil: not with pointwise=False or pointwise='fit'")
+            pointwise = True
+        if pointwise is not None and pointwise not in POINTWISE:
+            raise MeshError(f"pointwise must be True, False or 'fit'; got {pointwise!r}")
+        pointwise = on if pointwise is None else ("fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
         if curvature_limit is None:
             curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals) else 0.0
@@ -97,7 +111,8 @@ class Options:
         return cls(correction, arc_distance, pointwise, neumann, bool(adaptive), float(curvature_limit),
                    bool(check_psd), bool(matrix_free), 0.0 if exact else check_tol(tol), dt,
                    int(available_memory() * 0.8) if max_memory is None
-                   else int(check_positive(max_memory, "max_memory")))
+                   else int(check_positive(max_memory, "max_memory")),
+                   None if pointwise_degree is None else int(pointwise_degree))
 
 
 @dataclass
@@ -115,6 +130,7 @@ class Built:
     pointwise_unchanged: np.ndarray | None = None
     boundary_rows: int = 0
     matrix_free: assembly.MatrixFree | None = None
+    pointwise_choice: Any = None  # the per-point width and degree of pointwise="fit" rows
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -127,6 +143,22 @@ def _psd_faces(geo: Geometry) -> Any:
     if geo.cells is not None and geo.cells.shape[1] == 3:
         return geo.cells
     return None
+
+
+def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options) -> tuple:
+    # the rows op @ f applies: degree-2 moments of the kernel's rows (default), fitted rows of
+    # a fixed degree on the kernel's stencil, or width and degree chosen per point ("fit")
+    if opts.pointwise == "fit":
+        L, choice = corrections.rowchoice.choose_rows(geo.points, k=geo.dim)
+        return L, None, choice
+    if opts.pointwise_degree is not None:
+        L = corrections.highorder.pointwise_rows(geo.points, free.indptr, free.indices, hv,
+                                                 opts.pointwise_degree, k=geo.dim)
+        return L, None, None
+    # from the operator without mirror images: f need not satisfy Neumann conditions, and the
+    # moment correction handles the one-sided rows
+    L, unchanged = corrections.moment_correction(free, geo.points, geo.dim)
+    return L, unchanged, None
 
 
 def build(geo: Geometry, widths: Widths, opts: Options,
@@ -187,9 +219,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     if opts.pointwise:
         if report is not None:
             report(0.9, "point-wise rows")
-        # from the operator without mirror images: f need not satisfy Neumann conditions, and
-        # the moment correction handles the one-sided rows
-        out.L, out.pointwise_unchanged = corrections.moment_correction(free, geo.points, geo.dim)
+        out.L, out.pointwise_unchanged, out.pointwise_choice = _pointwise(geo, free, hv, opts)
     if report is not None:
         report(1.0, "done")
     return out

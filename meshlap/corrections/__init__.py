@@ -5,14 +5,18 @@
 * :mod:`~meshlap.corrections.moments`: the global second-moment scale (symmetric) and the
   point-wise rows exact for quadratics (what ``op @ f`` applies);
 * :mod:`~meshlap.corrections.psd`: the semidefiniteness check of the Richardson kernel, with
-  the plain kernel as its fallback.
+  the plain kernel as its fallback;
+* :mod:`~meshlap.corrections.highorder` and :mod:`~meshlap.corrections.rowchoice`: point-wise
+  rows exact for polynomials up to degree 6 in local coordinates of the fitted manifold, and
+  their width and degree chosen per point from the data (``pointwise="fit"``).
 
 The Richardson (difference of Gaussians) kernel itself is a kernel choice, made in
 :mod:`meshlap.assembly`.
 """
 
-from . import images, moments, psd
+from . import highorder, images, moments, psd, rowchoice
 from .images import neumann_images
 from .moments import moment_correction, second_moment_scale
 
-__all__ = ["images", "moment_correction", "moments", "neumann_images", "psd", "second_moment_scale"]
+__all__ = ["highorder", "images", "moment_correction", "moments", "neumann_images", "psd", "rowchoice",
+           "second_moment_scale"]

@@ -39,9 +39,9 @@ import scipy.sparse as sp
 from numba import prange
 from scipy.spatial import cKDTree
 
-from ._jit import jit
-from .errors import MeshError
-from .geometry import check_points
+from .._jit import jit
+from ..errors import MeshError
+from ..geometry import check_points
 
 __all__ = ["RowFit", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]

@@ -39,8 +39,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .errors import MeshError, MeshWarning
-from .geometry import check_points
+from ..errors import MeshError, MeshWarning
+from ..geometry import check_points
 from .highorder import RowFit, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error"]
