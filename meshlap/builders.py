@@ -95,7 +95,7 @@ def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = D
 
 
 def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float = DEFAULT_TOL, *,
-                          denoise: bool = False, neighbors: int | None = None, merge_tol: float = 1e-6,
+                          denoise: bool | None = None, neighbors: int | None = None, merge_tol: float = 1e-6,
                           outlier_ratio: float = 10.0, **kwargs: Any) -> MeshLaplacian:
     """The heat-kernel Laplacian of a point cloud (Belkin, Sun and Wang, SODA 2009).
 
@@ -120,10 +120,12 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
         Intrinsic dimension: 1 curve, 2 surface, 3 volume or 3-manifold.
     tol : float, default 1e-8
         Kernel tolerance, as for meshes.
-    denoise : bool, default False
-        Project the points onto their local tangent planes first (for noisy scans): on the
-        unit sphere with 1% radial noise this takes the error of the first 16 eigenvalues
-        from 3% (h = 0.004) to 1.0-1.1% (h = 0.002), on 16,000 points. ``op.V`` then holds the moved points.
+    denoise : bool, optional
+        Project the points onto their local tangent planes first (for noisy scans; ``op.V``
+        then holds the moved points). Default: when the cloud's normal noise exceeds about
+        14% of its spacing (:func:`~meshlap.geometry.pointcloud.noise_ratio`), noted in the
+        repr. On 16,000 unit-sphere points with 1% radial noise the default's first 9
+        eigenvalues are 0.26% off with it and 5.6% without (the paper's operator: 3.1%).
     neighbors, merge_tol, outlier_ratio
         See :func:`~meshlap.geometry.point_masses`.
     **kwargs

@@ -390,7 +390,8 @@ class MeshLaplacian(LumpedLaplacian):
         if geo.faces is not None:
             rows.append(("faces", f"{self.faces.n_faces:,}"))
         else:
-            rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}"))
+            note = f" ({geo.notes})" if geo.notes else ""
+            rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}{note}"))
         rows += [
             ("h", f"{self.h:.6g}{h_note}"),
             ("correction", self.correction + self._pointwise_note()),

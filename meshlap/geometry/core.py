@@ -83,6 +83,8 @@ class Geometry:
         Edges of a polyline or tetrahedra of a volume mesh, else None.
     source : str
         What the masses came from ("polyline", "surface", "tetrahedra", "point cloud").
+    notes : str
+        What the builder did to the input ("" when nothing), shown in the operator's repr.
 
     Examples
     --------
@@ -100,6 +102,7 @@ class Geometry:
     faces: Polygons | None = None
     cells: np.ndarray | None = None
     source: str = "mesh"
+    notes: str = ""  # what the builder did to the input, e.g. that it denoised a cloud
     # frames computed on first use and kept: a build asks for each once
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 

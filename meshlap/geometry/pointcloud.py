@@ -51,7 +51,10 @@ from ..errors import MeshError, MeshWarning
 from .core import Geometry, check_points
 from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
 
-__all__ = ["point_cloud_geometry", "point_masses", "project_to_tangent"]
+__all__ = ["NOISY", "noise_ratio", "point_cloud_geometry", "point_masses", "project_to_tangent"]
+
+#: The noise ratio σ̂²/a² (:func:`noise_ratio`) above which a cloud is denoised by default.
+NOISY = 0.02
 
 # First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
 # does not secure, up to _MAX_NEIGHBORS.
@@ -298,25 +301,65 @@ def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.n
     return out
 
 
-def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool = False, **kwargs: Any) -> Geometry:
+def noise_ratio(P: Any, k: int = 2, neighbors: int | None = None) -> float:
+    """σ̂²/a²: the median variance of the points' nearest neighbourhoods normal to their
+    k-plane of best fit, over the squared mean distance a to the 6 nearest neighbours.
+
+    About 1e-3 on clean samples of smooth surfaces (the sagitta of a curved patch), 0.01 on a
+    4,000-vertex torus of tube radius 0.4, 0.08 on 16,000 sphere points with 1% radial noise.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> bool(noise_ratio(meshlap.shapes.fibonacci_sphere(2000)) < NOISY)
+    True
+    """
+    P = check_points(P)
+    K = min(neighbors or _NEIGHBORS.get(k, 20 * k), len(P) - 1)
+    tree = KDTree(P)
+    _, idx = tree.query(P, k=K + 1)
+    d, _ = tree.query(P, k=min(7, len(P)))
+    normal = np.empty(len(P))
+    for a in range(0, len(P), 65536):  # blocks bound the (block, K+1, d) temporaries
+        nb = P[np.asarray(idx[a:a + 65536], np.int64)]
+        X = nb - nb.mean(axis=1, keepdims=True)
+        w = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", X, X) / X.shape[1])
+        normal[a:a + 65536] = w[:, : P.shape[1] - k].sum(axis=1)
+    spacing = float(np.mean(np.asarray(d)[:, 1:]))
+    return float(np.median(normal)) / max(spacing * spacing, 1e-300)
+
+
+def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **kwargs: Any) -> Geometry:
     """The :class:`~meshlap.geometry.Geometry` of a point cloud: points, masses from
     :func:`point_masses`, intrinsic dimension k, open cells as boundary.
 
     ``denoise=True`` first moves the points onto their local tangent planes
     (:func:`project_to_tangent`); the kernel then sees distances without most of the normal
-    noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}.
+    noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}, and the Richardson
+    kernel's narrow half by (1 + 2σ²/h)^{-1/2}: a bias of about 1.5σ²/h that outgrows the O(h)
+    bias it removes. ``denoise=None`` (the default) projects when :func:`noise_ratio` exceeds
+    :data:`NOISY` (noise above about 14% of the spacing) and notes it in ``notes``; on 16,000
+    sphere points with 1% radial noise the default's first 9 eigenvalues go from 5.6% to
+    0.26% off (the paper's operator: 3.1%).
 
     Examples
     --------
     >>> import meshlap
     >>> g = point_cloud_geometry(meshlap.shapes.fibonacci_sphere(1000))
-    >>> g.dim, g.source, round(g.spacing, 3)
-    (2, 'point cloud', 0.12)
+    >>> g.dim, g.source, round(g.spacing, 3), g.notes
+    (2, 'point cloud', 0.12, '')
     """
     P = check_points(P)
+    notes = ""
+    valid_k = isinstance(k, (int, np.integer)) and not isinstance(k, bool) and 1 <= k < P.shape[1]
+    if denoise is None and valid_k and len(P) > 8:  # bad k: point_masses names the problem
+        ratio = noise_ratio(P, k, kwargs.get("neighbors"))
+        denoise = ratio > NOISY
+        if denoise:
+            notes = f"denoised: normal noise {ratio:.3g} of the squared spacing"
     if denoise:
         P = project_to_tangent(P, k, kwargs.get("neighbors"))
     mass, info = point_masses(P, k, **kwargs)
     cells = info.get("triangles") if k == 2 else None
     return Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
-                    source="point cloud")
+                    source="point cloud", notes=notes)
