@@ -190,9 +190,11 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     hv = widths.per_point(geo.n_points)
 
     def stage(k: Kernel, what: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        if report is not None:
+            report(0.0, what)
         free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
                                  progress=None if report is None else (lambda f, s: report(0.6 * f, s)))
-        if report is not None:
+        if report is not None and opts.neumann:
             report(0.6, "boundary images")
         L = (corrections.neumann_images(free, geo.points, frames, geo.mass, hv, k.dog, geo.dim)
              if opts.neumann else free)

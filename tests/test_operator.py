@@ -242,6 +242,14 @@ def test_progress_callback():
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and fracs[-1] == 1.0
     assert {"count", "fill", "done"} <= {s for _, s in seen}
+    # the default reports each stage of the pipeline by name, in order
+    V, F = shapes.plane(1500, seed=0)
+    seen.clear()
+    meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
+    stages = list(dict.fromkeys(s for _, s in seen))
+    assert stages == ["kernel rows", "boundary images", "semidefinite check", "moment scale",
+                      "point-wise rows", "done"]
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen)
 
 
 def test_memory_guard():
