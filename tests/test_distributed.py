@@ -166,6 +166,8 @@ def test_clear_errors():
         distributed.laplacian(V, mass=np.ones(100), correction="none", comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="zero mass"):
         distributed.laplacian(V, mass=np.zeros(100), correction="none", h=0.01, comm=MPI.COMM_SELF)
+    with pytest.raises(meshlap.MeshError, match="not built on many ranks"):
+        distributed.laplacian(V, F, comm=MPI.COMM_SELF, pointwise="fit")
     with pytest.raises(meshlap.MeshError, match="partition"):
         distributed.laplacian(V, F, correction="none", h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
 

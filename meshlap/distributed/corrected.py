@@ -25,11 +25,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import assembly, corrections
+from ..errors import MeshError
 from ..geometry import Geometry
 from ..pipeline import Options
 from ..widths import Widths
 
-__all__ = ["PointAttributes", "attributes", "local_rows"]
+__all__ = ["PointAttributes", "attributes", "check_supported", "local_rows"]
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,16 @@ class PointAttributes:
                 np.ascontiguousarray(T[:, 2 + d:2 + 2 * d]), np.ascontiguousarray(T[:, 2 + 2 * d:]))
 
 
+def check_supported(opts: Options) -> None:
+    """The options the ranks build: the fitted point-wise rows are single-machine only so far."""
+    if opts.pointwise == "fit" or opts.pointwise_degree is not None:
+        raise MeshError("pointwise='fit' and pointwise_degree are not built on many ranks yet: use the "
+                        "default point-wise rows (pointwise=True) or meshlap.laplacian on one machine")
+
+
 def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
     """Stage 1-2 results of the whole geometry as per-point columns (every rank the same)."""
+    check_supported(opts)
     # the ranks work in three coordinates: lower dimensions are padded with zeros, which
     # leaves distances, normals and reflections as they are
     n, d0 = geo.points.shape
