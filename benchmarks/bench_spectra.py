@@ -155,6 +155,8 @@ def inputs(quick: bool):
     out.append((f"sphere cloud, {n:,} points", "cloud", P, _sphere_exact()))
     noisy = samples.sphere_points(n, "noisy", seed=0, noise=0.01)
     out.append(("same, 1% noise", "cloud", noisy, _sphere_exact()))
+    # the same noisy points without the default's projection onto the tangent planes
+    out.append(("same, 1% noise, `denoise=False`", "cloud-raw", noisy, _sphere_exact()))
     Vl, E, _ = samples.circle(2000 if not quick else 400, kind="random", seed=0)
     out.append((f"circle, {len(Vl):,} random angles", "curve", (Vl, E),
                 np.array([0] + [m * m for m in range(1, 6) for _ in range(2)], float)[:K]))
@@ -194,15 +196,18 @@ def row(name, kind, data, ref):
         def build(**o):
             return meshlap.laplacian(V, C, **kw, **o)
     else:
+        raw = {"denoise": False} if kind == "cloud-raw" else {}
+
         def build(**o):
-            return meshlap.point_cloud_laplacian(data, **o)
+            return meshlap.point_cloud_laplacian(data, **raw, **o)
     t0 = time.perf_counter()
     lam, op, warned = ours(build)
     res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction)
     lam, _, _ = ours(build, correction="none")
     res["paper"] = (err(lam), None, False, "none")
     peers = {"mesh": (("COT", cot), ("LaPy", lapy_tria), ("robust", robust_mesh)),
-             "tets": (("LaPy", lapy_tet),), "cloud": (("robust", robust_cloud),), "curve": ()}[kind]
+             "tets": (("LaPy", lapy_tet),), "cloud": (("robust", robust_cloud),),
+             "cloud-raw": (("robust", robust_cloud),), "curve": ()}[kind]
     for pname, fn in peers:
         try:
             res[pname] = (err(fn(*data) if isinstance(data, tuple) else fn(data)), None, False, "")

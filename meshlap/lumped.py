@@ -42,6 +42,19 @@ class LumpedLaplacian:
             self._S = sp.csr_matrix(self.M @ self.L_sym)
         return self._S
 
+    @property
+    def n_vertices(self) -> int:
+        return len(self.mass)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.n_vertices, self.n_vertices)
+
+    @property
+    def nnz(self) -> int:
+        """Stored entries of ``L_sym``."""
+        return int(self.L_sym.nnz)
+
 
 class SparseLaplacian(LumpedLaplacian):
     """A Laplacian ``L`` with a diagonal mass ``M``: the common surface of every operator.
@@ -74,18 +87,6 @@ class SparseLaplacian(LumpedLaplacian):
         self.mass = np.asarray(mass, dtype=np.float64)
         self.name = name
         self._S = None if S is None else sp.csr_matrix(S)
-
-    @property
-    def n_vertices(self) -> int:
-        return self.L.shape[0]
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.L.shape
-
-    @property
-    def nnz(self) -> int:
-        return int(self.L.nnz)
 
     def __matmul__(self, f: Any) -> np.ndarray:
         return np.asarray(self.L @ check_function(f, self.n_vertices))

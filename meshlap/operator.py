@@ -282,14 +282,6 @@ class MeshLaplacian(LumpedLaplacian):
         return sp.diags(self.mass.astype(self.dtype), format="csr")
 
     @property
-    def n_vertices(self) -> int:
-        return self.geometry.n_points
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return (self.n_vertices, self.n_vertices)
-
-    @property
     def nnz(self) -> int:
         """Stored entries of L (0 when matrix-free)."""
         return 0 if self._built.L_sym is None else int(self._built.L_sym.nnz)

@@ -117,18 +117,6 @@ class SavedLaplacian(LumpedLaplacian):
         return self._S
 
     @property
-    def n_vertices(self) -> int:
-        return self._applied.shape[0]
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self._applied.shape
-
-    @property
-    def nnz(self) -> int:
-        return int(self._sym.nnz)
-
-    @property
     def nbytes(self) -> int:
         """Bytes held by the CSR arrays (the point-wise values share the indices)."""
         extra = self._applied.data.nbytes if self.pointwise else 0

@@ -42,6 +42,7 @@ from scipy.spatial import cKDTree
 from .._jit import jit
 from ..errors import MeshError
 from ..geometry import check_points
+from ._cholesky import chol_solve, cholesky
 
 __all__ = ["RowFit", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]
@@ -94,39 +95,6 @@ def _recursion(exps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         e[i] -= 1
         parent[a], var[a] = where[tuple(e)], i
     return parent, var
-
-
-@jit()
-def _cholesky(G, m, diag):  # pragma: no cover - compiled
-    # in-place lower Cholesky of G[:m, :m]; returns the first column whose pivot is not
-    # clearly positive (m when all are)
-    for j in range(m):
-        s = G[j, j]
-        for q in range(j):
-            s -= G[j, q] * G[j, q]
-        if not s > _PIVOT_TOL * diag[j]:
-            return j
-        G[j, j] = math.sqrt(s)
-        for i in range(j + 1, m):
-            s = G[i, j]
-            for q in range(j):
-                s -= G[i, q] * G[j, q]
-            G[i, j] = s / G[j, j]
-    return m
-
-
-@jit()
-def _chol_solve(Lc, x, m):  # pragma: no cover - compiled
-    for i in range(m):
-        s = x[i]
-        for q in range(i):
-            s -= Lc[i, q] * x[q]
-        x[i] = s / Lc[i, i]
-    for i in range(m - 1, -1, -1):
-        s = x[i]
-        for q in range(i + 1, m):
-            s -= Lc[q, i] * x[q]
-        x[i] = s / Lc[i, i]
 
 
 @jit()
@@ -232,10 +200,10 @@ def _rows(P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
                 t = th[j] * Phi[j, al]
                 for be in range(al + 1):
                     G[al, be] += t * Phi[j, be]
-        diag = np.empty(m)
+        floor = np.empty(m)  # a pivot must stay above this fraction of its diagonal entry
         for al in range(m):
-            diag[al] = G[al, al]
-        good = _cholesky(G, m, diag)
+            floor[al] = _PIVOT_TOL * G[al, al]
+        good = cholesky(G, m, floor)
         q = degree
         while q >= 2 and count[q] > good:
             q -= 1
@@ -257,7 +225,7 @@ def _rows(P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
                 for j in range(K):
                     s += th[j] * Phi[j, al] * Z[j, c]
                 coef[al] = s
-            _chol_solve(G, coef, mq)
+            chol_solve(G, coef, mq)
             for i in range(k):
                 ag[c, i] = coef[idx1[i]] / rho
                 for jj in range(k):
@@ -315,7 +283,7 @@ def _rows(P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
             for mm in range(k):
                 vl += Gi[i, mm] * t[mm]
             lam[idx1[i]] -= vl / rho
-        _chol_solve(G, lam, mq)
+        chol_solve(G, lam, mq)
         s2 = 0.0
         for j in range(K):
             s = 0.0

@@ -24,36 +24,9 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._jit import jit
+from ._cholesky import chol_solve, cholesky
 
 __all__ = ["moment_correction", "second_moment_scale"]
-
-
-@jit(inline="always")
-def _solve_spd(G, r, k):  # pragma: no cover - compiled
-    # Cholesky solve of the k×k block of G (modified in place); returns False if not SPD
-    for j in range(k):
-        s = G[j, j]
-        for q in range(j):
-            s -= G[j, q] * G[j, q]
-        if s <= 0.0:
-            return False
-        G[j, j] = math.sqrt(s)
-        for i in range(j + 1, k):
-            s = G[i, j]
-            for q in range(j):
-                s -= G[i, q] * G[j, q]
-            G[i, j] = s / G[j, j]
-    for i in range(k):
-        s = r[i]
-        for q in range(i):
-            s -= G[i, q] * r[q]
-        r[i] = s / G[i, i]
-    for i in range(k - 1, -1, -1):
-        s = r[i]
-        for q in range(i + 1, k):
-            s -= G[q, i] * r[q]
-        r[i] = s / G[i, i]
-    return True
 
 
 @jit(parallel=True)
@@ -91,6 +64,7 @@ def _moment_rows(indptr, indices, data, P, k, out, failed):  # pragma: no cover 
         # target moments: 0 for u_a and u_a u_b (a ≠ b), 2/σ² for u_a² (units of σ)
         G = np.zeros((m, m))
         r = np.zeros(m)
+        floor = np.zeros(m)  # any positive pivot will do
         phi = np.empty(m)
         u = np.empty(k)
         pos = k
@@ -109,9 +83,10 @@ def _moment_rows(indptr, indices, data, P, k, out, failed):  # pragma: no cover 
                 r[i] -= data[q] * phi[i]
                 for j in range(i + 1):
                     G[i, j] += c * phi[i] * phi[j]
-        if not _solve_spd(G, r, m):
+        if cholesky(G, m, floor) < m:  # not positive definite: the row stays as it was
             failed[w] = 1
             continue
+        chol_solve(G, r, m)
         diag = -1
         s = 0.0
         for q in range(a, b):
