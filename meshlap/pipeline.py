@@ -185,8 +185,9 @@ def build(geo: Geometry, widths: Widths, opts: Options,
         if dog:
             apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
         return Built(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply)
-    guard = MemoryGuard(geo.n_points, opts.dtype, opts.max_memory, widths.h,
-                        matrices=2 if opts.pointwise else 1)
+    guard = MemoryGuard.for_build(geo.n_points, opts.dtype, opts.max_memory, widths.h,
+                                  images=opts.neumann and frames is not None, pointwise=opts.pointwise,
+                                  own_pattern=opts.pointwise_degree is not None)
     hv = widths.per_point(geo.n_points)
 
     def stage(k: Kernel, what: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
@@ -210,6 +211,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
                                                                     what)
         if out.fallback_reason is not None:
             out.correction = "none"
+            out.L_sym = out.L = free = L = None  # let the Richardson rows go before the plain ones come
             free, L = stage(replace(kern, dog=False), "plain kernel rows")
             out.L_sym = out.L = L
     if out.correction != "none":

@@ -38,9 +38,11 @@ from numba import prange
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
+from . import _lobpcg
 from ._jit import jit
 from .errors import MeshError
 from .geometry.validation import check_faces, check_k, check_vertices
+from .progress import ProgressLike, make_progress
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 
@@ -203,92 +205,6 @@ def _factor(A: sp.spmatrix):
                           options={"SymmetricMode": True})
 
 
-class _CotPreconditioner:
-    """T R = (K + σM)⁻¹ R + ½ D⁻¹ R (see the module notes); K from the cotangent Laplacian."""
-
-    def __init__(self, K: sp.csc_matrix | None, m: np.ndarray, diag: np.ndarray, sigma: float) -> None:
-        self.K = K
-        self.m = m
-        self.sigma = sigma
-        self.lu = None if K is None else _factor(K + sp.diags(sigma * m))
-        typical = float(np.median(diag / m)) if len(m) else 1.0  # no rows: an MPI rank without any
-        d = np.where(diag > 0, diag, m * max(typical, 1e-300))
-        self.half_inv_diag = 0.5 / d
-
-    def __call__(self, R: np.ndarray) -> np.ndarray:
-        out = self.half_inv_diag[:, None] * R
-        if self.lu is not None:
-            out += self.lu.solve(np.asfortranarray(R))
-        return out
-
-
-# -- LOBPCG --------------------------------------------------------------------------------------
-def _local(a: np.ndarray) -> np.ndarray:
-    return a
-
-
-def _svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10, allsum=_local) -> tuple[np.ndarray, np.ndarray]:
-    """M-orthonormalize the columns of U (dropping near-dependent directions): U @ T."""
-    G = allsum(U.T @ (m[:, None] * U))
-    d = np.sqrt(np.abs(np.diag(G)))
-    d[d == 0] = 1.0
-    w, Q = np.linalg.eigh(G / d[:, None] / d[None, :])
-    keep = w > drop * max(float(w.max()), 1e-300)
-    T = (Q[:, keep] / np.sqrt(w[keep])) / d[:, None]
-    return U @ T, T
-
-
-def _lobpcg(apply_A, m: np.ndarray, precond, X0: np.ndarray, k: int, tol: float, maxiter: int,
-            allsum=_local):
-    """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
-
-    Rayleigh–Ritz on [X, W, P] with W and P kept M-orthogonal to X (the basis selection of
-    Hetmaniuk and Lehoucq, 2006), so the small problems are well conditioned. Columns whose
-    residual ‖A x - λ M x‖_{M⁻¹} is below ``tol · max(λ, λ_k)`` stop receiving new directions.
-    The rows may be a share of the problem's (an MPI rank's): ``allsum`` then adds the small
-    Gram matrices and norms over the shares, so every share solves the same small problems.
-    Returns (λ, X, iterations, residual norms).
-    """
-    X, _ = _svqb(X0, m, allsum=allsum)
-    AX = apply_A(X)
-    G = allsum(X.T @ AX)
-    lam, Q = np.linalg.eigh(0.5 * (G + G.T))
-    X, AX = X @ Q, AX @ Q
-    nb = X.shape[1]
-    P = AP = None
-    for it in range(maxiter + 1):
-        R = AX - (m[:, None] * X) * lam
-        res = np.sqrt(allsum(np.sum(R * R / m[:, None], axis=0)))
-        scale = np.maximum(np.abs(lam), max(abs(float(lam[k - 1])), 1e-300))
-        active = res > tol * scale
-        if not active[:k].any() or it == maxiter:
-            break
-        W = precond(R[:, active])
-        for _ in range(2):  # classical Gram–Schmidt, twice is enough
-            W -= X @ allsum(X.T @ (m[:, None] * W))
-            if P is not None:
-                W -= P @ allsum(P.T @ (m[:, None] * W))
-        W, _ = _svqb(W, m, allsum=allsum)
-        AW = apply_A(W)
-        Z = np.hstack([X, W] if P is None else [X, W, P])
-        AZ = np.hstack([AX, AW] if P is None else [AX, AW, AP])
-        G = allsum(Z.T @ AZ)
-        B = allsum(Z.T @ (m[:, None] * Z))
-        lam_all, C = sla.eigh(0.5 * (G + G.T), 0.5 * (B + B.T))
-        C, lam = C[:, :nb], lam_all[:nb]
-        Xn, AXn = Z @ C, AZ @ C
-        # the new search directions: the part of the update outside the old X
-        Cp = C[nb:, active]
-        Pn, APn = Z[:, nb:] @ Cp, AZ[:, nb:] @ Cp
-        c = allsum(Xn.T @ (m[:, None] * Pn))
-        Pn -= Xn @ c
-        APn -= AXn @ c
-        P, T = _svqb(Pn, m, allsum=allsum)
-        AP = APn @ T
-        X, AX = Xn, AXn
-    return lam, X, it, res
-
-
 # -- the public solver ------------------------------------------------------------------------
 def eigs(
     op: Any,
@@ -300,6 +216,7 @@ def eigs(
     extra: int | None = None,
     mesh: tuple[Any, Any] | None = None,
     seed: int = 0,
+    progress: ProgressLike = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` (the symmetric form of -L).
 
@@ -319,8 +236,11 @@ def eigs(
         ``"auto"``: dense up to 1,200 vertices with mass, shift-invert for operators with at
         most 40 entries per row, LOBPCG otherwise.
     tol : float, default 1e-8
-        Relative residual ``‖-Sφ - λMφ‖_{M⁻¹} ≤ tol · max(λ, λ_k)`` for LOBPCG (eigenvalues
-        are then accurate to about tol²); passed to eigsh for shift-invert.
+        Relative accuracy of the eigenvalues: LOBPCG stops when a bound on each eigenvalue's
+        error from its residual (Kato–Temple over its cluster, see :mod:`meshlap._lobpcg`) is
+        below ``tol · max(λ, λ_k / 100)``. The eigenvectors are then accurate to about
+        ``√tol`` (ask ``tol=1e-14`` for eigenvectors to about 1e-7). Passed to eigsh for
+        shift-invert.
     maxiter : int, default 200
         LOBPCG iterations before giving up with a warning.
     extra : int, optional
@@ -333,6 +253,10 @@ def eigs(
         :func:`meshlap.baselines.bsw_scipy`). Polygons are fan-triangulated.
     seed : int, default 0
         Seed of the random start vectors (the result does not depend on it beyond ``tol``).
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)`` with the stage
+        names "preconditioner", "cotangent start (iteration i)", "LOBPCG (iteration i)",
+        "shift-invert", "dense" and "done".
 
     Returns
     -------
@@ -383,13 +307,18 @@ def eigs(
     if method == "lobpcg" and 3 * (k + extra) >= n_p:
         method = "dense"
 
+    report = make_progress(progress)
+    if report is not None and method != "lobpcg":
+        report(0.0, method)
     if method == "dense":
         S = _restricted_S(op, P).toarray()
         lam, X = sla.eigh(-0.5 * (S + S.T), np.diag(m), subset_by_index=[0, k - 1])
     elif method == "shift-invert":
         lam, X = _shift_invert(op, P, m, k, tol)
     else:
-        lam, X = _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt)
+        lam, X = _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report)
+    if report is not None:
+        report(1.0, "done")
     order = np.argsort(lam)
     lam, X = lam[order], X[:, order]
     return lam, _normalize_signs(_extend(op, P, X))
@@ -429,7 +358,7 @@ def _block_size(theta: np.ndarray, k: int, least: int) -> int:
     return int(min(len(theta), max(least, near + 2)))
 
 
-def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt):
+def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=None):
     n, n_p = op.n_vertices, len(P)
     nb = k + extra
     full = n_p == n
@@ -448,28 +377,30 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt):
     else:
         diag = -m * np.asarray(symmetric_L(op).diagonal())[P]
     sigma = _scale_shift(m)
+    if report is not None:
+        report(0.0, "preconditioner")
     geo = _mesh_of(op, mesh)
     K = None if geo is None else _cot_stiffness(geo[0], geo[1], P)
-    T = _CotPreconditioner(K, m, diag, sigma)
+    T = _lobpcg.CotPreconditioner(K, m, diag, sigma)
     rng = np.random.default_rng(seed)
     X0 = rng.standard_normal((n_p, _start_width(k, nb, n_p) if adapt and K is not None else nb))
     with _one_blas_thread():
         if K is not None:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
-            def exact(R: np.ndarray) -> np.ndarray:  # the same factorization, without ½ D⁻¹
-                return T.lu.solve(np.asfortranarray(R))
-
-            theta, X0, _, _ = _lobpcg(lambda Y: np.asarray(K @ Y), m, exact, X0, k, 1e-2, 10)
-            X0 = X0[:, :_block_size(theta, k, nb) if adapt else nb]
-        lam, X, it, res = _lobpcg(apply_A, m, T, X0, k, tol, maxiter)
-    scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
-    if (res[:k] > tol * scale).any():
+            # (the same factorization, without ½ D⁻¹), to a residual of 1%
+            cb = _lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2)
+            start = _lobpcg.lobpcg(lambda Y: np.asarray(K @ Y), m, T.lu.solve, X0, k, 1e-2, 10,
+                                   on_values=False, report=cb, cheap=True)
+            X0 = start.X[:, :_block_size(start.lam, k, nb) if adapt else nb]
+        out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter,
+                             report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
+    if (out.ratio[:k] > 1).any():
         warnings.warn(
-            f"eigs: LOBPCG stopped after {it} iterations with relative residual "
-            f"{float((res[:k] / scale).max()):.2e} > tol={tol:g}; raise maxiter or tol",
+            f"eigs: LOBPCG stopped after {out.iterations} iterations with eigenvalue error bound "
+            f"{float(out.ratio[:k].max()):.2g} times tol={tol:g}; raise maxiter or tol",
             RuntimeWarning, stacklevel=3,
         )
-    return lam[:k], X[:, :k]
+    return out.lam[:k], out.X[:, :k]
 
 
 # -- the sphere's spectrum --------------------------------------------------------------------------

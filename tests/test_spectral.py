@@ -14,7 +14,6 @@ from meshlap import shapes, spectral
 from meshlap.baselines import bsw_scipy, cotangent
 
 DATA = Path(__file__).parent / "data"
-DATA = Path(__file__).parent / "data"
 SHELLS = [(0, 1), (1, 3), (2, 5), (3, 7)]  # (degree l, multiplicity 2l+1): 16 eigenpairs
 
 
@@ -56,7 +55,7 @@ def test_unit_sphere_multiplicities_and_convergence_in_n():
         V, F = shapes.sphere(n, seed=0)
         op = meshlap.laplacian(V, F, h=h, correction="none")
         lam, phi = spectral.eigs(op, 16, method="lobpcg")
-        check_eigenpairs(op, lam, phi, 1e-7)
+        check_eigenpairs(op, lam, phi, 1e-4)  # about √tol: tol is on the eigenvalues
         start, err = 0, 0.0
         for d, mult in SHELLS:
             shell = lam[start:start + mult]
@@ -86,8 +85,12 @@ def test_unit_sphere_approaches_l_l_plus_1_as_h_shrinks():
 def test_lobpcg_matches_scipy_eigsh(kind):
     V, F = shapes.sphere(1300, kind=kind, seed=2)
     op = meshlap.laplacian(V, F, h=0.008, correction="none")
-    lam, phi = spectral.eigs(op, 20, method="lobpcg")
     ref, ref_phi = eigsh(-op.S, k=20, M=op.M.tocsc(), sigma=-1e-3, tol=1e-12)
+    # the default tol = 1e-8 is the eigenvalues' relative accuracy; eigenvectors to about √tol
+    lam, phi = spectral.eigs(op, 20, method="lobpcg")
+    assert (np.abs(lam[1:] - ref[1:]) / ref[1:]).max() < 1e-8 and abs(lam[0]) < 1e-8 * ref[1]
+    check_eigenpairs(op, lam, phi, 1e-3)
+    lam, phi = spectral.eigs(op, 20, method="lobpcg", tol=1e-14)
     assert np.abs(lam[1:] - ref[1:]).max() / ref[-1] < 1e-10
     check_eigenpairs(op, lam, phi, 1e-7)
     # same invariant subspace, to the residual tolerance (largest principal angle)
@@ -111,7 +114,7 @@ def test_cotangent_operator_and_mesh_argument():
     check_eigenpairs(cot, lam, phi, 1e-7)
     # an operator without its mesh gets the cotangent preconditioner from `mesh=`
     plain = bsw_scipy(V, F, h=0.02)
-    with_mesh, _ = spectral.eigs(plain, 10, method="lobpcg", mesh=(V, F))
+    with_mesh, _ = spectral.eigs(plain, 10, method="lobpcg", mesh=(V, F), tol=1e-12)
     direct, _ = spectral.eigs(meshlap.laplacian(V, F, h=0.02, correction="none"), 10, method="dense")
     assert np.abs(with_mesh - direct)[1:].max() / direct[-1] < 1e-9
 
@@ -127,8 +130,8 @@ def test_zero_mass_vertices_are_extended_not_nan():
     op = meshlap.laplacian(V, F, h=h, correction="none")
     with pytest.warns(UserWarning, match="unreferenced"):
         op2 = meshlap.laplacian(V2, F2, h=h, correction="none")
-    lam, phi = spectral.eigs(op, 9, method="lobpcg")
-    lam2, phi2 = spectral.eigs(op2, 9, method="lobpcg")
+    lam, phi = spectral.eigs(op, 9, method="lobpcg", tol=1e-14)
+    lam2, phi2 = spectral.eigs(op2, 9, method="lobpcg", tol=1e-14)
     assert np.abs(lam2 - lam).max() < 1e-9 * lam[-1]
     check_eigenpairs(op2, lam2, phi2, 1e-7)
     # degree-1 eigenfunctions extend smoothly: the mean of neighbours, close to the sphere's value
@@ -160,7 +163,7 @@ def test_polygon_mesh_uses_fan_triangles():
     V, F = read_quads(DATA / "spot-quads.obj")
     assert F.shape[1] == 4
     op = meshlap.laplacian(V, F, correction="none")
-    lam, phi = spectral.eigs(op, 12, method="lobpcg")
+    lam, phi = spectral.eigs(op, 12, method="lobpcg", tol=1e-14)
     ref, _ = spectral.eigs(op, 12, method="shift-invert", tol=1e-12)
     assert np.abs(lam - ref)[1:].max() / ref[-1] < 1e-10
     check_eigenpairs(op, lam, phi, 1e-7)
@@ -203,7 +206,7 @@ def test_bunny_50_eigenpairs():
     # a third of the automatic h (480 instead of 1,400 entries per row) keeps the test short
     op = meshlap.laplacian(V, F, h=3e-6, correction="none")
     assert (op.mass == 0).sum() == 1113
-    lam, phi = spectral.eigs(op, 50, tol=1e-5)
+    lam, phi = spectral.eigs(op, 50, tol=1e-10)
     check_eigenpairs(op, lam, phi, 1e-5)
     assert abs(lam[0]) < 1e-8 * lam[-1] and lam[1] > 0
 
@@ -212,7 +215,69 @@ def test_matrix_free_operator_gives_the_same_spectrum():
     V, F = shapes.sphere(1500, seed=6)
     stored = meshlap.laplacian(V, F, h=0.01, correction="none")
     free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
-    lam, _ = spectral.eigs(stored, 9, method="lobpcg")
-    lam_free, phi_free = spectral.eigs(free, 9)  # auto: LOBPCG through op @ X
+    lam, _ = spectral.eigs(stored, 9, method="lobpcg", tol=1e-12)
+    lam_free, phi_free = spectral.eigs(free, 9, tol=1e-12)  # auto: LOBPCG through op @ X
     assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
     assert np.abs(phi_free.T @ (stored.mass[:, None] * phi_free) - np.eye(9)).max() < 1e-9
+
+
+def test_default_operator_eigenvalues_to_the_tolerance_asked():
+    """The corrected default (its own pencil) by LOBPCG against dense eigh: each eigenvalue
+    within tol of the reference, relative to itself, for tol = 1e-8 and 1e-5."""
+    V, F = shapes.sphere(1500, kind="random", seed=7)
+    op = meshlap.laplacian(V, F)
+    ref, _ = spectral.eigs(op, 16, method="dense")
+    for tol in (1e-8, 1e-5):
+        lam, phi = spectral.eigs(op, 16, method="lobpcg", tol=tol)
+        assert (np.abs(lam[1:] - ref[1:]) / ref[1:]).max() < tol
+        assert abs(lam[0]) < tol * ref[1]
+        check_eigenpairs(op, lam, phi, 10 * math.sqrt(tol))
+
+
+def test_lobpcg_error_bound_on_clustered_spectrum():
+    """A diagonal pencil with tight clusters (spacing 1e-6 within, 1 between) and a poor
+    preconditioner: the eigenvalue bound stops the iteration while every Ritz value is
+    within tol of the exact one, well before the residuals reach tol."""
+    from meshlap import _lobpcg
+
+    exact = np.sort(np.concatenate([c + 1e-6 * np.arange(c) for c in range(1, 7)] + [np.arange(7.0, 400)]))
+    n = len(exact)
+    rng = np.random.default_rng(1)
+    m = rng.uniform(0.5, 2.0, n)
+    A = sp.diags(exact * m)  # the pencil (A, diag(m)) has the eigenvalues `exact`
+    pre = 1.0 / ((exact * rng.uniform(0.5, 2.0, n) + 1.0) * m)
+    X0 = rng.standard_normal((n, 26))
+    out = _lobpcg.lobpcg(lambda Y: A @ Y, m, lambda R: pre[:, None] * R, X0, 21, 1e-10, 200)
+    assert (out.ratio[:21] <= 1).all()
+    lam_ref = exact[:21]
+    assert (np.abs(out.lam[:21] - lam_ref) / lam_ref).max() < 1e-10
+    assert out.residuals[:21].max() > 1e-9 * lam_ref[-1]  # stopped on the values, not the residuals
+    bound = _lobpcg.eig_error(out.lam, out.residuals)
+    assert (np.abs(out.lam[:21] - lam_ref) <= bound[:21] + 1e-15).all()
+
+
+def test_block_factor_solves_like_splu():
+    from meshlap import _lobpcg
+
+    V, F = shapes.sphere(800, kind="random", seed=8)
+    K = sp.csc_matrix(-igl.cotmatrix(V, F)) + sp.diags(np.full(800, 0.01))
+    B = np.random.default_rng(3).standard_normal((800, 5))
+    X = _lobpcg.BlockFactor(K).solve(B)
+    assert np.abs(K @ X - B).max() < 1e-10 * np.abs(B).max()
+    assert np.allclose(_lobpcg.BlockFactor(K).solve(B[:, 0]), X[:, 0], rtol=0, atol=1e-12)
+
+
+def test_eigs_progress_reports_stages_in_order():
+    V, F = shapes.sphere(800, seed=9)
+    op = meshlap.laplacian(V, F, h=0.02, correction="none")
+    calls = []
+    lam, _ = spectral.eigs(op, 6, method="lobpcg", progress=lambda f, s: calls.append((f, s)))
+    stages = [s.split(" (")[0] for _, s in calls]
+    assert stages[0] == "preconditioner" and stages[-1] == "done" and calls[-1][0] == 1.0
+    assert "cotangent start" in stages and "LOBPCG" in stages
+    fractions = [f for f, _ in calls]
+    assert all(0 <= f <= 1 for f in fractions) and fractions == sorted(fractions)
+    assert any(s.startswith("LOBPCG (iteration 2)") for _, s in calls)
+    dense = []
+    spectral.eigs(op, 4, method="dense", progress=lambda f, s: dense.append(s))
+    assert dense == ["dense", "done"]

@@ -90,29 +90,56 @@ def csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, n: int) -> sp
 class MemoryGuard:
     """Refuses, before allocating, a build whose matrices would exceed ``max_memory`` bytes.
 
-    ``matrices`` is how many value arrays of one sparsity pattern the build keeps (the
-    symmetric L and, with point-wise rows, their values), so the guard counts everything.
+    The guard counts every matrix the build holds at its peak, not only L: ``values`` bytes
+    of values and ``patterns`` index arrays (indices and row pointers) per entry of the
+    kernel's pattern. :meth:`for_build` says what those are for one build.
     """
 
     n: int
     dtype: np.dtype
     max_memory: int
     h: float
-    matrices: int = 1
+    values: int | None = None
+    patterns: int = 1
+
+    @classmethod
+    def for_build(cls, n: int, dtype: np.dtype, max_memory: int, h: float, *, images: bool,
+                  pointwise: bool | str, own_pattern: bool = False) -> MemoryGuard:
+        """The guard of one build: the kernel's rows (``dtype``); with mirror images at a
+        boundary a second matrix, worked in float64 and cast back; with point-wise rows a
+        third value array on the kernel's pattern, or float64 values with an index array of
+        their own (``own_pattern``, the fixed-degree rows).
+
+        Examples
+        --------
+        >>> g = MemoryGuard.for_build(1000, np.dtype(np.float64), 1 << 30, 0.01, images=True, pointwise=True)
+        >>> g.values, g.patterns      # L without and with images, the point-wise values; two patterns
+        (24, 2)
+        """
+        size = np.dtype(dtype).itemsize
+        values, patterns = size, 1
+        if images:
+            values += 8 + (size if size != 8 else 0)
+            patterns += 1
+        if pointwise:
+            values += 8 if own_pattern else size
+            patterns += 1 if own_pattern else 0
+        return cls(n, np.dtype(dtype), max_memory, h, values, patterns)
 
     def bytes_for(self, nnz: float) -> float:
-        """Bytes of ``matrices`` CSR value arrays sharing one index structure."""
+        """Bytes of the build's value arrays and index structures for ``nnz`` entries."""
         idx = 4 if (nnz <= _INT32_MAX and self.n <= _INT32_MAX) else 8
-        return nnz * (self.matrices * self.dtype.itemsize + idx) + (self.n + 1) * idx
+        values = self.dtype.itemsize if self.values is None else self.values
+        return nnz * (values + self.patterns * idx) + self.patterns * (self.n + 1) * idx
 
     def __call__(self, nnz: float, estimated: bool = False) -> None:
         need = self.bytes_for(nnz)
         if need > self.max_memory:
             how = "at least about" if estimated else "exactly"
             raise OperatorTooLargeError(
-                f"the operator would hold {how} {int(nnz):,} entries ({fmt_bytes(need)}), more than "
-                f"max_memory={fmt_bytes(self.max_memory)}; use a smaller h (now {self.h:.4g}) or "
-                f"tol, dtype=float32, or matrix_free=True")
+                f"the operator would hold {how} {int(nnz):,} entries: with every matrix the build "
+                f"keeps, {fmt_bytes(need)}, more than max_memory={fmt_bytes(self.max_memory)}; use a "
+                f"smaller h (now {self.h:.4g}) or tol, dtype=float32, or matrix_free=True")
 
 
 def sample_counts(points: np.ndarray, g: grid.Grid, sample: int = 512, seed: int = 0) -> tuple[float, float]:

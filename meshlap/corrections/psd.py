@@ -3,7 +3,11 @@
 The difference of Gaussians has negative weights, so −S = −M L positive semidefinite is not
 automatic: on a geometry too coarse for the narrow kernel h/2 it fails, and spectra and heat
 flow would blow up. :func:`check` finds the smallest eigenvalue of the pencil (−S, M) and
-compares it with the operator's scale.
+compares it with the operator's scale. No cheaper proof covers the case: the continuous
+Richardson symbol of −L, (1 − e^{−x/2})(3 − e^{−x/2})/h with x = hω², is positive, but the
+sampled kernel has negative weights at every pair farther than √(4h ln 8) (on a surface), so
+neither the weights' signs nor diagonal dominance decide it; the check is an eigensolver run
+that stops as early as the answer is known.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ import math
 import warnings
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..geometry import Polygons
@@ -19,40 +24,74 @@ from ..lumped import SparseLaplacian
 
 __all__ = ["PSD_RTOL", "check", "smallest_eigenvalue"]
 
-# points up to which a failed iterative check is repeated with a dense eigensolver
+# points up to which a failed iterative check is repeated with a dense eigensolver, and up to
+# which the check is dense from the start
 _DENSE_MAX = 4000
+_DENSE_DIRECT = 1200
 #: −S counts as semidefinite when λ_min ≥ −PSD_RTOL · max_w(−L_ww).
 PSD_RTOL = 1e-6
 
 
 def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,
-                        tol: float = 1e-4) -> tuple[float, float]:
+                        tol: float = 1e-3, maxiter: int = 40) -> tuple[float, float]:
     """The two ends that decide whether −S = −M L is positive semidefinite.
 
     Returns (λ_min, λ_scale): the smallest eigenvalue of the pencil (−S, M) on the points
-    with mass, from :func:`meshlap.spectral.eigs` (LOBPCG, cotangent preconditioner when
-    ``faces`` are triangles in R³, a few vectors), and the scale ``max_w −L_ww`` it is to be
-    compared with. A negative mode of the difference of Gaussians lives at high frequency;
-    LOBPCG minimizes the Rayleigh quotient over the whole space, so it finds such a mode if
-    there is one.
-    """
-    from ..spectral import eigs  # the uses sit above the corrections; only this check needs one
+    with mass and the scale ``max_w −L_ww`` it is to be compared with.
 
-    op = SparseLaplacian(L, mass)
-    n = int((mass > 0).sum())
+    Where L's rows sum to zero (not on an MPI rank's diagonal block) the constant is an
+    eigenvector with eigenvalue 0: it is deflated, and LOBPCG (:mod:`meshlap._lobpcg`) looks
+    for the smallest eigenvalue on its M-orthogonal complement, one target vector and five
+    guards: the coordinate functions (smooth, near the bottom of a semidefinite spectrum) and
+    random vectors (every frequency, where a negative mode of the difference of Gaussians
+    lives). The preconditioner is :func:`meshlap.spectral.eigs`'s (the cotangent factor when
+    ``faces`` are triangles in R³, plus ½ D⁻¹). The iteration ends at the first Ritz value
+    below −PSD_RTOL · scale, which proves the failure (a Ritz value bounds an eigenvalue from
+    above), or when the smallest is known to ``tol`` relative (the Kato–Temple bound).
+    """
+    from .. import _lobpcg
+    from ..spectral import _cot_stiffness, _one_blas_thread, _scale_shift, apply_block
+
     scale = float(np.max(-L.diagonal()))
-    with warnings.catch_warnings():
+    P = np.flatnonzero(mass > 0)
+    m = mass[P]
+    Lp = sp.csr_matrix(L if len(P) == len(mass) else L[P][:, P], dtype=np.float64)
+    op = SparseLaplacian(Lp, m)
+    one = np.full(len(P), 1.0 / math.sqrt(float(m.sum())))
+    r = -(Lp @ one)  # L's rows sum to zero: the constant is in the kernel, up to rounding
+    const = float(one @ (m * r))
+    deflate = math.sqrt(float(m @ (r * r))) <= 1e-10 * scale
+    if len(P) <= _DENSE_DIRECT:
+        S = (m[:, None] * Lp.toarray())
+        low = sla.eigh(-0.5 * (S + S.T), np.diag(m), eigvals_only=True, subset_by_index=[0, 0])
+        return float(low[0]), scale
+
+    def project(X: np.ndarray) -> np.ndarray:  # onto the M-orthogonal complement of the constant
+        return X - one[:, None] * (one @ (m[:, None] * X))[None, :] if deflate else X
+
+    tri = None if faces is None else (faces.triangles() if isinstance(faces, Polygons) else faces)
+    K = None if tri is None or V.shape[1] != 3 else _cot_stiffness(V, tri, P)
+    T = _lobpcg.CotPreconditioner(K, m, -m * Lp.diagonal(), _scale_shift(m))
+    rng = np.random.default_rng(0)
+    coords = V[P][:, :3] - (m @ V[P][:, :3]) / m.sum()
+    smooth = coords if deflate else np.hstack([one[:, None], coords])
+    X0 = project(np.hstack([smooth, rng.standard_normal((len(P), 6 - smooth.shape[1]))]))
+    with _one_blas_thread(), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
-            lam, _ = eigs(op, 2, tol=tol, maxiter=60, mesh=None if faces is None else (V, faces),
-                          method="lobpcg" if n > 1200 else "dense")
+            # the search directions are kept off the constant; A X needs nothing (A 1 = 0)
+            out = _lobpcg.lobpcg(lambda X: -m[:, None] * apply_block(op, X), m,
+                                 lambda R: project(T(R)), X0, 1 if deflate else 2, tol, maxiter,
+                                 floor=-PSD_RTOL * scale)
         except np.linalg.LinAlgError:
-            # LOBPCG's Gram matrices break down on a strongly indefinite pencil: decide densely
-            # where that is affordable, else count it as failed (the plain kernel is safe)
-            if n > _DENSE_MAX:
+            # the Gram matrices break down on a strongly indefinite pencil: decide densely where
+            # that is affordable, else count it as failed (the plain kernel is safe)
+            if len(P) > _DENSE_MAX:
                 return -math.inf, scale
-            lam, _ = eigs(op, 2, method="dense")
-    return float(lam.min()), scale
+            S = (m[:, None] * Lp.toarray())
+            return float(sla.eigh(-0.5 * (S + S.T), np.diag(m), eigvals_only=True,
+                                  subset_by_index=[0, 0])[0]), scale
+    return min(const, float(out.lam[0])), scale
 
 
 def check(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,

@@ -19,6 +19,7 @@ is not caught (the single machine's check on the whole pencil would).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,14 +100,20 @@ def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) 
 
 
 def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: int, g, rows: np.ndarray,
-               attrs: PointAttributes) -> tuple[sp.csr_matrix, sp.csr_matrix, dict]:
+               attrs: PointAttributes, report: Callable[[float, str], None] | None = None,
+               ) -> tuple[sp.csr_matrix, sp.csr_matrix, dict]:
     """The own rows (local indices < n_own) of L_sym and of the point-wise L over the local
     points P (own, then halo) with their attribute ``table`` (collective: reductions).
 
     Returns CSR matrices over all local points (rows beyond n_own empty) and a dict with the
     correction in effect, the moment scale, the PSD margin and the fallback reason.
+    ``report(fraction, stage)`` is called at each stage's start (the same on every rank).
     """
     from mpi4py import MPI
+
+    def tell(fraction: float, what: str) -> None:
+        if report is not None:
+            report(fraction, what)
 
     hv, band, normals, b, nu = attrs.columns(table)
     frames = (np.flatnonzero(band), b[band], nu[band]) if band.any() else None
@@ -118,8 +125,10 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         L = corrections.neumann_images(free, P, frames, mass, hv, dog, attrs.dim) if attrs.neumann else free
         return free, L
 
+    tell(0.0, "kernel rows")
     free, L = stage(attrs.dog)
     if attrs.dog and attrs.check_psd:
+        tell(0.5, "semidefinite check")
         block = sp.csr_matrix(L[:n_own, :n_own])
         margin, reason = (0.0, None) if n_own == 0 else corrections.psd.check(
             block, mass[:n_own], P[:n_own], None, "geometry")
@@ -131,8 +140,10 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
                 f"the Richardson operator is not negative semidefinite on another rank's block "
                 f"(margin {worst:.3g}); using the plain kernel (O(h) bias)")
             info["correction"] = "none"
+            tell(0.6, "plain kernel rows")
             free, L = stage(False)
     if info["correction"] != "none":
+        tell(0.8, "moment scale")
         Y = free @ np.column_stack([(P**2).sum(axis=1), P])
         mu = Y[:n_own, 0] - 2.0 * (P[:n_own] * Y[:n_own, 1:]).sum(axis=1)
         use = (mass[:n_own] > 0) & ~band[:n_own]
@@ -143,6 +154,7 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         L.data *= scale
     Lp = L
     if attrs.pointwise:
+        tell(0.9, "point-wise rows")
         Lp, _ = corrections.moment_correction(free, P, attrs.dim)
     return L, Lp, info
 

@@ -43,9 +43,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .. import spectral
+from .. import _lobpcg, spectral
 from ..errors import MeshError
 from ..geometry.validation import check_faces, check_k, check_vertices
+from ..progress import ProgressLike, make_progress
 
 __all__ = ["eigs", "finish"]
 
@@ -199,6 +200,7 @@ def eigs(
     mesh: tuple[Any, Any] | None = None,
     seed: int = 0,
     info: dict | None = None,
+    progress: ProgressLike = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` by distributed LOBPCG (collective).
 
@@ -212,8 +214,8 @@ def eigs(
     k : int, default 20
         Number of eigenpairs.
     tol : float, default 1e-8
-        Relative residual ``‖-Sφ - λMφ‖_{M⁻¹} ≤ tol · max(λ, λ_k)``, as in
-        :func:`meshlap.spectral.eigs` (eigenvalues then agree to about tol²).
+        Relative accuracy of the eigenvalues, as in :func:`meshlap.spectral.eigs` (a bound
+        from the residuals; eigenvectors then accurate to about √tol).
     maxiter : int, default 300
         Iterations before giving up with a warning.
     extra : int, optional
@@ -225,8 +227,12 @@ def eigs(
     seed : int, default 0
         Seed of the random start vectors (with the rank).
     info : dict, optional
-        Filled with ``iterations``, the relative ``residuals`` of the k pairs and the
-        ``block`` width.
+        Filled with ``iterations``, the relative ``residuals`` ``‖r‖ / max(λ, λ_k)`` of the
+        k pairs, their eigenvalue ``error_bounds`` relative to tol's scale, and the ``block``
+        width.
+    progress : bool or callable, optional
+        As in :func:`meshlap.spectral.eigs`: ``True`` draws a bar on rank 0's stderr; a
+        callable gets ``(fraction, stage)`` on every rank, the same calls everywhere.
 
     Returns
     -------
@@ -262,6 +268,9 @@ def eigs(
     nb = min(k + (max(4, k // 10) if extra is None else int(extra)), n_p)
     allsum = _allsum(comm)
     full = len(P) == op.n_local
+    report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
+    if report is not None:
+        report(0.0, "preconditioner")
 
     def apply_A(Xp: np.ndarray) -> np.ndarray:
         if full:
@@ -273,7 +282,7 @@ def eigs(
     diag = -m * op.diagonal()[P]
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
     K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
-    T = spectral._CotPreconditioner(K if len(P) else None, m, diag, sigma)
+    T = _lobpcg.CotPreconditioner(K if len(P) else None, m, diag, sigma)
     adapt = extra is None and Kg is not None
     width = spectral._start_width(k, nb, n_p) if adapt else nb
     X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
@@ -283,20 +292,25 @@ def eigs(
             def local(R: np.ndarray) -> np.ndarray:
                 if T.lu is None:
                     return R / (sigma * m[:, None])
-                return T.lu.solve(np.asfortranarray(R))
+                return T.lu.solve(R)
 
-            theta, X0, _, _ = spectral._lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2,
-                                               _START_ITERATIONS, allsum)
-            nb = spectral._block_size(theta, k, nb) if adapt else nb
-            X0 = X0[:, :nb]
-        lam, X, it, res = spectral._lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum)
-    scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
-    if (res[:k] > tol * scale).any():
-        warnings.warn(f"eigs: distributed LOBPCG stopped after {it} iterations with relative residual "
-                      f"{float((res[:k] / scale).max()):.2e} > tol={tol:g}; raise maxiter or tol",
+            start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2, _START_ITERATIONS,
+                                   allsum, on_values=False,
+                                   report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2))
+            nb = spectral._block_size(start.lam, k, nb) if adapt else nb
+            X0 = start.X[:, :nb]
+        out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum,
+                             report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
+    lam, X, it = out.lam, out.X, out.iterations
+    if (out.ratio[:k] > 1).any():
+        warnings.warn(f"eigs: distributed LOBPCG stopped after {it} iterations with eigenvalue error bound "
+                      f"{float(out.ratio[:k].max()):.2g} times tol={tol:g}; raise maxiter or tol",
                       RuntimeWarning, stacklevel=2)
     if info is not None:
-        info.update(iterations=it, residuals=res[:k] / scale, block=nb)
+        scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
+        info.update(iterations=it, residuals=out.residuals[:k] / scale, error_bounds=out.ratio[:k], block=nb)
+    if report is not None:
+        report(1.0, "done")
     return finish(op, P, lam[:k], X[:, :k])
 
 

@@ -29,6 +29,7 @@ installs mpi4py; petsc4py/slepc4py build against a PETSc/SLEPc installation (REA
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,7 @@ from ..geometry import Geometry
 from ..geometry.validation import check_faces, check_h, check_tol, check_vertices
 from ..operator import DEFAULT_TOL, as_geometry
 from ..pipeline import Options
+from ..progress import ProgressLike, make_progress
 from .comm import (
     _BLOCK_ENTRIES,
     _IMBALANCE,
@@ -92,8 +94,10 @@ class DistributedLaplacian:
 
     def __init__(self, comm, V: np.ndarray, mass: np.ndarray, uid: np.ndarray, h: float, tol: float,
                  matrix_free: bool, partition: np.ndarray | None, attrs: PointAttributes | None = None,
-                 table: np.ndarray | None = None) -> None:
+                 table: np.ndarray | None = None, report: Callable[[float, str], None] | None = None) -> None:
         MPI, PETSc = _mpi()
+        tell = report or (lambda fraction, stage: None)
+        tell(0.0, "partition")
         self.comm = comm
         self.h, self.tol = h, tol
         self.attrs = attrs
@@ -122,16 +126,19 @@ class DistributedLaplacian:
             mean = comm.allreduce(entries, op=MPI.SUM) / comm.Get_size()
             self.rebalanced = bool(busiest > _IMBALANCE * mean)
             if self.rebalanced:
+                tell(0.2, "rebalance")
                 # re-split the points where they are now, weighted by their counted entries
                 Vn, mn, un, wn = self.V, self.mass, self.ids, self._counts.astype(np.float64)
                 self._setup(Vn, mn, un, self._Tloc[: self.n_local], _kd_split(comm, Vn, wn))
+        tell(0.3, "kernel rows")
         if self.matrix_free:
             self.L = self.L_sym = self._shell()
         elif attrs is None:
             self.L = self.L_sym = self._assemble()
         else:
-            self.L_sym, self.L = self._assemble_corrected()
+            self.L_sym, self.L = self._assemble_corrected(tell)
         self._S = None
+        tell(1.0, "done")
 
     # -- setup: partition, halo, local grid ----------------------------------------------
     def _setup(self, V, mass, uid, T, owner) -> None:
@@ -246,12 +253,13 @@ class DistributedLaplacian:
         L.assemble()
         return L
 
-    def _assemble_corrected(self):
+    def _assemble_corrected(self, tell):
         # stages 4-5 on the own rows (meshlap.distributed.corrected), then into PETSc
         MPI, PETSc = _mpi()
         N, n = self.n_vertices, self.n_local
         L_sym, L_pw, info = local_rows(self.comm, self._Vloc, self._mloc, self._Tloc, n, self._grid,
-                                       self._rows, self.attrs)
+                                       self._rows, self.attrs, report=lambda f, s: tell(0.3 + 0.6 * f, s))
+        tell(0.9, "PETSc matrices")
         self.correction = info["correction"]
         self.fallback_reason = info["fallback_reason"]
         self.moment_scale = info["moment_scale"]
@@ -445,6 +453,7 @@ def laplacian(
     partition: Any = None,
     correction: str | None = None,
     k: int | None = None,
+    progress: ProgressLike = None,
     **options: Any,
 ) -> DistributedLaplacian:
     r"""Build the Belkin–Sun–Wang Laplacian over the ranks of an MPI communicator (collective).
@@ -475,6 +484,8 @@ def laplacian(
         A PETSc shell that recomputes rows in each product instead of an MPIAIJ matrix.
     partition : (n,) array_like of int, optional
         Owner rank of each passed point, instead of the k-d split.
+    progress : bool or callable, optional
+        ``True``: a bar on rank 0's stderr; a callable gets ``(fraction, stage)`` on every rank.
 
     Returns
     -------
@@ -501,6 +512,7 @@ def laplacian(
     MPI, PETSc = _mpi()
     comm = MPI.COMM_WORLD if comm is None else comm
     tol = check_tol(tol)
+    report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
     if correction != "none":
         if matrix_free or (F is None and not isinstance(V, Geometry)):
             raise MeshError(
@@ -508,8 +520,8 @@ def laplacian(
                 "(scattered or whole), or a Geometry such as meshlap.geometry.point_cloud_geometry(P), "
                 "without matrix_free=True; or pass correction='none' for the paper's operator")
         if scattered:
-            return _scattered_corrected(comm, V, F, h, tol, partition, correction, options)
-        return _corrected(comm, V, F, k, h, tol, partition, correction, options)
+            return _scattered_corrected(comm, V, F, h, tol, partition, correction, options, report)
+        return _corrected(comm, V, F, k, h, tol, partition, correction, options, report)
     if options:
         raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
     V = np.asarray(V, dtype=np.float64)
@@ -550,11 +562,12 @@ def laplacian(
         uid = np.arange(a, b, dtype=np.int64)
         part = None if partition is None else np.asarray(partition)[a:b]
         V, mass = V[a:b], mass[a:b]
-    return DistributedLaplacian(comm, np.ascontiguousarray(V), mass, uid, h, tol, matrix_free, part)
+    return DistributedLaplacian(comm, np.ascontiguousarray(V), mass, uid, h, tol, matrix_free, part,
+                                report=report)
 
 
 def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partition: Any, correction: Any,
-               options: dict) -> DistributedLaplacian:
+               options: dict, report=None) -> DistributedLaplacian:
     # stages 1-2 on every rank (each holds the whole input), then the rows on their owners
     geo = as_geometry(V, F, k)
     if geo.ambient_dim > 3:
@@ -571,11 +584,11 @@ def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partitio
     part = None if partition is None else np.asarray(partition)[a:b]
     return DistributedLaplacian(comm, np.ascontiguousarray(P[a:b]), geo.mass[a:b],
                                 np.arange(a, b, dtype=np.int64), widths.h, opts.tol, False, part,
-                                attrs=attrs, table=attrs.table[a:b])
+                                attrs=attrs, table=attrs.table[a:b], report=report)
 
 
 def _scattered_corrected(comm, V: Any, F: Any, h: Any, tol: float, partition: Any, correction: Any,
-                         options: dict) -> DistributedLaplacian:
+                         options: dict, report=None) -> DistributedLaplacian:
     # stages 1-2 by global reductions over the faces each rank holds (meshlap.distributed.scattered)
     from mpi4py import MPI
 
@@ -584,4 +597,4 @@ def _scattered_corrected(comm, V: Any, F: Any, h: Any, tol: float, partition: An
     start = comm.exscan(len(V), op=MPI.SUM)  # collective; None on rank 0
     uid = (int(start) if comm.Get_rank() > 0 else 0) + np.arange(len(V), dtype=np.int64)
     return DistributedLaplacian(comm, np.ascontiguousarray(V, dtype=np.float64), mass, uid, h0, attrs.tol,
-                                False, partition, attrs=attrs, table=attrs.table)
+                                False, partition, attrs=attrs, table=attrs.table, report=report)

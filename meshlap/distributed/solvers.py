@@ -171,12 +171,14 @@ class _ImplicitContext:
 
 def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh: Any = None,
          tol: float | None = None, sigma: float | None = None, maxiter: int | None = None,
-         solver: str = "auto", blr: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+         solver: str = "auto", blr: float | None = None,
+         progress: Any = None) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` (collective).
 
     ``method="lobpcg"`` (default): :func:`meshlap.distributed.lobpcg.eigs`, a distributed LOBPCG
-    that never factors the operator (``mesh``, ``tol`` and ``maxiter`` go to it; its defaults
-    1e-8 and 300). ``method="shift-invert"``: the rest of this docstring.
+    that never factors the operator (``mesh``, ``tol``, ``maxiter`` and ``progress`` go to it;
+    its defaults 1e-8 on the eigenvalues and 300). ``method="shift-invert"``: the rest of this
+    docstring (no progress reports: SLEPc runs the whole solve).
 
     Krylov–Schur with shift-and-invert around a small negative shift σ. As in
     :func:`meshlap.spectral.eigs`, the problem lives on the points with mass and the
@@ -231,8 +233,8 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh:
         if sigma is not None or blr is not None or solver != "auto":
             raise MeshError("sigma, solver and blr set up shift-and-invert: pass method='shift-invert'")
 
-        return lobpcg(op, k, mesh=mesh, **{key: v for key, v in (("tol", tol), ("maxiter", maxiter))
-                                           if v is not None})
+        return lobpcg(op, k, mesh=mesh, progress=progress,
+                      **{key: v for key, v in (("tol", tol), ("maxiter", maxiter)) if v is not None})
     if method != "shift-invert":
         raise MeshError(f"method must be 'lobpcg' or 'shift-invert'; got {method!r}")
     MPI, PETSc = _mpi()

@@ -1,0 +1,57 @@
+"""The semidefiniteness check: cheap on a semidefinite operator, and a negative mode is caught
+wherever it lives (issue 19)."""
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+import meshlap
+from meshlap import geometry, shapes
+from meshlap.corrections import psd
+
+
+def dense_min(L, mass):
+    S = mass[:, None] * L.toarray()
+    return sla.eigh(-0.5 * (S + S.T), np.diag(mass), eigvals_only=True, subset_by_index=[0, 0])[0]
+
+
+def spiked(L, mass, a, b, excess):
+    """L plus a rank-one term on two vertices: S stays symmetric and the rows still sum to zero;
+    −S gets a mode localized at a and b whose Rayleigh quotient is −excess times its own energy."""
+    v = np.zeros(len(mass))
+    v[a], v[b] = 1.0 / mass[a], -1.0 / mass[b]  # M-orthogonal to the constant
+    Mv = mass * v
+    energy = float(v @ (-(mass * (L @ v))))
+    alpha = (1.0 + excess) * energy / float(v @ Mv) ** 2
+    ab = [a, b]
+    rank_one = sp.coo_matrix((alpha * np.outer(v[ab], Mv[ab]).ravel(), (np.repeat(ab, 2), np.tile(ab, 2))),
+                             shape=L.shape)
+    return sp.csr_matrix(L + rank_one)
+
+
+def test_semidefinite_default_passes_and_agrees_with_dense():
+    V, F = shapes.sphere(1300, kind="random", seed=5)
+    op = meshlap.laplacian(V, F, check_psd=False)
+    faces = geometry.from_mesh(V, F).faces
+    lam, scale = psd.smallest_eigenvalue(op.L_sym, op.mass, V, faces)
+    assert abs(lam) < 1e-12 * scale  # the constant: 0 up to rounding
+    assert dense_min(op.L_sym, op.mass) > -1e-9 * scale  # measured densely: semidefinite
+    margin, reason = psd.check(op.L_sym, op.mass, V, faces, "mesh")
+    assert reason is None and margin > -1e-12
+
+
+def test_a_localized_negative_mode_is_caught():
+    # a high-frequency mode at two neighbouring vertices, the kind the smooth start misses
+    V, F = shapes.sphere(1300, kind="random", seed=5)
+    op = meshlap.laplacian(V, F, check_psd=False)
+    faces = geometry.from_mesh(V, F).faces
+    a, b = int(F[100, 0]), int(F[100, 1])
+    L = spiked(op.L_sym, op.mass, a, b, 1e-2)
+    assert np.abs(L @ np.ones(len(V))).max() < 1e-9 * abs(L).max()
+    exact = dense_min(L, op.mass)
+    scale = float(np.max(-L.diagonal()))
+    assert exact < -1e-4 * scale  # measured densely: not semidefinite
+    lam, _ = psd.smallest_eigenvalue(L, op.mass, V, faces)
+    assert lam < -psd.PSD_RTOL * scale and lam >= exact - 1e-9 * scale  # a Ritz value: above λ_min
+    margin, reason = psd.check(L, op.mass, V, faces, "mesh")
+    assert reason is not None and "not negative semidefinite" in reason and margin < 0
