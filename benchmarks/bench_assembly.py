@@ -3,6 +3,7 @@ operator, against the straightforward scipy build and one product with the finis
 
     python benchmarks/bench_assembly.py            # full run, updates benchmarks/RESULTS.md
     python benchmarks/bench_assembly.py --quick    # small meshes only, prints, writes nothing
+    python benchmarks/bench_assembly.py --default-vs-paper   # the default build / the paper's (issue 19)
 
 Meshes: the unit sphere with 16,000 vertices at h = 0.01 (47 M entries, 2,945 per row), the
 Stanford bunny at the automatic h = (2·mean edge)², and a 1,000,000-vertex sphere at
@@ -193,14 +194,49 @@ def table(rows: list[dict], mem: dict) -> list[str]:
     return out
 
 
+def default_vs_paper(n: int = 16000, repeat: int = 3) -> dict:
+    """The default build against the paper's operator at the same h on a random n-vertex
+    sphere, best of ``repeat`` each (wall and CPU), with the default's stages timed through
+    its progress callback."""
+    import meshlap
+
+    V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
+    h = meshlap.laplacian(V, F).h  # also the warm-up
+    meshlap.laplacian(V, F, h=h, correction="none")
+    out = {"n": n, "h": h}
+    for name, kw in (("paper", {"h": h, "correction": "none"}), ("default", {})):
+        best = None
+        for _ in range(repeat):
+            marks = []
+
+            def note(fraction, stage, marks=marks):
+                marks.append((stage, time.perf_counter()))
+
+            t, c = time.perf_counter(), time.process_time()
+            op = meshlap.laplacian(V, F, progress=note, **kw)
+            wall, cpu = time.perf_counter() - t, time.process_time() - c
+            if best is None or wall < best[0]:
+                stages = {}
+                for (stage, a), (_, b) in zip(marks, marks[1:] + [("end", t + wall)], strict=True):
+                    stages[stage] = stages.get(stage, 0.0) + b - a
+                best = (wall, cpu, stages, op.nnz)
+        out[name] = best
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="small meshes only; writes nothing")
     ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--default-vs-paper", action="store_true",
+                    help="only the default build against the paper's (random 16k sphere)")
     ap.add_argument("--child", nargs=2, metavar=("MESH", "WHICH"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child(*args.child)
+        return
+    if args.default_vs_paper:
+        write_default_vs_paper(default_vs_paper(), args.no_write)
         return
     import numba
 
@@ -276,6 +312,32 @@ def main() -> None:
         ]
     write_section("Assembly", lines)
     print(f"wrote the Assembly section of {RESULTS}")
+
+
+def write_default_vs_paper(r: dict, no_write: bool) -> None:
+    (pw, pc, _, pnnz), (dw, dc, stages, dnnz) = r["paper"], r["default"]
+    parts = ", ".join(f"{k} {v:.3f} s" for k, v in stages.items() if k != "done")
+    print(f"random sphere {r['n']:,}, h = {r['h']:.4g}: paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
+          f"default {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}); default / paper {dw / pw:.2f}x wall, "
+          f"{dc / pc:.2f}x CPU; stages: {parts}", flush=True)
+    if no_write:
+        return
+    write_section("Default build against the paper's operator", [
+        "Command: `python benchmarks/bench_assembly.py --default-vs-paper` (written "
+        f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}).",
+        "",
+        f"`meshlap.shapes.sphere({r['n']}, kind='random', seed=0)`; the default `meshlap.laplacian(V, F)` "
+        f"(h = {r['h']:.4g}) against the paper's `meshlap.laplacian(V, F, h=h, correction='none')`, "
+        "best of 3 each after a warm-up, in the same process; the default's stages timed by its "
+        "progress callback.",
+        "",
+        "| build | time (CPU) | entries | / paper's, wall | / paper's, CPU |",
+        "|---|---|---|---|---|",
+        f"| paper's operator | {pw:.3f} s ({pc:.2f} s) | {pnnz:,} | 1.00× | 1.00× |",
+        f"| default | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} | **{dw / pw:.2f}×** | {dc / pc:.2f}× |",
+        "",
+        f"The default's stages (wall): {parts}.",
+    ])
 
 
 if __name__ == "__main__":

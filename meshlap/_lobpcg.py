@@ -138,8 +138,9 @@ def eig_error(theta: np.ndarray, res: np.ndarray) -> np.ndarray:
 
     Examples
     --------
-    >>> eig_error(np.array([1.0, 1.001, 2.0]), np.array([1e-4, 1e-4, 1e-3])).round(12)
-    array([2.e-08, 2.e-08, 1.e-06])
+    >>> err = eig_error(np.array([1.0, 1.001, 2.0]), np.array([1e-4, 1e-4, 1e-3]))
+    >>> (err * 1e8).round(1)     # the pair's residuals squared over its gap to 2, in 1e-8
+    array([  2. ,   2. , 100.1])
     """
     err = res.astype(np.float64)
     for i, t in enumerate(theta):

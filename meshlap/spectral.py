@@ -21,7 +21,8 @@ symbol as a function of the cotangent eigenvalue x, give the preconditioner
     T = (K + σM)⁻¹ + ½ D⁻¹,    K = -C (cotangent stiffness),  D = diag(-S) ≈ M/h,
 
 whose product with the operator stays within a factor of about two of the identity at every
-frequency. See ``benchmarks/RESULTS.md`` ("Eigenpairs") for the measured times.
+frequency. The iteration itself (and the meaning of ``tol``: the eigenvalues' accuracy) is in
+:mod:`meshlap._lobpcg`. See ``benchmarks/RESULTS.md`` ("Eigenpairs") for the measured times.
 """
 
 from __future__ import annotations
