@@ -16,9 +16,9 @@ holds it, within ``‖R_c‖² / δ`` (Kato–Temple for the cluster: R_c their 
 distance to the nearest Ritz value outside). A relative eigenvalue accuracy ε so needs a
 residual of only about √(ε·θ·δ), not ε·θ: half the iterations for ε = 1e-8.
 
-The preconditioner factor is a sparse LU in symmetric mode, applied with blocked triangular
-solves compiled here: one pass over each factor serves every column of the block, where
-SuperLU's own solve treats the columns one after the other.
+The preconditioner factor is a sparse LU in symmetric mode, applied to wide blocks with
+blocked triangular solves compiled here: one pass over each factor serves every column of the
+block, where SuperLU's own solve treats the columns one after the other.
 """
 
 from __future__ import annotations
@@ -36,6 +36,9 @@ __all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "eig_error", "lobpcg", "l
 
 # the relative half-width of the window of Ritz values counted as one cluster by the bound
 _WINDOW = 0.05
+# blocks up to this many columns go to SuperLU's own solve (no compiled kernel needed: the
+# semidefiniteness check of a build uses 6)
+_NARROW = 8
 
 
 @jit()
@@ -79,23 +82,26 @@ class BlockFactor:
     """
 
     def __init__(self, A: sp.spmatrix) -> None:
-        lu = sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
-        # Pr A Pc = L U with (Pr b)[perm_r[j]] = b[j] and (Pc y)[i] = y[perm_c[i]]
-        self.perm_r, self.perm_c = lu.perm_r, lu.perm_c
-        self.lower = sp.csr_matrix(sp.tril(lu.L, k=-1))
-        U = sp.csr_matrix(lu.U)
-        self.diag = U.diagonal()
-        self.upper = sp.csr_matrix(sp.triu(U, k=1))
+        self.lu = sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                 options={"SymmetricMode": True})
+        self._tri = None
 
     def solve(self, B: np.ndarray) -> np.ndarray:
         """A⁻¹ B for B of shape (n,) or (n, c)."""
         B = np.asarray(B, dtype=np.float64)
-        X = np.empty((B.shape[0], B[0].size))
-        X[self.perm_r] = B.reshape(len(B), -1)
-        _forward(self.lower.indptr, self.lower.indices, self.lower.data, X)
-        _backward(self.upper.indptr, self.upper.indices, self.upper.data, self.diag, X)
-        return X[self.perm_c].reshape(B.shape)
+        if B.ndim == 1 or B.shape[1] <= _NARROW:
+            return self.lu.solve(np.asfortranarray(B))
+        if self._tri is None:  # the factors as CSR, made on the first wide block
+            U = sp.csr_matrix(self.lu.U)
+            lower = sp.csr_matrix(sp.tril(self.lu.L, k=-1))
+            self._tri = (lower, sp.csr_matrix(sp.triu(U, k=1)), U.diagonal())
+        lower, upper, diag = self._tri
+        # Pr A Pc = L U with (Pr b)[perm_r[j]] = b[j] and (Pc y)[i] = y[perm_c[i]]
+        X = np.empty(B.shape)
+        X[self.lu.perm_r] = B
+        _forward(lower.indptr, lower.indices, lower.data, X)
+        _backward(upper.indptr, upper.indices, upper.data, diag, X)
+        return X[self.lu.perm_c]
 
 
 class CotPreconditioner:
