@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -37,7 +37,8 @@ from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
-__all__ = ["EIGENVALUES", "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess"]
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "RATIO_LIMIT", "Resolution", "ResolutionWarning",
+           "assess", "default_terms", "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -48,11 +49,12 @@ RATIO_LIMIT = 1.5
 CREASE_RATIO = 5.0
 #: ... and at least this fraction of its mean edge (a smooth surface's own bending stays below).
 CREASE_HEIGHT = 0.1
-# the default's error model (see the module docstring), fitted on 33 inputs
-A_H, A_2, A_Q, P_Q, R_0 = 0.023, 0.12, 0.0016, 2.5, 0.95
-A_B, A_K, A_C, A_N = 0.082, 0.25, 0.18, 1.86
-# linear FEM's, fitted on the same inputs
-F_E, F_Q, F_T, F_N = 0.0163, 0.364, 0.0385, 5.5
+#: The constants of the default's error model (module docstring), fitted on 33 inputs by
+#: ``benchmarks/calibrate_resolution.py``, which prints new ones after a change of the numerics.
+DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.95,
+                 "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
+#: The constants of linear FEM's, fitted on the same inputs.
+FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5}
 
 
 class ResolutionWarning(MeshWarning):
@@ -102,8 +104,8 @@ class Resolution:
     Examples
     --------
     >>> import meshlap
-    >>> op = meshlap.laplacian(*meshlap.shapes.sphere(16000, kind="random", seed=0))
-    >>> op.resolution.verdict, op.resolution.alternative
+    >>> op = meshlap.laplacian(*meshlap.shapes.plane(4000, seed=0, kind="stratified"))
+    >>> op.resolution.verdict, op.resolution.alternative    # 0.08% against FEM's 0.23%
     ('resolved', None)
     """
 
@@ -210,6 +212,42 @@ def _heights(P: np.ndarray, geo: Geometry, edges: np.ndarray) -> tuple[np.ndarra
     return out[0], out[1]
 
 
+def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> dict[str, float]:
+    """The default's predicted error, term by term (named for the report's reason), from the
+    figures of ``fig`` (its predictions are not read).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> r = meshlap.laplacian(*meshlap.shapes.plane(400, seed=0, kind="stratified")).resolution
+    >>> bool(abs(sum(default_terms(r).values()) - r.predicted_error) < 1e-15)
+    True
+    """
+    c, hl = model, fig.wavelength
+    narrowed = min(fig.narrowed / c["R_0"], 1.0) ** -c["P_Q"]
+    return {"the width against the eigenfunctions' wavelength": (c["A_H"] + c["A_2"] * hl) * hl * fig.bend,
+            f"the kernel narrowed to {fig.narrowed:.2f} of its width on an irregular sampling":
+                c["A_Q"] * hl * (fig.irregularity / 0.3) ** 2 * narrowed,
+            f"{fig.boundary:.0%} of the mass near the boundary":
+                c["A_B"] * fig.boundary * hl**1.5 + c["A_K"] * hl * fig.boundary_curvature,
+            f"{fig.creases:.0%} of the mass near creases": c["A_C"] * fig.creases * math.sqrt(hl),
+            f"noise of {fig.noise:.2f} mean edges": c["A_N"] * fig.noise**2}
+
+
+def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float] = FEM_MODEL) -> float | None:
+    """Linear FEM's predicted error on the same cells (None without: a point cloud, a curve).
+
+    ``source`` is the geometry's (``"tetrahedra"`` for volumes); ``faces``, whether it has
+    faces; ē²λ is ``wavelength / width²``.
+    """
+    e2l = fig.wavelength / fig.width**2
+    if source == "tetrahedra":
+        return model["F_T"] * e2l
+    if not faces:
+        return None
+    return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
+
+
 def assess(geo: Geometry, widths: Any, correction: str) -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
@@ -254,23 +292,14 @@ def assess(geo: Geometry, widths: Any, correction: str) -> Resolution | None:
         # a crease lifts its own line only, far above the median vertex
         rel = one / np.sqrt(np.maximum(ell2, 1e-300))
         crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
-    terms = {"the width against the eigenfunctions' wavelength": (A_H + A_2 * hl) * hl * bend,
-             f"the kernel narrowed to {rho:.2f} of its width on an irregular sampling":
-                 A_Q * hl * (q / 0.3) ** 2 * min(rho / R_0, 1.0) ** -P_Q,
-             f"{band:.0%} of the mass near the boundary": A_B * band * hl**1.5 + A_K * hl * curv,
-             f"{crease:.0%} of the mass near creases": A_C * crease * math.sqrt(hl),
-             f"noise of {noise:.2f} mean edges": A_N * noise**2}
+    fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
+                     crease, 0.0, None, "", None, "")
+    terms = default_terms(fig)
     predicted = float(sum(terms.values()))
-    e2l = geo.spacing**2 * _weyl(geo)
-    fem: float | None
-    if geo.source == "tetrahedra":
-        fem, alternative = F_T * e2l, "linear FEM (lapy.Solver(lapy.TetMesh(V, T)))"
-    elif geo.faces is not None:
-        fem, alternative = (F_E + F_Q * q * q) * e2l * (1 + e2l) + F_N * noise**2, \
-            "meshlap.baselines.cotangent(V, F)"
-    else:
-        fem, alternative = None, None
+    fem = fem_error(fig, geo.source, geo.faces is not None)
+    alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
+                   else "meshlap.baselines.cotangent(V, F)")
     coarse = fem is not None and predicted > RATIO_LIMIT * fem
-    return Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                      crease, predicted, fem, "too coarse" if coarse else "resolved",
-                      alternative if coarse else None, max(terms, key=terms.get))
+    verdict = "too coarse" if coarse else "resolved"
+    return replace(fig, predicted_error=predicted, fem_error=fem, verdict=verdict,
+                   alternative=alternative if coarse else None, reason=max(terms, key=terms.get))
