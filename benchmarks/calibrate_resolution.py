@@ -1,4 +1,4 @@
-"""Fit the constants of meshlap.resolution's two error models on 33 inputs, and check the verdicts.
+"""Fit the constants of meshlap.resolution's two error models on 32 inputs, and check the verdicts.
 
     python benchmarks/calibrate_resolution.py                  # measure, fit, print
     python benchmarks/calibrate_resolution.py --cache m.json   # keep the measurements for a re-fit

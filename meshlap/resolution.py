@@ -49,7 +49,7 @@ RATIO_LIMIT = 1.5
 CREASE_RATIO = 5.0
 #: ... and at least this fraction of its mean edge (a smooth surface's own bending stays below).
 CREASE_HEIGHT = 0.1
-#: The constants of the default's error model (module docstring), fitted on 33 inputs by
+#: The constants of the default's error model (module docstring), fitted on 32 inputs by
 #: ``benchmarks/calibrate_resolution.py``, which prints new ones after a change of the numerics.
 DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.95,
                  "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
