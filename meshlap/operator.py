@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
-from . import pipeline
+from . import pipeline, resolution
 from . import widths as widths_mod
 from .assembly import cutoff_radius, fmt_bytes, normalization
 from .errors import MeshError, MeshWarning, OperatorTooLargeError
@@ -170,6 +170,10 @@ class MeshLaplacian(LumpedLaplacian):
     psd_margin, moment_scale : float or None, float
         Smallest eigenvalue of (−S, M) over the largest diagonal entry of −L (the check),
         and the global second-moment factor (docs/accuracy.md).
+    resolution : meshlap.resolution.Resolution or None
+        Whether the kernel resolves the input: the figures, the predicted eigenvalue error
+        against linear FEM's, the verdict (a :class:`~meshlap.resolution.ResolutionWarning`
+        when too coarse) and the alternative; None for ``correction="none"``.
 
     Examples
     --------
@@ -212,9 +216,15 @@ class MeshLaplacian(LumpedLaplacian):
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
         self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress))
+        level = 2 if type(self) is MeshLaplacian else 3
         if self._built.fallback_reason is not None:
             warnings.warn(self._built.fallback_reason + "; pass a larger h to keep the correction",
-                          MeshWarning, stacklevel=2 if type(self) is MeshLaplacian else 3)
+                          MeshWarning, stacklevel=level)
+        #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
+        #: the paper's operator): :class:`meshlap.resolution.Resolution`.
+        self.resolution = resolution.assess(self.geometry, self.widths, self._built.correction)
+        if self.resolution is not None and self.resolution.too_coarse:
+            warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None
         self._S = None
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import MeshError
+from .geometry.frames import vertex_normals
 from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
 
@@ -88,6 +89,7 @@ def mean_curvature_flow(
     rebuild: bool = True,
     h: float | None = None,
     keep_volume: bool = False,
+    normal: bool = False,
     **kwargs: Any,
 ) -> tuple[np.ndarray, dict[str, Any]]:
     r"""Smooth a surface by implicit mean curvature flow, ``(M - dt S) X' = M X`` per step.
@@ -114,6 +116,13 @@ def mean_curvature_flow(
     keep_volume : bool, default False
         After every step, scale the surface about its centroid back to the enclosed volume
         it had before the step (Desbrun et al.), which removes the flow's shrinking.
+    normal : bool, default False
+        Keep only each vertex's motion along the normal of the stepped surface. The flow moves
+        a surface along its normal (ΔX = −2Hn); the tangential part of a discrete step comes
+        from the sampling and drags vertices along the surface. Measured on fandisk with
+        normal noise of 0.3 mean edges (RMS distance of the vertices to their clean
+        positions, in mean edges; docs/spectral.md): one cotangent step of 0.3ē², 0.2035 →
+        0.2011; one heat-kernel step at h = ē²/2, 0.2193 → 0.2128.
     **kwargs
         ``solver``, ``rtol``: see :class:`~meshlap.heat.ImplicitHeat`.
 
@@ -155,7 +164,11 @@ def mean_curvature_flow(
     for _ in range(steps):
         if step is None or rebuild:
             step = ImplicitHeat(laplacian(X, faces), dt, **kwargs)
-        X = step(X)
+        Y = step(X)
+        if normal:
+            n = vertex_normals(Y, faces)
+            Y = X + ((Y - X) * n).sum(axis=1, keepdims=True) * n
+        X = Y
         vol = enclosed_volume(X, faces)
         kept *= vol / volume[-1] if volume[-1] != 0 else float("nan")
         if keep_volume and vol * volume[-1] > 0:

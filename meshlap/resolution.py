@@ -1,0 +1,305 @@
+"""Can the kernel resolve this input? A report at build time, and a warning when FEM will win.
+
+The heat kernel of width h averages over a disc of radius about √(2h). Where the input is
+coarse against that width, the default operator's eigenvalues are less accurate than those of
+linear finite elements (the cotangent Laplacian of a surface mesh, LaPy's on tetrahedra).
+:func:`assess` reads the geometry and the chosen widths, measures what decides it, and
+predicts the largest relative error of eigenvalues 1..:data:`EIGENVALUES` for the default and
+for linear FEM:
+
+* the default: ``A_H·b·hλ + A_2·b·(hλ)² + A_Q·hλ·(q/0.3)²·min(ρ/R_0, 1)^-P_Q +
+  A_B·β·(hλ)^1.5 + A_K·hλ·κ_b + A_C·c·√(hλ) + A_N·ν²``, with hλ the mean width times
+  Weyl's estimate of λ_9 (the width against the wavelength), b how much the surface bends
+  (1 − |mean normal|: 0 on a flat domain), q the irregularity of the sampling (spread of the
+  edge lengths), ρ the width in squared edges over its default ratio (below 1 where the
+  curvature cap narrowed it), β the mass within √(2h) of the boundary, κ_b the boundary's
+  curvature times √(2h), c the mass within √(2h) of a crease and ν the noise in mean edges;
+* linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
+  tetrahedra).
+
+The predictions are fits, not bounds: the constants below were calibrated on the rows of
+``benchmarks/bench_spectra.py`` and on coarser and finer variants of them (docs/spectral.md
+has the table, measured and predicted); re-calibrate them here when the numerics change.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from .errors import MeshWarning
+from .geometry import Geometry
+from .widths import h_scale
+
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "RATIO_LIMIT", "Resolution", "ResolutionWarning",
+           "assess", "default_terms", "fem_error"]
+
+#: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
+EIGENVALUES = 9
+#: The warning fires when the default's predicted error exceeds FEM's by this factor.
+RATIO_LIMIT = 1.5
+#: A crease vertex sits this many times farther from its neighbours' mean, along its normal,
+#: than the median vertex does (noise moves every vertex alike; a crease only its line) ...
+CREASE_RATIO = 5.0
+#: ... and at least this fraction of its mean edge (a smooth surface's own bending stays below).
+CREASE_HEIGHT = 0.1
+#: The constants of the default's error model (module docstring), fitted on 32 inputs by
+#: ``benchmarks/calibrate_resolution.py``, which prints new ones after a change of the numerics.
+DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.95,
+                 "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
+#: The constants of linear FEM's, fitted on the same inputs.
+FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5}
+
+
+class ResolutionWarning(MeshWarning):
+    """The input is too coarse for the kernel: linear FEM is expected to be more accurate."""
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """What the build measured about resolving the input, and what it predicts.
+
+    Attributes
+    ----------
+    spacing : float
+        ē, the mean edge length (a cloud's spacing).
+    width : float
+        √h̄/ē: the mass-weighted mean width in mean edges (2 for the default 4ē²).
+    narrowed : float
+        ρ, the mass-weighted geometric mean of h_w/ℓ_w² (ℓ_w² the mean squared edge at w)
+        over the default ratio h/ē²: about 1 where the kernel was not narrowed, less where
+        the curvature cap narrowed it below the sampling.
+    wavelength : float
+        h̄·λ, λ Weyl's estimate of eigenvalue 9 from the total mass.
+    irregularity : float
+        Standard deviation over mean of the edge lengths.
+    bend : float
+        1 − |mass-weighted mean normal|: 0 on a flat domain, 1 on a closed surface (and
+        where there is no normal).
+    noise : float
+        Height of the vertices over their neighbours, along the normal, that the smooth
+        bending does not explain, in mean edges (0 on a clean mesh; meshes only).
+    boundary : float
+        Mass fraction within √(2h̄) of the boundary (0 without one).
+    boundary_curvature : float
+        Median curvature of a surface's boundary times √(2h̄) (0 for a straight one).
+    creases : float
+        Mass fraction within √(2h̄) of a crease vertex.
+    predicted_error, fem_error : float, float or None
+        Predicted largest relative error of eigenvalues 1-9: the operator's, and linear
+        FEM's on the same mesh (None without cells: a point cloud).
+    verdict : str
+        "resolved", or "too coarse" when ``predicted_error > RATIO_LIMIT · fem_error``.
+    alternative : str or None
+        The operator to use instead when too coarse.
+    reason : str
+        The figure behind most of the predicted error.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> op = meshlap.laplacian(*meshlap.shapes.plane(4000, seed=0, kind="stratified"))
+    >>> op.resolution.verdict, op.resolution.alternative    # 0.08% against FEM's 0.23%
+    ('resolved', None)
+    """
+
+    spacing: float
+    width: float
+    narrowed: float
+    wavelength: float
+    irregularity: float
+    bend: float
+    noise: float
+    boundary: float
+    boundary_curvature: float
+    creases: float
+    predicted_error: float
+    fem_error: float | None
+    verdict: str
+    alternative: str | None
+    reason: str
+
+    @property
+    def too_coarse(self) -> bool:
+        """Whether FEM is expected to be more accurate by more than :data:`RATIO_LIMIT`."""
+        return self.verdict == "too coarse"
+
+    def message(self) -> str:
+        """The warning's text."""
+        return (f"the input is too coarse for the heat kernel ({self.reason}): predicted eigenvalue "
+                f"error {self.predicted_error:.2%} against {self.fem_error:.2%} for linear FEM; use "
+                f"{self.alternative} (op.resolution has the figures)")
+
+    def to_json(self) -> str:
+        """The report as JSON (floats exactly), for :mod:`meshlap.store`."""
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_json(cls, text: str) -> Resolution:
+        """The report written by :meth:`to_json`."""
+        return cls(**json.loads(text))
+
+    def __repr__(self) -> str:
+        fem = "–" if self.fem_error is None else f"{self.fem_error:.2%}"
+        rows = [f"Resolution: {self.verdict} (predicted eigenvalue error {self.predicted_error:.2%}, "
+                f"linear FEM {fem})",
+                f"  width {self.width:.2f} mean edges (ē = {self.spacing:.4g}); narrowed to "
+                f"{self.narrowed:.2f} of the default; h·λ₉ = {self.wavelength:.3g}; irregularity "
+                f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
+                f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
+                f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}",
+                f"  most of it: {self.reason}"]
+        if self.alternative:
+            rows.append(f"  use instead: {self.alternative}")
+        return "\n".join(rows)
+
+
+def _weyl(geo: Geometry) -> float:
+    # λ_j ≈ (2π)² (j / (ω_k Vol))^{2/k}, ω_k the volume of the unit k-ball
+    k = geo.dim
+    omega = math.pi ** (k / 2) / math.gamma(k / 2 + 1)
+    return (2 * math.pi) ** 2 * (EIGENVALUES / (omega * float(geo.mass.sum()))) ** (2 / k)
+
+
+def _near(P: np.ndarray, where: np.ndarray, weight: np.ndarray, radius: float) -> float:
+    # the weight of the points within radius of the marked ones
+    if not where.any():
+        return 0.0
+    d, _ = cKDTree(P[where]).query(P, distance_upper_bound=radius)
+    return float(weight[np.isfinite(d)].sum())
+
+
+def _boundary_curvature(P: np.ndarray, geo: Geometry) -> float:
+    # turning angle over length at the vertices of a surface's boundary loops
+    e = np.sort(geo.faces.edges(), axis=1)
+    key, count = np.unique(e, axis=0, return_counts=True)
+    b = key[count == 1]
+    flat = b.ravel()
+    deg = np.bincount(flat, minlength=len(P))
+    order = np.argsort(flat, kind="stable")
+    v = np.flatnonzero(deg == 2)
+    if not len(v):
+        return 0.0
+    first = np.searchsorted(flat[order], v)
+    ends = []
+    for j in (0, 1):
+        edge = b[order[first + j] // 2]
+        ends.append(P[np.where(edge[:, 0] == v, edge[:, 1], edge[:, 0])] - P[v])
+    l1, l2 = (np.linalg.norm(u, axis=1) for u in ends)
+    cos = np.clip((ends[0] * ends[1]).sum(axis=1) / np.maximum(l1 * l2, 1e-300), -1.0, 1.0)
+    return float(np.median((math.pi - np.arccos(cos)) / np.maximum(0.5 * (l1 + l2), 1e-300)))
+
+
+def _heights(P: np.ndarray, geo: Geometry, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # each vertex's height over the mean of its neighbours, and of its two rings, along its normal
+    n = len(P)
+    A = sp.csr_matrix((np.ones(2 * len(edges)), (edges.ravel(), edges[:, ::-1].ravel())), shape=(n, n))
+    A2 = A @ A + A
+    A2.data[:] = 1.0
+    A2.setdiag(0)
+    A2.eliminate_zeros()
+    N = geo.normals()
+    out = []
+    for B in (A, A2):
+        mean = (B @ P) / np.maximum(np.asarray(B.sum(axis=1)), 1.0)
+        out.append(np.abs(((P - mean) * N).sum(axis=1)))
+    return out[0], out[1]
+
+
+def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> dict[str, float]:
+    """The default's predicted error, term by term (named for the report's reason), from the
+    figures of ``fig`` (its predictions are not read).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> r = meshlap.laplacian(*meshlap.shapes.plane(400, seed=0, kind="stratified")).resolution
+    >>> bool(abs(sum(default_terms(r).values()) - r.predicted_error) < 1e-15)
+    True
+    """
+    c, hl = model, fig.wavelength
+    narrowed = min(fig.narrowed / c["R_0"], 1.0) ** -c["P_Q"]
+    return {"the width against the eigenfunctions' wavelength": (c["A_H"] + c["A_2"] * hl) * hl * fig.bend,
+            f"the kernel narrowed to {fig.narrowed:.2f} of its width on an irregular sampling":
+                c["A_Q"] * hl * (fig.irregularity / 0.3) ** 2 * narrowed,
+            f"{fig.boundary:.0%} of the mass near the boundary":
+                c["A_B"] * fig.boundary * hl**1.5 + c["A_K"] * hl * fig.boundary_curvature,
+            f"{fig.creases:.0%} of the mass near creases": c["A_C"] * fig.creases * math.sqrt(hl),
+            f"noise of {fig.noise:.2f} mean edges": c["A_N"] * fig.noise**2}
+
+
+def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float] = FEM_MODEL) -> float | None:
+    """Linear FEM's predicted error on the same cells (None without: a point cloud, a curve).
+
+    ``source`` is the geometry's (``"tetrahedra"`` for volumes); ``faces``, whether it has
+    faces; ē²λ is ``wavelength / width²``.
+    """
+    e2l = fig.wavelength / fig.width**2
+    if source == "tetrahedra":
+        return model["F_T"] * e2l
+    if not faces:
+        return None
+    return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
+
+
+def assess(geo: Geometry, widths: Any, correction: str) -> Resolution | None:
+    """The resolution report of an operator built on ``geo`` with ``widths``.
+
+    None for the paper's operator (``correction="none"``), which the model does not cover.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> op = meshlap.laplacian(*meshlap.shapes.plane(400, seed=0, kind="stratified"))
+    >>> r = op.resolution
+    >>> r.too_coarse, r.alternative
+    (True, 'meshlap.baselines.cotangent(V, F)')
+    """
+    if correction == "none":
+        return None
+    P, m = geo.points, geo.mass
+    n = len(P)
+    w = m / m.sum()
+    edges = geo.edges()
+    l2 = ((P[edges[:, 0]] - P[edges[:, 1]]) ** 2).sum(axis=1)
+    deg = np.bincount(edges.ravel(), minlength=n)
+    ell2 = (np.bincount(edges[:, 0], l2, n) + np.bincount(edges[:, 1], l2, n)) / np.maximum(deg, 1)
+    hv = widths.per_point(n)
+    h_mean = float((w * hv).sum())
+    sigma = math.sqrt(2 * h_mean)
+    ratio = np.maximum(hv / np.maximum(ell2, 1e-300), 1e-12)
+    rho = float(np.exp((w * np.log(ratio)).sum())) / h_scale(geo)
+    hl = h_mean * _weyl(geo)
+    length = np.sqrt(l2)
+    q = float(length.std() / length.mean()) if len(length) else 0.0
+    normals = geo.normals()
+    bend = 1.0 if normals is None else 1.0 - float(np.linalg.norm(w @ normals))
+    band = curv = crease = noise = 0.0
+    if geo.boundary is not None and geo.boundary.any():
+        band = _near(P, geo.boundary, w, sigma)
+        if geo.faces is not None:
+            curv = _boundary_curvature(P, geo) * sigma
+    if geo.faces is not None and normals is not None:
+        one, two = _heights(P, geo, edges)
+        # a smooth surface rises 4× as far over two rings as over one; noise alike over both
+        noise = max(0.0, (4 * float(np.median(one)) - float(np.median(two))) / 3) / geo.spacing
+        # a crease lifts its own line only, far above the median vertex
+        rel = one / np.sqrt(np.maximum(ell2, 1e-300))
+        crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
+    fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
+                     crease, 0.0, None, "", None, "")
+    terms = default_terms(fig)
+    predicted = float(sum(terms.values()))
+    fem = fem_error(fig, geo.source, geo.faces is not None)
+    alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
+                   else "meshlap.baselines.cotangent(V, F)")
+    coarse = fem is not None and predicted > RATIO_LIMIT * fem
+    verdict = "too coarse" if coarse else "resolved"
+    return replace(fig, predicted_error=predicted, fem_error=fem, verdict=verdict,
+                   alternative=alternative if coarse else None, reason=max(terms, key=terms.get))
