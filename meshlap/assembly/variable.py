@@ -18,7 +18,7 @@ from .._jit import each_thread, in_blocks, jit
 from ._intrinsics import _exp_neg, _fetch_add
 from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
 
-__all__ = ["dog_factor", "sort_rows", "variable_csr"]
+__all__ = ["count_entries", "dog_factor", "sort_rows", "variable_csr"]
 
 
 @jit(inline="always")
@@ -121,6 +121,47 @@ def dog_factor(dim: int) -> float:
     return 8.0 if dim == 2 else 2.0 ** (2.0 + 0.5 * dim)
 
 
+def _pass_args(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
+               dog: bool, dim: int, rows: np.ndarray | None) -> tuple:
+    # the arguments of _var_rows up to its fill flag: rows, sources, grid, widths, kernel
+    lnt4 = math.inf if tol == 0 else 4.0 * math.log(1.0 / tol)
+    hv = np.ascontiguousarray(hv, dtype=np.float64)
+    use_normals = normals is not None
+    nv = np.ascontiguousarray(normals if use_normals else np.zeros((len(V), 3)), dtype=np.float64)
+    order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
+    return (order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index, grid.self_slot,
+            grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns, _CHUNK_ROWS,
+            hv, np.ascontiguousarray(hv[grid.src_index]), nv, np.ascontiguousarray(nv[grid.src_index]),
+            use_normals, lnt4, float(hv.max()), dog_factor(dim) if dog else 0.0, 0.5 * dim)
+
+
+def _count_pass(args: tuple, n: int, index_dtype) -> np.ndarray:
+    # entries per vertex of the rows in args (0 for the others); the index arrays have the fill
+    # pass's type, so that one compiled specialization serves both passes
+    counts = np.zeros(n, dtype=np.int64)
+    dummy_i = np.zeros(1, dtype=index_dtype)
+    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, False, dummy_i, dummy_i, np.zeros(1), counts,
+                np.zeros(1, dtype=np.int64))
+    return counts
+
+
+def count_entries(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
+                  dim: int = 2, rows: np.ndarray | None = None) -> np.ndarray:
+    """Stored entries (diagonal included) of each row in ``rows`` (default: all, by vertex), as
+    :func:`variable_csr` with the same arguments would store them; ``rows`` may repeat.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from meshlap.assembly.grid import build_grid
+    >>> V = np.array([[0, 0, 0], [0.1, 0, 0], [5, 0, 0]], float)
+    >>> count_entries(V, build_grid(V, np.ones(3), 1.0), np.full(3, 0.01), 1e-8, None).tolist()
+    [2, 2, 1]
+    """
+    counts = _count_pass(_pass_args(V, grid, hv, tol, normals, False, dim, rows), len(V), np.int32)
+    return counts if rows is None else counts[np.asarray(rows, dtype=np.int64)]
+
+
 def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
                  dog: bool, index_dtype, value_dtype,
                  max_nnz: Callable[[int], None] | None = None, dim: int = 2,
@@ -136,26 +177,8 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     others stay empty (one MPI rank's own rows).
     """
     n = len(V)
-    lnt4 = math.inf if tol == 0 else 4.0 * math.log(1.0 / tol)
-    hv = np.ascontiguousarray(hv, dtype=np.float64)
-    hs = np.ascontiguousarray(hv[grid.src_index])
-    use_normals = normals is not None
-    nv = np.ascontiguousarray(normals if use_normals else np.zeros((n, 3)), dtype=np.float64)
-    ns = np.ascontiguousarray(nv[grid.src_index])
-    hmax = float(hv.max())
-    counts = np.zeros(n, dtype=np.int64)
-    status = np.zeros(1, dtype=np.int64)
-    geo = (grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns, _CHUNK_ROWS)
-    head = (grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
-            grid.self_slot)
-    tail = (hv, hs, nv, ns, use_normals, lnt4, hmax, dog_factor(dim) if dog else 0.0, 0.5 * dim)
-    if rows is not None:
-        head = (np.ascontiguousarray(rows, dtype=np.int64),) + head[1:]
-    # the count pass takes index arrays of the fill pass's type: one compiled specialization
-    # serves both (a fresh cache compiles it once, about 2 s, instead of twice)
-    dummy_i = np.zeros(1, dtype=index_dtype)
-    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *head, *geo, *tail, False, dummy_i, dummy_i,
-                np.zeros(1), counts, status)
+    args = _pass_args(V, grid, hv, tol, normals, dog, dim, rows)
+    counts = _count_pass(args, n, index_dtype)
     nnz = int(counts.sum())
     if max_nnz is not None:
         max_nnz(nnz)
@@ -163,8 +186,8 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     np.cumsum(counts, out=indptr[1:])
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=np.float64)
-    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *head, *geo, *tail, True, indptr, indices, data,
-                counts, status)
+    status = np.zeros(1, dtype=np.int64)
+    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, True, indptr, indices, data, counts, status)
     if status[0]:
         raise RuntimeError("meshlap internal error: the count and fill passes found different "
                            "neighbourhoods; please report this with the mesh")
