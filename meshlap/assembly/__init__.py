@@ -142,14 +142,19 @@ class MemoryGuard:
                 f"smaller h (now {self.h:.4g}) or tol, dtype=float32, or matrix_free=True")
 
 
-def sample_counts(points: np.ndarray, g: grid.Grid, sample: int = 512, seed: int = 0) -> tuple[float, float]:
+def sample_counts(points: np.ndarray, g: grid.Grid, sample: int = 512, seed: int = 0,
+                  count: Callable[[np.ndarray | None], np.ndarray] | None = None) -> tuple[float, float]:
     """Mean total entries and its standard error from ``sample`` rows drawn with replacement:
-    O(sample) memory and O(sample × row length) time, even when the matrix would be dense."""
+    O(sample) memory and O(sample × row length) time, even when the matrix would be dense.
+    ``count(rows)`` counts the entries of those rows (None: all); default the one-h kernel's."""
     n = len(points)
+    if count is None:
+        def count(rows):
+            return grid.count_entries(points, g, rows=rows)
     if n <= sample:
-        return float(grid.count_entries(points, g).sum()), 0.0
+        return float(count(None).sum()), 0.0
     rows = np.random.default_rng(seed).integers(0, n, size=sample)
-    counts = grid.count_entries(points, g, rows=rows).astype(np.float64)
+    counts = count(rows).astype(np.float64)
     return counts.mean() * n, counts.std(ddof=1) / math.sqrt(sample) * n
 
 
@@ -201,12 +206,17 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
                                        kernel.dog, kernel.normals, dtype)
     P = pad3(points)
     g = grid.build_grid(P, mass, radius)
-    mean, err = sample_counts(P, g)
+    one_h = kernel.plain and widths.h_vertex is None
+    normals = None if kernel.normals is None else pad3(kernel.normals)
+    hv = None if one_h else widths.per_point(n)
+    # the sample is counted by the kernel that then builds (one fewer to compile)
+    mean, err = sample_counts(P, g, count=None if one_h else (
+        lambda rows: variable.count_entries(P, g, hv, kernel.tol, normals, kernel.dim, rows)))
     if guard is not None:
         # fail fast only when the sample leaves no doubt; the exact count decides otherwise
         guard(max(mean - 4.0 * err, 0.0), estimated=True)
     index_dtype = np.int32 if n <= _INT32_MAX else np.int64
-    if kernel.plain and widths.h_vertex is None:
+    if one_h:
         count_cb = None if progress is None else (lambda f: progress(0.3 * f, "count"))
         fill_cb = None if progress is None else (lambda f: progress(0.3 + 0.7 * f, "fill"))
         counts = grid.count_entries(P, g, progress=count_cb, expected_nnz=mean)
@@ -228,10 +238,9 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
         if nnz > _INT32_MAX:
             raise OperatorTooLargeError(f"{nnz:,} entries need 64-bit indices; use a smaller h")
 
-    normals = None if kernel.normals is None else pad3(kernel.normals)
     if progress is not None:
         progress(0.0, "kernel rows")
-    indptr, indices, data = variable.variable_csr(P, g, widths.per_point(n), kernel.tol, normals,
+    indptr, indices, data = variable.variable_csr(P, g, hv, kernel.tol, normals,
                                                   kernel.dog, index_dtype, np.dtype(dtype), max_nnz=check,
                                                   dim=kernel.dim)
     variable.sort_rows(indptr, indices, data)

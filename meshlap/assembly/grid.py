@@ -28,11 +28,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numba
 import numpy as np
-from numba import prange
 
-from .._jit import jit
+from .._jit import each_thread, jit
 from ._intrinsics import _exp_neg, _fetch_add
 
 __all__ = ["cutoff_radius", "normalization", "Grid", "build_grid", "count_entries", "fill_csr", "apply"]
@@ -324,108 +322,103 @@ def _dot_diff(wt, sj, fq, fw, cnt):
 
 
 # -- the parallel passes -------------------------------------------------------------------
-@jit(parallel=True)
-def _count_rows(rows, V, xs, ys, zs, self_slot, cell_start, dims, lo, cell, r, full, max_columns,
-                chunk, n_workers, counts, by_vertex):
+@jit()
+def _count_rows(next_chunk, rows, V, xs, ys, zs, self_slot, cell_start, dims, lo, cell, r, full,
+                max_columns, chunk, counts, by_vertex):
+    # one thread's share (each_thread), like the other passes: chunks of rows from the counter
     n_rows = len(rows)
     n_chunks = (n_rows + chunk - 1) // chunk
-    next_chunk = np.zeros(1, dtype=np.int64)
     r2 = r * r
-    for _ in prange(n_workers):
-        cols = np.empty((max_columns, 2), dtype=np.int64)
-        while True:
-            c = _fetch_add(next_chunk, 0, 1)
-            if c >= n_chunks:
-                break
-            for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
-                w = rows[k]
-                x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
-                cnt = 0
-                for i in range(ncols):
-                    for j in range(cols[i, 0], cols[i, 1]):
-                        dx = xs[j] - x
-                        dy = ys[j] - y
-                        dz = zs[j] - z
-                        cnt += np.int64(dx * dx + dy * dy + dz * dz <= r2)
-                # the diagonal takes the place of the vertex itself when it is a source
-                cnt += np.int64(self_slot[w] < 0)
-                counts[w if by_vertex else k] = cnt
+    cols = np.empty((max_columns, 2), dtype=np.int64)
+    while True:
+        c = _fetch_add(next_chunk, 0, 1)
+        if c >= n_chunks:
+            break
+        for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
+            w = rows[k]
+            x, y, z = V[w, 0], V[w, 1], V[w, 2]
+            ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
+            cnt = 0
+            for i in range(ncols):
+                for j in range(cols[i, 0], cols[i, 1]):
+                    dx = xs[j] - x
+                    dy = ys[j] - y
+                    dz = zs[j] - z
+                    cnt += np.int64(dx * dx + dy * dy + dz * dz <= r2)
+            # the diagonal takes the place of the vertex itself when it is a source
+            cnt += np.int64(self_slot[w] < 0)
+            counts[w if by_vertex else k] = cnt
 
 
-@jit(parallel=True)
-def _fill_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell, r, full,
-               max_columns, chunk, n_workers, inv4h, coef, indptr, indices, data, status):
+@jit()
+def _fill_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell, r,
+               full, max_columns, chunk, inv4h, coef, indptr, indices, data, status):
     n_rows = len(rows)
     n_chunks = (n_rows + chunk - 1) // chunk
-    next_chunk = np.zeros(1, dtype=np.int64)
     r2 = r * r
-    for _ in prange(n_workers):
-        cols = np.empty((max_columns, 2), dtype=np.int64)
-        sj = np.empty(1024, dtype=np.int64)
-        sd = np.empty(1024, dtype=np.float64)
-        sm = np.empty(1024, dtype=np.float64)
-        while True:
-            c = _fetch_add(next_chunk, 0, 1)
-            if c >= n_chunks:
-                break
-            for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
-                w = rows[k]
-                x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
-                need = _candidates(cols, ncols)
-                if need > len(sj):
-                    sj = np.empty(2 * need, dtype=np.int64)
-                    sd = np.empty(2 * need, dtype=np.float64)
-                    sm = np.empty(2 * need, dtype=np.float64)
-                cnt = _gather(x, y, z, self_slot[w], xs, ys, zs, r2, cols, ncols, sj, sd)
-                start = indptr[w]
-                if cnt != indptr[w + 1] - start - 1:
-                    status[0] = 1  # the count pass disagrees: never write past the row
-                    cnt = min(cnt, indptr[w + 1] - start - 1)
-                first = start + 1
-                for i in range(cnt):
-                    j = sj[i]
-                    sm[i] = m[j]
-                    indices[first + i] = src_index[j]
-                for i in range(cnt):  # vectorized: no indirect access
-                    data[first + i] = coef * sm[i] * _exp_neg(-sd[i] * inv4h)
-                indices[start] = w
-                data[start] = -_sum(data, first, cnt)
+    cols = np.empty((max_columns, 2), dtype=np.int64)
+    sj = np.empty(1024, dtype=np.int64)
+    sd = np.empty(1024, dtype=np.float64)
+    sm = np.empty(1024, dtype=np.float64)
+    while True:
+        c = _fetch_add(next_chunk, 0, 1)
+        if c >= n_chunks:
+            break
+        for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
+            w = rows[k]
+            x, y, z = V[w, 0], V[w, 1], V[w, 2]
+            ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
+            need = _candidates(cols, ncols)
+            if need > len(sj):
+                sj = np.empty(2 * need, dtype=np.int64)
+                sd = np.empty(2 * need, dtype=np.float64)
+                sm = np.empty(2 * need, dtype=np.float64)
+            cnt = _gather(x, y, z, self_slot[w], xs, ys, zs, r2, cols, ncols, sj, sd)
+            start = indptr[w]
+            if cnt != indptr[w + 1] - start - 1:
+                status[0] = 1  # the count pass disagrees: never write past the row
+                cnt = min(cnt, indptr[w + 1] - start - 1)
+            first = start + 1
+            for i in range(cnt):
+                j = sj[i]
+                sm[i] = m[j]
+                indices[first + i] = src_index[j]
+            for i in range(cnt):  # vectorized: no indirect access
+                data[first + i] = coef * sm[i] * _exp_neg(-sd[i] * inv4h)
+            indices[start] = w
+            data[start] = -_sum(data, first, cnt)
 
 
-@jit(parallel=True)
-def _apply_rows(rows, V, xs, ys, zs, m, self_slot, cell_start, dims, lo, cell, r, full, max_columns,
-                chunk, n_workers, inv4h, coef, fs, f, out):
+@jit()
+def _apply_rows(next_chunk, rows, V, xs, ys, zs, m, self_slot, cell_start, dims, lo, cell, r, full,
+                max_columns, chunk, inv4h, coef, fs, f, out):
     # out[w] = coef * sum_p K_wp m_p (f_p - f_w); fs holds f in source order, one row per
     # column of f, so that each column's gather runs over contiguous memory
     n_rows = len(rows)
     n_chunks = (n_rows + chunk - 1) // chunk
-    next_chunk = np.zeros(1, dtype=np.int64)
     r2 = r * r
     nk = f.shape[1]
-    for _ in prange(n_workers):
-        cols = np.empty((max_columns, 2), dtype=np.int64)
-        sj = np.empty(1024, dtype=np.int64)
-        sd = np.empty(1024, dtype=np.float64)
-        sm = np.empty(1024, dtype=np.float64)
-        while True:
-            c = _fetch_add(next_chunk, 0, 1)
-            if c >= n_chunks:
-                break
-            for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
-                w = rows[k]
-                x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
-                need = _candidates(cols, ncols)
-                if need > len(sj):
-                    sj = np.empty(2 * need, dtype=np.int64)
-                    sd = np.empty(2 * need, dtype=np.float64)
-                    sm = np.empty(2 * need, dtype=np.float64)
-                cnt = _gather(x, y, z, self_slot[w], xs, ys, zs, r2, cols, ncols, sj, sd)
-                _weights(sj, sd, sm, m, cnt, inv4h, 1.0)
-                for q in range(nk):
-                    out[w, q] = coef * _dot_diff(sd, sj, fs[q], f[w, q], cnt)
+    cols = np.empty((max_columns, 2), dtype=np.int64)
+    sj = np.empty(1024, dtype=np.int64)
+    sd = np.empty(1024, dtype=np.float64)
+    sm = np.empty(1024, dtype=np.float64)
+    while True:
+        c = _fetch_add(next_chunk, 0, 1)
+        if c >= n_chunks:
+            break
+        for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
+            w = rows[k]
+            x, y, z = V[w, 0], V[w, 1], V[w, 2]
+            ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
+            need = _candidates(cols, ncols)
+            if need > len(sj):
+                sj = np.empty(2 * need, dtype=np.int64)
+                sd = np.empty(2 * need, dtype=np.float64)
+                sm = np.empty(2 * need, dtype=np.float64)
+            cnt = _gather(x, y, z, self_slot[w], xs, ys, zs, r2, cols, ncols, sj, sd)
+            _weights(sj, sd, sm, m, cnt, inv4h, 1.0)
+            for q in range(nk):
+                out[w, q] = coef * _dot_diff(sd, sj, fs[q], f[w, q], cnt)
 
 
 # -- drivers -------------------------------------------------------------------------------
@@ -440,9 +433,13 @@ def _row_blocks(grid: Grid, entries_per_row: float, progress) -> list[tuple[int,
 
 
 def _geometry(grid: Grid) -> tuple:
-    # the workers are the threads numba runs now; each takes chunks until none is left
     return (grid.cell_start, grid.dims, grid.lo, grid.cell, grid.radius, grid.full, grid.max_columns,
-            _CHUNK_ROWS, numba.get_num_threads())
+            _CHUNK_ROWS)
+
+
+def _counter() -> np.ndarray:
+    # the next chunk of rows, shared by the threads of one pass (each_thread)
+    return np.zeros(1, dtype=np.int64)
 
 
 def count_entries(V: np.ndarray, grid: Grid, rows: np.ndarray | None = None,
@@ -463,12 +460,12 @@ def count_entries(V: np.ndarray, grid: Grid, rows: np.ndarray | None = None,
     if rows is not None:
         rows = np.ascontiguousarray(rows, dtype=np.int64)
         counts = np.empty(len(rows), dtype=np.int64)
-        _count_rows(rows, *head, *_geometry(grid), counts, False)
+        each_thread(_count_rows, _counter(), rows, *head, *_geometry(grid), counts, False)
         return counts
     counts = np.empty(len(V), dtype=np.int64)
     blocks = _row_blocks(grid, expected_nnz / max(len(V), 1), progress)
     for a, b in blocks:
-        _count_rows(grid.tgt_order[a:b], *head, *_geometry(grid), counts, True)
+        each_thread(_count_rows, _counter(), grid.tgt_order[a:b], *head, *_geometry(grid), counts, True)
         if progress is not None:
             progress(b / len(V))
     return counts
@@ -490,9 +487,9 @@ def fill_csr(V: np.ndarray, grid: Grid, h: float, indptr: np.ndarray, index_dtyp
     status = np.zeros(1, dtype=np.int64)
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     for a, b in _row_blocks(grid, nnz / max(len(V), 1), progress):
-        _fill_rows(order[a:b], V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
-                   grid.self_slot, *_geometry(grid), 1.0 / (4.0 * h), coef, indptr, indices, data,
-                   status)
+        each_thread(_fill_rows, _counter(), order[a:b], V, grid.xs, grid.ys, grid.zs, grid.src_mass,
+                    grid.src_index, grid.self_slot, *_geometry(grid), 1.0 / (4.0 * h), coef, indptr,
+                    indices, data, status)
         if progress is not None:
             progress(b / len(V))
     if status[0]:
@@ -521,6 +518,6 @@ def apply(V: np.ndarray, grid: Grid, h: float, f: np.ndarray, dim: int = 2,
     fs = np.ascontiguousarray(f2[grid.src_index].T)
     out = np.empty_like(f2)
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
-    _apply_rows(order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.self_slot,
-                *_geometry(grid), 1.0 / (4.0 * h), normalization(h, dim), fs, f2, out)
+    each_thread(_apply_rows, _counter(), order, V, grid.xs, grid.ys, grid.zs, grid.src_mass,
+                grid.self_slot, *_geometry(grid), 1.0 / (4.0 * h), normalization(h, dim), fs, f2, out)
     return out[:, 0] if vec else out

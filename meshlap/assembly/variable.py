@@ -12,15 +12,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import numba
 import numpy as np
-from numba import prange
 
-from .._jit import jit
+from .._jit import each_thread, in_blocks, jit
 from ._intrinsics import _exp_neg, _fetch_add
 from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
 
-__all__ = ["dog_factor", "sort_rows", "variable_csr"]
+__all__ = ["count_entries", "dog_factor", "sort_rows", "variable_csr"]
 
 
 @jit(inline="always")
@@ -60,56 +58,55 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
     return pos
 
 
-@jit(parallel=True)
-def _var_rows(rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell, full,
-              max_columns, chunk, n_workers, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k,
-              fill, indptr, indices, data, counts, status):
-    # fill=False: counts[w] = entries of row w; fill=True: write the row into CSR
+@jit()
+def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell,
+              full, max_columns, chunk, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k, fill,
+              indptr, indices, data, counts, status):
+    # one thread's share (each_thread): chunks of rows from the shared counter. fill=False:
+    # counts[w] = entries of row w; fill=True: write the row into CSR
     n_rows = len(rows)
     n_chunks = (n_rows + chunk - 1) // chunk
-    next_chunk = np.zeros(1, dtype=np.int64)
-    for _ in prange(n_workers):
-        cols = np.empty((max_columns, 2), dtype=np.int64)
-        sj = np.empty(1024, dtype=np.int64)
-        sd = np.empty(1024, dtype=np.float64)
-        sh = np.empty(1024, dtype=np.float64)
-        while True:
-            c = _fetch_add(next_chunk, 0, 1)
-            if c >= n_chunks:
-                break
-            for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
-                w = rows[k]
-                x, y, z = V[w, 0], V[w, 1], V[w, 2]
-                hw = hv[w]
-                r = math.sqrt(lnt4 * 0.5 * (hw + hmax)) if not full else math.inf
-                ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
-                need = _candidates(cols, ncols)
-                if need > len(sj):
-                    sj = np.empty(2 * need, dtype=np.int64)
-                    sd = np.empty(2 * need, dtype=np.float64)
-                    sh = np.empty(2 * need, dtype=np.float64)
-                cnt = _gather_var(x, y, z, self_slot[w], hw, nv[w], xs, ys, zs, hs, ns, lnt4,
-                                  use_normals, cols, ncols, sj, sd, sh)
-                if not fill:
-                    counts[w] = cnt + 1
-                    continue
-                start = indptr[w]
-                if cnt != indptr[w + 1] - start - 1:
-                    status[0] = 1
-                    cnt = min(cnt, indptr[w + 1] - start - 1)
-                first = start + 1
-                for i in range(cnt):
-                    j = sj[i]
-                    hp = sh[i]
-                    e = _exp_neg(-sd[i] / (4.0 * hp))
-                    kern = e * (dogc * e - 1.0) if dogc != 0.0 else e
-                    indices[first + i] = src_index[j]
-                    if half_k == 1.0:  # surfaces, rounded as the plain operator is
-                        data[first + i] = m[j] * kern / (4.0 * math.pi * hp * hp)
-                    else:
-                        data[first + i] = m[j] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
-                indices[start] = w
-                data[start] = -_sum(data, first, cnt)
+    cols = np.empty((max_columns, 2), dtype=np.int64)
+    sj = np.empty(1024, dtype=np.int64)
+    sd = np.empty(1024, dtype=np.float64)
+    sh = np.empty(1024, dtype=np.float64)
+    while True:
+        c = _fetch_add(next_chunk, 0, 1)
+        if c >= n_chunks:
+            break
+        for k in range(c * chunk, min((c + 1) * chunk, n_rows)):
+            w = rows[k]
+            x, y, z = V[w, 0], V[w, 1], V[w, 2]
+            hw = hv[w]
+            r = math.sqrt(lnt4 * 0.5 * (hw + hmax)) if not full else math.inf
+            ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
+            need = _candidates(cols, ncols)
+            if need > len(sj):
+                sj = np.empty(2 * need, dtype=np.int64)
+                sd = np.empty(2 * need, dtype=np.float64)
+                sh = np.empty(2 * need, dtype=np.float64)
+            cnt = _gather_var(x, y, z, self_slot[w], hw, nv[w], xs, ys, zs, hs, ns, lnt4,
+                              use_normals, cols, ncols, sj, sd, sh)
+            if not fill:
+                counts[w] = cnt + 1
+                continue
+            start = indptr[w]
+            if cnt != indptr[w + 1] - start - 1:
+                status[0] = 1
+                cnt = min(cnt, indptr[w + 1] - start - 1)
+            first = start + 1
+            for i in range(cnt):
+                j = sj[i]
+                hp = sh[i]
+                e = _exp_neg(-sd[i] / (4.0 * hp))
+                kern = e * (dogc * e - 1.0) if dogc != 0.0 else e
+                indices[first + i] = src_index[j]
+                if half_k == 1.0:  # surfaces, rounded as the plain operator is
+                    data[first + i] = m[j] * kern / (4.0 * math.pi * hp * hp)
+                else:
+                    data[first + i] = m[j] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
+            indices[start] = w
+            data[start] = -_sum(data, first, cnt)
 
 
 def dog_factor(dim: int) -> float:
@@ -122,6 +119,47 @@ def dog_factor(dim: int) -> float:
     (8.0, 5.6569)
     """
     return 8.0 if dim == 2 else 2.0 ** (2.0 + 0.5 * dim)
+
+
+def _pass_args(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
+               dog: bool, dim: int, rows: np.ndarray | None) -> tuple:
+    # the arguments of _var_rows up to its fill flag: rows, sources, grid, widths, kernel
+    lnt4 = math.inf if tol == 0 else 4.0 * math.log(1.0 / tol)
+    hv = np.ascontiguousarray(hv, dtype=np.float64)
+    use_normals = normals is not None
+    nv = np.ascontiguousarray(normals if use_normals else np.zeros((len(V), 3)), dtype=np.float64)
+    order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
+    return (order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index, grid.self_slot,
+            grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns, _CHUNK_ROWS,
+            hv, np.ascontiguousarray(hv[grid.src_index]), nv, np.ascontiguousarray(nv[grid.src_index]),
+            use_normals, lnt4, float(hv.max()), dog_factor(dim) if dog else 0.0, 0.5 * dim)
+
+
+def _count_pass(args: tuple, n: int, index_dtype) -> np.ndarray:
+    # entries per vertex of the rows in args (0 for the others); the index arrays have the fill
+    # pass's type, so that one compiled specialization serves both passes
+    counts = np.zeros(n, dtype=np.int64)
+    dummy_i = np.zeros(1, dtype=index_dtype)
+    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, False, dummy_i, dummy_i, np.zeros(1), counts,
+                np.zeros(1, dtype=np.int64))
+    return counts
+
+
+def count_entries(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
+                  dim: int = 2, rows: np.ndarray | None = None) -> np.ndarray:
+    """Stored entries (diagonal included) of each row in ``rows`` (default: all, by vertex), as
+    :func:`variable_csr` with the same arguments would store them; ``rows`` may repeat.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from meshlap.assembly.grid import build_grid
+    >>> V = np.array([[0, 0, 0], [0.1, 0, 0], [5, 0, 0]], float)
+    >>> count_entries(V, build_grid(V, np.ones(3), 1.0), np.full(3, 0.01), 1e-8, None).tolist()
+    [2, 2, 1]
+    """
+    counts = _count_pass(_pass_args(V, grid, hv, tol, normals, False, dim, rows), len(V), np.int32)
+    return counts if rows is None else counts[np.asarray(rows, dtype=np.int64)]
 
 
 def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
@@ -139,26 +177,8 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     others stay empty (one MPI rank's own rows).
     """
     n = len(V)
-    lnt4 = math.inf if tol == 0 else 4.0 * math.log(1.0 / tol)
-    hv = np.ascontiguousarray(hv, dtype=np.float64)
-    hs = np.ascontiguousarray(hv[grid.src_index])
-    use_normals = normals is not None
-    nv = np.ascontiguousarray(normals if use_normals else np.zeros((n, 3)), dtype=np.float64)
-    ns = np.ascontiguousarray(nv[grid.src_index])
-    hmax = float(hv.max())
-    counts = np.zeros(n, dtype=np.int64)
-    status = np.zeros(1, dtype=np.int64)
-    geo = (grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns,
-           _CHUNK_ROWS, numba.get_num_threads())
-    head = (grid.tgt_order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index,
-            grid.self_slot)
-    tail = (hv, hs, nv, ns, use_normals, lnt4, hmax, dog_factor(dim) if dog else 0.0, 0.5 * dim)
-    if rows is not None:
-        head = (np.ascontiguousarray(rows, dtype=np.int64),) + head[1:]
-    # the count pass takes index arrays of the fill pass's type: one compiled specialization
-    # serves both (a fresh cache compiles it once, about 5 s, instead of twice)
-    dummy_i = np.zeros(1, dtype=index_dtype)
-    _var_rows(*head, *geo, *tail, False, dummy_i, dummy_i, np.zeros(1), counts, status)
+    args = _pass_args(V, grid, hv, tol, normals, dog, dim, rows)
+    counts = _count_pass(args, n, index_dtype)
     nnz = int(counts.sum())
     if max_nnz is not None:
         max_nnz(nnz)
@@ -166,21 +186,74 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     np.cumsum(counts, out=indptr[1:])
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=np.float64)
-    _var_rows(*head, *geo, *tail, True, indptr, indices, data, counts, status)
+    status = np.zeros(1, dtype=np.int64)
+    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, True, indptr, indices, data, counts, status)
     if status[0]:
         raise RuntimeError("meshlap internal error: the count and fill passes found different "
                            "neighbourhoods; please report this with the mesh")
     return indptr, indices, data.astype(value_dtype, copy=False)
 
 
-@jit(parallel=True)
-def _sort_rows(indptr, indices, data):  # pragma: no cover - compiled
-    for w in prange(len(indptr) - 1):
-        a, b = indptr[w], indptr[w + 1]
-        if b - a > 1:
-            order = np.argsort(indices[a:b])
-            indices[a:b] = indices[a:b][order]
-            data[a:b] = data[a:b][order]
+@jit()
+def _sort_rows(start, stop, indptr, indices, data):  # pragma: no cover - compiled
+    for w in range(start, stop):
+        _sort_pairs(indices, data, indptr[w], indptr[w + 1])
+
+
+@jit()
+def _sort_pairs(key, val, lo, hi):  # pragma: no cover - compiled
+    # key[lo:hi] ascending (distinct keys), val moved alongside, in place: quicksort with the
+    # median of three as pivot and insertion sort below 16 entries. Written out because
+    # np.argsort costs seconds to compile and needs two gathers and their copies.
+    stack = np.empty((64, 2), dtype=np.int64)  # the larger part waits: depth <= log2(n)
+    top = 0
+    while True:
+        while hi - lo > 16:
+            mid = (lo + hi) >> 1
+            # the median of key[lo], key[mid], key[hi - 1] goes to lo, the pivot of Hoare's scheme
+            a, b, c = key[lo], key[mid], key[hi - 1]
+            m = mid if (a < b) == (b < c) else (lo if (b < a) == (a < c) else hi - 1)
+            _swap(key, val, lo, m)
+            p = key[lo]
+            i = lo - 1
+            j = hi
+            while True:
+                i += 1
+                while key[i] < p:
+                    i += 1
+                j -= 1
+                while key[j] > p:
+                    j -= 1
+                if i >= j:
+                    break
+                _swap(key, val, i, j)
+            # parts [lo, j] and [j + 1, hi), both non-empty
+            if j + 1 - lo < hi - j - 1:
+                stack[top, 0], stack[top, 1] = j + 1, hi
+                hi = j + 1
+            else:
+                stack[top, 0], stack[top, 1] = lo, j + 1
+                lo = j + 1
+            top += 1
+        for i in range(lo + 1, hi):
+            k, v = key[i], val[i]
+            j = i - 1
+            while j >= lo and key[j] > k:
+                key[j + 1] = key[j]
+                val[j + 1] = val[j]
+                j -= 1
+            key[j + 1] = k
+            val[j + 1] = v
+        if top == 0:
+            return
+        top -= 1
+        lo, hi = stack[top, 0], stack[top, 1]
+
+
+@jit(inline="always")
+def _swap(key, val, i, j):  # pragma: no cover - compiled
+    key[i], key[j] = key[j], key[i]
+    val[i], val[j] = val[j], val[i]
 
 
 def sort_rows(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> None:
@@ -197,4 +270,4 @@ def sort_rows(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray) -> None
     >>> sort_rows(ip, ind, dat); ind.tolist(), dat.tolist()
     ([0, 1, 2], [1.0, 2.0, 3.0])
     """
-    _sort_rows(indptr, indices, data)
+    in_blocks(_sort_rows, len(indptr) - 1, indptr, indices, data)

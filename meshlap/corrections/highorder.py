@@ -36,10 +36,9 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 from scipy.spatial import cKDTree
 
-from .._jit import jit
+from .._jit import in_blocks, jit
 from ..errors import MeshError
 from ..geometry import check_points
 from ._cholesky import chol_solve, cholesky
@@ -149,12 +148,12 @@ def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compi
             B[r, a] = vec[a, d - 1 - r]
 
 
-@jit(parallel=True)
-def _rows(P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count, degree, idx1,
-          idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
+@jit()
+def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
+          degree, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
     d = P.shape[1]
     nc = d - k
-    for r in prange(len(centers)):
+    for r in range(start, stop):
         w = centers[r]
         a0 = indptr[r]
         K = indptr[r + 1] - a0
@@ -470,8 +469,8 @@ def pointwise_rows(P: Any, indptr: Any, indices: Any, h: Any, degree: int = 4, *
     probes = np.full((rows, 2), np.nan)
     if rows:
         parent, var = _recursion(exps)
-        _rows(P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count, degree, idx1, idx2,
-              bool(noise_dof), out, used, resid, amp, probes, kap)
+        in_blocks(_rows, rows, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count, degree,
+                  idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
     L = _rows_matrix(n, centers, indptr, indices, out)
     if not return_fit:
         return L

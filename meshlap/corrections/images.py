@@ -16,20 +16,19 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 
-from .._jit import jit
+from .._jit import in_blocks, jit
 from ..assembly.variable import dog_factor
 from ..geometry.frames import BoundaryFrames
 
 __all__ = ["neumann_images"]
 
 
-@jit(parallel=True)
-def _image_rows(indptr, indices, data, P, pos, bpt, nu, mass, hv, dogc, half_k):  # pragma: no cover
-    n = len(indptr) - 1
+@jit()
+def _image_rows(start, stop, indptr, indices, data, P, pos, bpt, nu, mass, hv, dogc,
+                half_k):  # pragma: no cover
     d = P.shape[1]
-    for w in prange(n):
+    for w in range(start, stop):
         iw = pos[w]
         if iw < 0:
             continue
@@ -111,8 +110,9 @@ def neumann_images(L: sp.csr_matrix, P: np.ndarray, frames: BoundaryFrames, mass
     pos = np.full(len(P), -1, dtype=np.int64)
     pos[band] = np.arange(len(band))
     out = sp.csr_matrix(L, dtype=np.float64, copy=True)
-    _image_rows(out.indptr, out.indices, out.data, np.ascontiguousarray(P, dtype=np.float64), pos,
-                np.ascontiguousarray(bpt, dtype=np.float64), np.ascontiguousarray(nu, dtype=np.float64),
-                np.ascontiguousarray(mass, dtype=np.float64), np.ascontiguousarray(hv, dtype=np.float64),
-                dog_factor(dim) if dog else 0.0, 0.5 * dim)
+    in_blocks(_image_rows, out.shape[0], out.indptr, out.indices, out.data,
+              np.ascontiguousarray(P, dtype=np.float64), pos,
+              np.ascontiguousarray(bpt, dtype=np.float64), np.ascontiguousarray(nu, dtype=np.float64),
+              np.ascontiguousarray(mass, dtype=np.float64), np.ascontiguousarray(hv, dtype=np.float64),
+              dog_factor(dim) if dog else 0.0, 0.5 * dim)
     return out if out.dtype == L.dtype else out.astype(L.dtype)

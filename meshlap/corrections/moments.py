@@ -21,20 +21,18 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 
-from .._jit import jit
+from .._jit import in_blocks, jit
 from ._cholesky import chol_solve, cholesky
 
 __all__ = ["moment_correction", "second_moment_scale"]
 
 
-@jit(parallel=True)
-def _moment_rows(indptr, indices, data, P, k, out, failed):  # pragma: no cover - compiled
-    n = len(indptr) - 1
+@jit()
+def _moment_rows(start, stop, indptr, indices, data, P, k, out, failed):  # pragma: no cover - compiled
     d = P.shape[1]
     m = k + k * (k + 1) // 2  # linear and quadratic monomials in k tangent coordinates
-    for w in prange(n):
+    for w in range(start, stop):
         a, b = indptr[w], indptr[w + 1]
         for q in range(a, b):
             out[q] = data[q]
@@ -161,8 +159,8 @@ def moment_correction(L: sp.csr_matrix, P: np.ndarray, dim: int = 2) -> tuple[sp
     L = sp.csr_matrix(L)
     out = np.empty_like(L.data)
     failed = np.zeros(L.shape[0], dtype=np.int8)
-    _moment_rows(L.indptr, L.indices, L.data, np.ascontiguousarray(P, dtype=np.float64), int(dim), out,
-                 failed)
+    in_blocks(_moment_rows, L.shape[0], L.indptr, L.indices, L.data,
+              np.ascontiguousarray(P, dtype=np.float64), int(dim), out, failed)
     # same pattern: share the index arrays (neither matrix is changed in place afterwards)
     Lc = sp.csr_matrix(L.shape, dtype=L.dtype)
     Lc.data, Lc.indices, Lc.indptr = out, L.indices, L.indptr

@@ -47,6 +47,7 @@ import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components
 
+from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
 from . import frames
 from .core import Geometry, check_points
@@ -174,13 +175,13 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         counts = np.full(len(todo), K, dtype=np.int64)
         if k == 1:
             m, st, ends = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
-            _masses1(Q, nbr, counts, kt, todo, m, st, ends)
+            in_blocks(_masses1, len(todo), Q, nbr, counts, kt, todo, m, st, ends)
             open_cell[todo] = ends
         elif k == 2:
             m, vor, st, flat = (np.zeros(len(todo)), np.zeros(len(todo)),
                                 np.zeros(len(todo), np.int64), np.zeros(len(todo)))
             tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
-            _masses2(Q, nbr, counts, kt, todo, m, vor, st, flat, tri)
+            in_blocks(_masses2, len(todo), Q, nbr, counts, kt, todo, m, vor, st, flat, tri)
             open_cell[todo] = ~np.isfinite(vor)
             # each triangle of the local stars once, from its corner of smallest index
             r, slot = np.nonzero(tri[:, :, 0] >= 0)
@@ -191,7 +192,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
             star_parts.append((it, np.column_stack([todo[r], a, b])[own]))
         elif k == 3:
             m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
-            _masses3(Q, nbr, counts, kt, todo, m, st, hull)
+            in_blocks(_masses3, len(todo), Q, nbr, counts, kt, todo, m, st, hull)
             # cospherical neighbours: Qhull (with its joggle) decides the star
             tie = np.flatnonzero(st == _DEGENERATE)
             if len(tie):

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 from scipy.spatial import Delaunay, QhullError
 
 from .._jit import jit
@@ -148,10 +147,10 @@ def _star2(U, K, tri):
     return star / 6.0, 0.5 * abs(voronoi), status
 
 
-@jit(parallel=True)
-def _masses2(P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
+@jit()
+def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
     d = P.shape[1]
-    for r in prange(len(rows)):
+    for r in range(start, stop):
         p = rows[r]
         K = counts[r]
         T = np.empty((2, d))
@@ -165,10 +164,10 @@ def _masses2(P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
 
 
 # -- k = 1: half the gap to the nearest neighbours on each side ---------------------------------
-@jit(parallel=True)
-def _masses1(P, nbr, counts, kt, rows, out, status, ends):
+@jit()
+def _masses1(start, stop, P, nbr, counts, kt, rows, out, status, ends):
     d = P.shape[1]
-    for r in prange(len(rows)):
+    for r in range(start, stop):
         p = rows[r]
         K = counts[r]
         T = np.empty((1, d))
@@ -255,10 +254,10 @@ def _star3(U, K):
     return vol / 4.0, status, not closed
 
 
-@jit(parallel=True)
-def _masses3(P, nbr, counts, kt, rows, out, status, hull):
+@jit()
+def _masses3(start, stop, P, nbr, counts, kt, rows, out, status, hull):
     d = P.shape[1]
-    for r in prange(len(rows)):
+    for r in range(start, stop):
         p = rows[r]
         K = counts[r]
         T = np.empty((3, d))
