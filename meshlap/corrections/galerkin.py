@@ -1,0 +1,250 @@
+"""The symmetric pencil from the kernel integrated over the cells (a Galerkin form).
+
+The vertex operator integrates the kernel with one point per vertex (the lumped masses);
+once the width is near the squared edge length that rule, not the kernel, sets the error.
+Here the kernel is integrated over the cells with the piecewise-linear hat functions φ_i,
+a degree-2 rule of q points per cell (3 per triangle, 4 per tetrahedron, 2 per segment):
+
+    −S_ij = ½ ∫∫ k_h(x, y) (φ_i(x) − φ_i(y)) (φ_j(x) − φ_j(y)) dx dy
+
+(the energy ½∫∫ k (f(x) − f(y))² of f = Σ f_i φ_i), which is −Φᵀ W L_q Φ with L_q the
+kernel operator on the quadrature points x_q of weights W and Φ_qi = φ_i(x_q). The self pairs
+cancel, the rows sum to zero, S is symmetric, and −S is semidefinite wherever L_q is (the
+Richardson kernel's check decides). Mirror images at the boundary work on L_q as on the
+vertices.
+
+The form pairs with the consistent mass C = Φᵀ W Φ. The operator's mass is lumped (the
+diagonal m = C·1 that :mod:`meshlap.spectral` expects), so the pencil is moved onto it by the
+congruence S' = Bᵀ S B, B = I + ½ m⁻¹ (diag(m) − C): to first order in m⁻¹(diag(m) − C),
+which is O(ē² λ) on a mode of eigenvalue λ, (S', diag m) has the eigenvalues of (S, C), and a
+congruence keeps −S' semidefinite.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..assembly import Kernel, assemble, cutoff_radius
+from ..errors import MeshError
+from ..geometry import frames as frames_mod
+from ..geometry import simplex_volumes
+from ..widths import Widths
+from .images import neumann_images
+
+__all__ = ["AUTO_MAX_DIHEDRAL", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "H_SCALE", "RULES",
+           "boundary_samples", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
+
+#: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
+#: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
+#: (0.25 ē² loses 1% to the quadrature on the 4,000-vertex square).
+H_SCALE = 0.5
+#: The automatic choice takes the Galerkin pencil up to this many vertices (its build costs
+#: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
+#: linear FEM on the clean inputs measured).
+AUTO_MAX_POINTS = 10_000
+#: ... on meshes without a dihedral angle above this (degrees): across a crease the Euclidean
+#: kernel couples points much farther apart along the surface (cube surface 5.8% against the
+#: vertex pencil's 3.3%).
+AUTO_MAX_DIHEDRAL = 60.0
+#: ... and whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
+#: follows the noise, the wide vertex kernel averages it out.
+AUTO_MAX_ROUGHNESS = 3.0
+
+#: Degree-2 rules on the simplex of k + 1 corners: (a, b) barycentric coordinates, each point
+#: a at one corner and b at the others, one point per corner, equal weights.
+RULES = {1: (0.5 + 0.5 / np.sqrt(3.0), 0.5 - 0.5 / np.sqrt(3.0)),
+         2: (2.0 / 3.0, 1.0 / 6.0),
+         3: (0.5854101966249685, 0.1381966011250105)}
+
+
+def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
+    """Points, weights and hat-function values of the degree-2 rule on every simplex.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray
+        Vertex positions.
+    cells : (c, k + 1) int ndarray
+        Simplices: segments, triangles or tetrahedra.
+
+    Returns
+    -------
+    X : (c (k + 1), d) ndarray
+        Quadrature points, k + 1 per cell.
+    W : (c (k + 1),) ndarray
+        Weights (the cell's k-volume shared equally).
+    Phi : (c (k + 1), n) scipy.sparse.csr_matrix
+        φ_i(x_q): the barycentric coordinates of each point.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> X, W, Phi = quadrature_points(P, np.array([[0, 1, 2]]))
+    >>> X.shape, float(W.sum()), bool(np.allclose(Phi.sum(axis=1), 1))
+    ((3, 3), 0.5, True)
+    """
+    cells = np.asarray(cells, dtype=np.int64)
+    k = cells.shape[1] - 1
+    if k not in RULES:
+        raise MeshError(f"the Galerkin pencil needs segments, triangles or tetrahedra; got cells of {k + 1}")
+    a, b = RULES[k]
+    B = np.full((k + 1, k + 1), b) + (a - b) * np.eye(k + 1)  # row q: the point near corner q
+    X = np.einsum("qa,cad->cqd", B, P[cells]).reshape(-1, P.shape[1])
+    W = np.repeat(simplex_volumes(P, cells) / (k + 1), k + 1)
+    rows = np.repeat(np.arange(len(X)), k + 1)
+    cols = np.repeat(cells, k + 1, axis=0).ravel()
+    Phi = sp.csr_matrix((np.tile(B, (len(cells), 1)).ravel(), (rows, cols)), shape=(len(X), len(P)))
+    return X, W, Phi
+
+
+def _mass_congruence(S: sp.csr_matrix, Phi: sp.csr_matrix, W: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
+    C = (Phi.T @ sp.diags(W) @ Phi).tocsr()
+    m = np.asarray(C.sum(axis=1)).ravel()
+    inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+    B = sp.eye(len(m), format="csr") + 0.5 * (sp.eye(len(m)) - sp.diags(inv) @ C)
+    out = (B.T @ S @ B).tocsr()
+    return 0.5 * (out + out.T), m
+
+
+def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog: bool = True,
+                    cell_normals: np.ndarray | None = None, boundary: tuple | None = None,
+                    tol: float = 1e-8, guard: Any = None) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The Galerkin pencil ``(S, m)`` of the kernel of width ``h`` on the simplices ``cells``.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray
+        Vertex positions.
+    cells : (c, k + 1) int ndarray
+        Segments, triangles or tetrahedra.
+    h : float
+        Kernel width.
+    dim : int
+        Intrinsic dimension k (the kernel's normalization).
+    dog : bool, default True
+        The Richardson kernel 2K_{h/2} − K_h; False: one Gaussian.
+    cell_normals : (c, d) ndarray, optional
+        Unit normals of the cells: arc distances between the quadrature points.
+    boundary : (samples, ν), optional
+        Boundary samples and outward conormals (:mod:`meshlap.geometry.frames`): mirror images
+        for Neumann spectra.
+    tol : float, default 1e-8
+        Kernel tolerance (its cut-off).
+    guard : MemoryGuard, optional
+        Called with the quadrature operator's entry count before it is allocated.
+
+    Returns
+    -------
+    S : scipy.sparse.csr_matrix
+        Symmetric, rows summing to zero, negative semidefinite for a positive kernel.
+    m : (n,) ndarray
+        The lumped masses C·1 the pencil goes with (a third of the adjacent triangles' area).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(300, seed=0)
+    >>> S, m = galerkin_pencil(V, F, 0.5 * 0.2**2, 2)
+    >>> bool(abs(S - S.T).max() < 1e-12), bool(np.abs(S @ np.ones(300)).max() < 1e-9)
+    (True, True)
+    """
+    X, W, Phi = quadrature_points(P, cells)
+    k = cells.shape[1] - 1
+    normals = None if cell_normals is None else np.repeat(cell_normals, k + 1, axis=0)
+    widths = Widths(float(h), None, False)
+    Lq = assemble(X, W, widths, Kernel(dim, dog=dog, normals=normals, tol=tol), guard=guard)
+    if boundary is not None:
+        samples, nu = boundary
+        fr = frames_mod.frames_from_samples(X, samples, nu, cutoff_radius(h, tol))
+        Lq = neumann_images(Lq, X, fr, W, np.full(len(X), float(h)), dog, dim)
+    WP = sp.diags(W) @ Phi
+    S = (WP.T @ Lq @ Phi).tocsr()
+    return _mass_congruence(0.5 * (S + S.T), Phi, W)
+
+
+def simplices(geo: Any) -> np.ndarray | None:
+    """The geometry's cells as simplices of k + 1 corners (a triangle mesh's faces, a curve's
+    segments, tetrahedra), or None when it has none (clouds, polygons other than triangles)."""
+    faces = getattr(geo, "faces", None)
+    if faces is not None:
+        return faces.indices.reshape(-1, 3) if (faces.n_faces and (faces.sizes == 3).all()) else None
+    cells = getattr(geo, "cells", None)
+    if cells is not None and getattr(geo, "source", None) in ("polyline", "tetrahedra") \
+            and cells.shape[1] == geo.dim + 1:
+        return np.asarray(cells, dtype=np.int64)
+    return None
+
+
+def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
+    """``(largest dihedral angle in degrees, roughness)`` of a triangle mesh in R³.
+
+    The roughness is the median squared change of the face normal across an edge over the
+    same after the normals are averaged twice over each face and its edge neighbours: about
+    1 where the normals vary smoothly (1.1-1.6 on the spheres and the torus of
+    benchmarks/bench_spectra.py), ten and more where they are noise (11 on the sphere with
+    0.5% radial noise), 0 on a flat mesh.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> angle, rough = shape_measures(V, F)
+    >>> bool(angle < 15), bool(rough < 2)
+    (True, True)
+    """
+    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    face = np.tile(np.arange(len(tri)), 3)
+    key = sides[:, 0] * np.int64(len(P)) + sides[:, 1]
+    order = np.argsort(key, kind="stable")
+    pair = np.flatnonzero(key[order][1:] == key[order][:-1])
+    f1, f2 = face[order][pair], face[order][pair + 1]
+    if not len(f1):
+        return 0.0, 0.0
+    angle = float(np.degrees(np.arccos(np.clip((n[f1] * n[f2]).sum(axis=1), -1.0, 1.0))).max())
+    A = sp.csr_matrix((np.ones(2 * len(f1)), (np.r_[f1, f2], np.r_[f2, f1])), shape=(len(tri),) * 2)
+    A = A + sp.eye(len(tri), format="csr")
+    avg = n
+    for _ in range(2):
+        avg = A @ avg
+        avg /= np.maximum(np.linalg.norm(avg, axis=1, keepdims=True), 1e-300)
+    raw = float(np.median(((n[f1] - n[f2]) ** 2).sum(axis=1)))
+    smooth = float(np.median(((avg[f1] - avg[f2]) ** 2).sum(axis=1)))
+    if smooth <= 1e-24:
+        return angle, 0.0 if raw <= 1e-24 else math.inf
+    return angle, raw / smooth
+
+
+def wins(geo: Any) -> bool:
+    """Whether the automatic choice is the Galerkin pencil: a clean triangle mesh of at most
+    :data:`AUTO_MAX_POINTS` vertices without creases (no dihedral angle above
+    :data:`AUTO_MAX_DIHEDRAL`) and without noise (roughness below :data:`AUTO_MAX_ROUGHNESS`),
+    where benchmarks/RESULTS.md measures it ahead of the vertex pencil and of linear FEM."""
+    tri = simplices(geo)
+    if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
+        return False
+    P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
+    angle, rough = shape_measures(P, tri)
+    return angle <= AUTO_MAX_DIHEDRAL and rough <= AUTO_MAX_ROUGHNESS
+
+
+def boundary_samples(geo: Any, tri: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Boundary samples and outward conormals for the mirror images of the quadrature points
+    (the samples :meth:`meshlap.geometry.Geometry.boundary_frames` reflects the vertices
+    across), or None without a boundary."""
+    if geo.boundary is None or not geo.boundary.any():
+        return None
+    P, step = geo.points, max(radius / 16, geo.spacing / 4)
+    if geo.faces is not None:
+        s, nu = frames_mod.boundary_samples_surface(P, geo.faces, step)
+    elif geo.dim == 1:
+        s, nu = frames_mod.boundary_samples_curve(P, tri)
+    else:
+        s, nu = frames_mod.boundary_samples_volume(P, tri, step)
+    return (s, nu) if len(s) else None
