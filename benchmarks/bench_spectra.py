@@ -202,7 +202,7 @@ def row(name, kind, data, ref):
             return meshlap.point_cloud_laplacian(data, **raw, **o)
     t0 = time.perf_counter()
     lam, op, warned = ours(build)
-    res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction)
+    res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction, op.quadrature)
     lam, _, _ = ours(build, correction="none")
     res["paper"] = (err(lam), None, False, "none")
     peers = {"mesh": (("COT", cot), ("LaPy", lapy_tria), ("robust", robust_mesh)),
@@ -230,6 +230,7 @@ def main(argv=None) -> int:
         best = min(peers.values()) if peers else math.nan
         d = r["default"]
         flag = (" ⚠" if d[2] else "") + ("" if d[3] == "richardson" else f" ({d[3]})")
+        flag += " G" if d[4] == "galerkin" else ""
 
         cells = [f"{r[key][0]:.2%}" if key in r and np.isfinite(r[key][0]) else "–"
                  for key in ("paper", "COT", "LaPy", "robust")]
@@ -239,7 +240,8 @@ def main(argv=None) -> int:
         print(line, flush=True)
     cmd = "python benchmarks/bench_spectra.py" + (" --quick" if args.quick else "")
     body = [f"Command: `{cmd}` (2 cores). Largest relative error of eigenvalues 1-9; ⚠: the build "
-            "warned (MeshWarning); a correction in parentheses: the default fell back to it; the time is the "
+            "warned (MeshWarning); a correction in parentheses: the default fell back to it; G: the "
+            "default's pencil is the Galerkin one (`op.quadrature`); the time is the "
             "default's build and eigs.", ""] + lines
     if not args.quick:
         write_section("Spectra on every input (issue 18)", body)

@@ -188,7 +188,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
         report(0.95, "Galerkin pencil")
     tri = gal.simplices(geo)
     h = gal.H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
-    dog = out.correction != "none"
+    dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
     boundary = gal.boundary_samples(geo, tri, cutoff_radius(h, opts.tol)) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, boundary=boundary, tol=opts.tol,
@@ -201,7 +201,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
             if opts.quadrature == "galerkin":  # asked for: say why it is not in effect
                 warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
                               f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning, stacklevel=4)
-            return  # the vertex pencil passed its own check
+            return  # the vertex pencil stays
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
     if not opts.pointwise:
@@ -269,7 +269,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
         if report is not None:
             report(0.9, "point-wise rows")
         out.L, out.pointwise_unchanged, out.pointwise_choice = _pointwise(geo, free, hv, opts)
-    if out.correction != "none" or opts.quadrature == "galerkin":
+    if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
     if report is not None:
         report(1.0, "done")
