@@ -191,8 +191,9 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
     boundary = gal.boundary_samples(geo, tri, cutoff_radius(h, opts.tol)) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
-    S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, boundary=boundary, tol=opts.tol,
-                               guard=guard)
+    folds = gal.creases(geo.points, tri) if geo.faces is not None and geo.ambient_dim == 3 else None
+    S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
+                               tol=opts.tol, guard=guard)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if dog and opts.check_psd:

@@ -27,30 +27,32 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from numba import prange
+from pykdtree.kdtree import KDTree
 
+from .._jit import jit
 from ..assembly import Kernel, assemble, cutoff_radius
+from ..assembly.variable import dog_factor
 from ..errors import MeshError
 from ..geometry import frames as frames_mod
 from ..geometry import simplex_volumes
 from ..widths import Widths
 from .images import neumann_images
 
-__all__ = ["AUTO_MAX_DIHEDRAL", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "H_SCALE", "RULES",
-           "boundary_samples", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
+__all__ = ["AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES", "boundary_samples",
+           "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
 #: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
 #: (0.25 ē² loses 1% to the quadrature on the 4,000-vertex square).
 H_SCALE = 0.5
+#: Pairs of cells whose normals differ by more than this (degrees) are across a crease.
+CREASE_ANGLE = 60.0
 #: The automatic choice takes the Galerkin pencil up to this many vertices (its build costs
 #: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
 #: linear FEM on the clean inputs measured).
 AUTO_MAX_POINTS = 10_000
-#: ... on meshes without a dihedral angle above this (degrees): across a crease the Euclidean
-#: kernel couples points much farther apart along the surface (cube surface 5.8% against the
-#: vertex pencil's 3.3%).
-AUTO_MAX_DIHEDRAL = 60.0
-#: ... and whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
+#: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
 #: follows the noise, the wide vertex kernel averages it out.
 AUTO_MAX_ROUGHNESS = 3.0
 
@@ -59,6 +61,76 @@ AUTO_MAX_ROUGHNESS = 3.0
 RULES = {1: (0.5 + 0.5 / np.sqrt(3.0), 0.5 - 0.5 / np.sqrt(3.0)),
          2: (2.0 / 3.0, 1.0 / 6.0),
          3: (0.5854101966249685, 0.1381966011250105)}
+
+
+@jit(parallel=True)
+def _unfold_rows(indptr, indices, data, X, N, W, near, h, dogc, norm, cos_crease):  # pragma: no cover
+    # pairs near a crease whose cells' normals differ by more than the crease angle: the
+    # kernel of the distance along the two planes unfolded about their line of intersection
+    n = len(indptr) - 1
+    for q in prange(n):
+        if not near[q]:
+            continue
+        diag = -1
+        s = 0.0
+        for e in range(indptr[q], indptr[q + 1]):
+            r = indices[e]
+            if r == q:
+                diag = e
+                continue
+            c = 2.0 if not near[r] else N[q, 0] * N[r, 0] + N[q, 1] * N[r, 1] + N[q, 2] * N[r, 2]
+            if c < cos_crease:
+                ux = N[q, 1] * N[r, 2] - N[q, 2] * N[r, 1]
+                uy = N[q, 2] * N[r, 0] - N[q, 0] * N[r, 2]
+                uz = N[q, 0] * N[r, 1] - N[q, 1] * N[r, 0]
+                uu = ux * ux + uy * uy + uz * uz
+                if uu > 1e-12:  # not opposite faces
+                    d1 = N[q, 0] * X[q, 0] + N[q, 1] * X[q, 1] + N[q, 2] * X[q, 2]
+                    d2 = N[r, 0] * X[r, 0] + N[r, 1] * X[r, 1] + N[r, 2] * X[r, 2]
+                    # z0 on the line: d1 (n_r × u) + d2 (u × n_q), over |u|²
+                    z0 = np.empty(3)
+                    z0[0] = (d1 * (N[r, 1] * uz - N[r, 2] * uy) + d2 * (uy * N[q, 2] - uz * N[q, 1])) / uu
+                    z0[1] = (d1 * (N[r, 2] * ux - N[r, 0] * uz) + d2 * (uz * N[q, 0] - ux * N[q, 2])) / uu
+                    z0[2] = (d1 * (N[r, 0] * uy - N[r, 1] * ux) + d2 * (ux * N[q, 1] - uy * N[q, 0])) / uu
+                    inv = 1.0 / math.sqrt(uu)
+                    u = np.empty(3)
+                    u[0], u[1], u[2] = ux * inv, uy * inv, uz * inv
+                    sq = 0.0
+                    sr = 0.0
+                    for a in range(3):
+                        sq += (X[q, a] - z0[a]) * u[a]
+                        sr += (X[r, a] - z0[a]) * u[a]
+                    aq = 0.0
+                    ar = 0.0
+                    chord = 0.0
+                    for a in range(3):
+                        aq += (X[q, a] - z0[a] - sq * u[a]) ** 2
+                        ar += (X[r, a] - z0[a] - sr * u[a]) ** 2
+                        chord += (X[q, a] - X[r, a]) ** 2
+                    d2u = (math.sqrt(aq) + math.sqrt(ar)) ** 2 + (sq - sr) ** 2
+                    ex = math.exp(-max(d2u, chord) / (4.0 * h))
+                    data[e] = W[r] * norm * (ex * (dogc * ex - 1.0) if dogc != 0.0 else ex)
+            s += data[e]
+        if diag >= 0:
+            data[diag] = -s
+
+
+def _unfold(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, W: np.ndarray,
+            crease_edges: np.ndarray, h: float, dim: int, dog: bool, radius: float) -> sp.csr_matrix:
+    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    N = np.ascontiguousarray(np.repeat(n, 3, axis=0))
+    # the quadrature points within the cut-off of a crease (its edges sampled 8 times each)
+    s = np.linspace(0.0, 1.0, 9)[:, None, None]
+    a, b = P[crease_edges[:, 0]], P[crease_edges[:, 1]]
+    samples = ((1.0 - s) * a + s * b).reshape(-1, 3)
+    dist, _ = KDTree(samples).query(np.ascontiguousarray(X), k=1, distance_upper_bound=radius)
+    near = np.isfinite(dist)
+    Lq = sp.csr_matrix(Lq, dtype=np.float64, copy=True)
+    norm = 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
+    _unfold_rows(Lq.indptr, Lq.indices, Lq.data, np.ascontiguousarray(X, dtype=np.float64), N, W, near,
+                 float(h), dog_factor(dim) if dog else 0.0, norm, math.cos(math.radians(CREASE_ANGLE)))
+    return Lq
 
 
 def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
@@ -112,8 +184,8 @@ def _mass_congruence(S: sp.csr_matrix, Phi: sp.csr_matrix, W: np.ndarray) -> tup
 
 
 def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog: bool = True,
-                    cell_normals: np.ndarray | None = None, boundary: tuple | None = None,
-                    tol: float = 1e-8, guard: Any = None) -> tuple[sp.csr_matrix, np.ndarray]:
+                    crease_edges: np.ndarray | None = None, boundary: tuple | None = None, tol: float = 1e-8,
+                    guard: Any = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The Galerkin pencil ``(S, m)`` of the kernel of width ``h`` on the simplices ``cells``.
 
     Parameters
@@ -128,8 +200,12 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         Intrinsic dimension k (the kernel's normalization).
     dog : bool, default True
         The Richardson kernel 2K_{h/2} − K_h; False: one Gaussian.
-    cell_normals : (c, d) ndarray, optional
-        Unit normals of the cells: arc distances between the quadrature points.
+    crease_edges : (e, 2) int ndarray, optional
+        Crease edges of a triangle mesh in R³ (:func:`creases`): a pair of quadrature points
+        within the cut-off of one, whose faces' normals differ by more than
+        :data:`CREASE_ANGLE`, gets the kernel of its distance along the two face planes
+        unfolded about their line of intersection (the geodesic across a straight crease)
+        instead of the chord.
     boundary : (samples, ν), optional
         Boundary samples and outward conormals (:mod:`meshlap.geometry.frames`): mirror images
         for Neumann spectra.
@@ -154,10 +230,10 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
     (True, True)
     """
     X, W, Phi = quadrature_points(P, cells)
-    k = cells.shape[1] - 1
-    normals = None if cell_normals is None else np.repeat(cell_normals, k + 1, axis=0)
     widths = Widths(float(h), None, False)
-    Lq = assemble(X, W, widths, Kernel(dim, dog=dog, normals=normals, tol=tol), guard=guard)
+    Lq = assemble(X, W, widths, Kernel(dim, dog=dog, tol=tol), guard=guard)
+    if crease_edges is not None and len(crease_edges):
+        Lq = _unfold(Lq, P, cells, X, W, crease_edges, h, dim, dog, cutoff_radius(h, tol))
     if boundary is not None:
         samples, nu = boundary
         fr = frames_mod.frames_from_samples(X, samples, nu, cutoff_radius(h, tol))
@@ -180,6 +256,33 @@ def simplices(geo: Any) -> np.ndarray | None:
     return None
 
 
+def _face_pairs(P: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    # unit face normals, and for every interior edge its two faces and its two vertices
+    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    face = np.tile(np.arange(len(tri)), 3)
+    key = sides[:, 0] * np.int64(len(P)) + sides[:, 1]
+    order = np.argsort(key, kind="stable")
+    pair = np.flatnonzero(key[order][1:] == key[order][:-1])
+    return n, face[order][pair], face[order][pair + 1], sides[order][pair]
+
+
+def creases(P: np.ndarray, tri: np.ndarray, angle: float = CREASE_ANGLE) -> np.ndarray:
+    """The edges (vertex pairs) of a triangle mesh in R³ whose faces meet at more than
+    ``angle`` degrees between their normals.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> creases(V, F).shape
+    (0, 2)
+    """
+    n, f1, f2, edges = _face_pairs(P, tri)
+    return edges[(n[f1] * n[f2]).sum(axis=1) < math.cos(math.radians(angle))]
+
+
 def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
     """``(largest dihedral angle in degrees, roughness)`` of a triangle mesh in R³.
 
@@ -197,14 +300,7 @@ def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
     >>> bool(angle < 15), bool(rough < 2)
     (True, True)
     """
-    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
-    face = np.tile(np.arange(len(tri)), 3)
-    key = sides[:, 0] * np.int64(len(P)) + sides[:, 1]
-    order = np.argsort(key, kind="stable")
-    pair = np.flatnonzero(key[order][1:] == key[order][:-1])
-    f1, f2 = face[order][pair], face[order][pair + 1]
+    n, f1, f2, _ = _face_pairs(P, tri)
     if not len(f1):
         return 0.0, 0.0
     angle = float(np.degrees(np.arccos(np.clip((n[f1] * n[f2]).sum(axis=1), -1.0, 1.0))).max())
@@ -222,16 +318,15 @@ def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
 
 
 def wins(geo: Any) -> bool:
-    """Whether the automatic choice is the Galerkin pencil: a clean triangle mesh of at most
-    :data:`AUTO_MAX_POINTS` vertices without creases (no dihedral angle above
-    :data:`AUTO_MAX_DIHEDRAL`) and without noise (roughness below :data:`AUTO_MAX_ROUGHNESS`),
-    where benchmarks/RESULTS.md measures it ahead of the vertex pencil and of linear FEM."""
+    """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
+    :data:`AUTO_MAX_POINTS` vertices whose normals are not noise (roughness below
+    :data:`AUTO_MAX_ROUGHNESS`), where benchmarks/RESULTS.md measures it ahead of the vertex
+    pencil and of linear FEM."""
     tri = simplices(geo)
     if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
         return False
     P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
-    angle, rough = shape_measures(P, tri)
-    return angle <= AUTO_MAX_DIHEDRAL and rough <= AUTO_MAX_ROUGHNESS
+    return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS
 
 
 def boundary_samples(geo: Any, tri: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
