@@ -70,7 +70,7 @@ def main() -> int:
 
         g = meshlap.geometry.from_mesh(V, F)
         h = galerkin.H_SCALE * g.spacing**2
-        bnd = galerkin.boundary_samples(g, F, assembly.cutoff_radius(h, 1e-8))
+        bnd = g.boundary_samples(assembly.cutoff_radius(4.0 * g.spacing**2, 1e-8))  # as the default samples
         folds = galerkin.creases(V, F)
         row = [err(spectral.eigs(meshlap.laplacian(V, F, quadrature="vertex"), bs.K)[0])]
         S, C = _raw(V, F, h, False, bnd)
@@ -78,9 +78,7 @@ def main() -> int:
         S, C = _raw(V, F, h, True, bnd)
         row += [err(_eig(S, g.mass)), err(_eig(S, C))]
         for c in (galerkin.H_SCALE, 0.25, 1.0):
-            S, m = galerkin.galerkin_pencil(V, F, c * g.spacing**2, 2, crease_edges=folds,
-                                            boundary=galerkin.boundary_samples(
-                                                g, F, assembly.cutoff_radius(c * g.spacing**2, 1e-8)))
+            S, m = galerkin.galerkin_pencil(V, F, c * g.spacing**2, 2, crease_edges=folds, boundary=bnd)
             row.append(err(_eig(S, m)))
         if bnd is not None or len(folds):
             S, m = galerkin.galerkin_pencil(V, F, h, 2)

@@ -189,7 +189,9 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     tri = gal.simplices(geo)
     h = gal.H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
     dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
-    boundary = gal.boundary_samples(geo, tri, cutoff_radius(h, opts.tol)) if opts.neumann else None
+    # the vertex pencil's boundary samples (one sampling per build), reflected across for the
+    # quadrature points within the Galerkin kernel's cut-off
+    boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
     folds = gal.creases(geo.points, tri) if geo.faces is not None and geo.ambient_dim == 3 else None
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,

@@ -59,7 +59,7 @@ def test_pencil_symmetric_semidefinite_and_energy_of_a_neumann_mode():
     Vq, Fq = shapes.plane(400, seed=0, kind="stratified")
     g = meshlap.geometry.from_mesh(Vq, Fq)
     h = 0.5 * g.spacing**2
-    bnd = galerkin.boundary_samples(g, Fq, meshlap.assembly.cutoff_radius(h, 1e-8))
+    bnd = g.boundary_samples(meshlap.assembly.cutoff_radius(h, 1e-8))
     f = np.cos(math.pi * (Vq[:, 0] + 1) / 2)
     cases = ((None, False, -0.07, -0.04), (bnd, False, -0.01, 0.01), (bnd, True, 0, 0.012))
     for boundary, dog, lo, hi in cases:

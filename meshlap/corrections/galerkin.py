@@ -39,7 +39,7 @@ from ..geometry import simplex_volumes
 from ..widths import Widths
 from .images import neumann_images
 
-__all__ = ["AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES", "boundary_samples",
+__all__ = ["AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES",
            "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
@@ -327,19 +327,3 @@ def wins(geo: Any) -> bool:
         return False
     P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
     return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS
-
-
-def boundary_samples(geo: Any, tri: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
-    """Boundary samples and outward conormals for the mirror images of the quadrature points
-    (the samples :meth:`meshlap.geometry.Geometry.boundary_frames` reflects the vertices
-    across), or None without a boundary."""
-    if geo.boundary is None or not geo.boundary.any():
-        return None
-    P, step = geo.points, max(radius / 16, geo.spacing / 4)
-    if geo.faces is not None:
-        s, nu = frames_mod.boundary_samples_surface(P, geo.faces, step)
-    elif geo.dim == 1:
-        s, nu = frames_mod.boundary_samples_curve(P, tri)
-    else:
-        s, nu = frames_mod.boundary_samples_volume(P, tri, step)
-    return (s, nu) if len(s) else None
