@@ -39,7 +39,7 @@ from ..geometry import simplex_volumes
 from ..widths import Widths
 from .images import neumann_images
 
-__all__ = ["AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES",
+__all__ = ["AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES",
            "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
@@ -52,6 +52,10 @@ CREASE_ANGLE = 60.0
 #: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
 #: linear FEM on the clean inputs measured).
 AUTO_MAX_POINTS = 10_000
+#: ... whose longest edge is at most this many mean edges: three points on a triangle much
+#: larger than the rest do not resolve the kernel there (a random 6,000-vertex plane, longest
+#: edge 63 mean edges: 22% against the vertex pencil's 1.5%)
+AUTO_MAX_EDGE_RATIO = 2.5
 #: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
 #: follows the noise, the wide vertex kernel averages it out.
 AUTO_MAX_ROUGHNESS = 3.0
@@ -319,11 +323,16 @@ def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
 
 def wins(geo: Any) -> bool:
     """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
-    :data:`AUTO_MAX_POINTS` vertices whose normals are not noise (roughness below
+    :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long,
+    whose normals are not noise (roughness below
     :data:`AUTO_MAX_ROUGHNESS`), where benchmarks/RESULTS.md measures it ahead of the vertex
     pencil and of linear FEM."""
     tri = simplices(geo)
     if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
         return False
     P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
+    E = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    length = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
+    if length.max() > AUTO_MAX_EDGE_RATIO * length.mean():
+        return False
     return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS
