@@ -241,7 +241,7 @@ def row(name, kind, data, ref):
             return meshlap.point_cloud_laplacian(data, **raw, **o)
     t0 = time.perf_counter()
     lam, op, warned = ours(build)
-    res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction)
+    res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction, op.quadrature)
     res["resolution"] = op.resolution
     if kind == "tets" and op.n_vertices > 20000:
         # the paper's width (2ē)² holds 22× the default's neighbours in 3-D: gigabytes here
@@ -275,7 +275,7 @@ def main(argv=None) -> int:
                  and np.isfinite(v[0])}
         best = min(peers.values()) if peers else math.nan
         d = r["default"]
-        flag = "" if d[3] == "richardson" else f" ({d[3]})"
+        flag = ("" if d[3] == "richardson" else f" ({d[3]})") + (" G" if d[4] == "galerkin" else "")
         rep = r["resolution"]
         said = f"⚠ {rep.predicted_error:.2%}, {rep.reason}" if d[2] else "–"
         ok = "yes" if (d[2] or not peers or d[0] <= 1.5 * best) else "**no**"
@@ -289,8 +289,9 @@ def main(argv=None) -> int:
     cmd = "python benchmarks/bench_spectra.py" + (" --quick" if args.quick else "")
     body = [f"Command: `{cmd}` (2 cores, shared). Largest relative error of eigenvalues 1-9; ⚠: the "
             "build raised the ResolutionWarning (the predicted error and the figure behind most of it, from "
-            "`op.resolution`); a correction in parentheses: the default fell back to it; the time is the "
-            "default's build and eigs (wall clock).", ""] + lines
+            "`op.resolution`); a correction in parentheses: the default fell back to it; G: the default's "
+            "pencil is the Galerkin one (`op.quadrature`); the time is the default's build and eigs "
+            "(wall clock).", ""] + lines
     if not args.quick:
         write_section("Spectra on every input (issue 18)", body)
     return 0

@@ -135,6 +135,14 @@ class MeshLaplacian(LumpedLaplacian):
         that would exceed it raises :class:`OperatorTooLargeError` before allocating.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
+    quadrature : {"vertex", "galerkin"}, optional
+        How the symmetric pencil (``L_sym``, ``S``: spectra, heat flow, smoothing) integrates
+        the kernel. "vertex": one point per vertex, the lumped masses. "galerkin": over the
+        triangles (segments, tetrahedra) with the hat functions, 3 points per triangle, at
+        h = 0.5·ē² unless ``h`` is given (:mod:`meshlap.corrections.galerkin`); ``op.L``
+        keeps the vertex rows. Default: "galerkin" with the correction and automatic h on a
+        clean triangle mesh of at most 10,000 vertices without creases (where it measures
+        ahead, docs/spectral.md), else "vertex". ``op.quadrature`` says which is in effect.
     k : {1, 2, 3}, optional
         Intrinsic dimension of the mesh, inferred from ``F`` when not given; the kernel's
         normalization is 1/(h (4πh)^{k/2}) (1/(4πh²) on surfaces).
@@ -206,13 +214,14 @@ class MeshLaplacian(LumpedLaplacian):
         check_psd: bool = True,
         k: int | None = None,
         pointwise_degree: int | None = None,
+        quadrature: str | None = None,
     ) -> None:
         self.geometry = as_geometry(V, F, k)
         self.options = pipeline.Options.resolve(
             self.geometry, h, correction=correction, adaptive=adaptive, arc_distance=arc_distance,
             pointwise=pointwise, neumann=neumann, curvature_limit=curvature_limit, check_psd=check_psd,
             matrix_free=matrix_free, tol=tol, exact=exact, dtype=dtype, max_memory=max_memory,
-            pointwise_degree=pointwise_degree)
+            pointwise_degree=pointwise_degree, quadrature=quadrature)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
         self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress))
@@ -250,6 +259,9 @@ class MeshLaplacian(LumpedLaplacian):
     moment_scale = property(lambda self: self._built.moment_scale)
     boundary_rows = property(lambda self: self._built.boundary_rows)
     pointwise_unchanged = property(lambda self: self._built.pointwise_unchanged)
+    quadrature = property(lambda self: self._built.quadrature,
+                          doc="The symmetric pencil's quadrature in effect: 'vertex' or 'galerkin'.")
+    quadrature_h = property(lambda self: self._built.quadrature_h, doc="The Galerkin pencil's h, else None.")
     pointwise_choice = property(lambda self: self._built.pointwise_choice,
                                 doc="Per-point width and degree of ``pointwise='fit'`` rows, else None.")
 
@@ -302,7 +314,10 @@ class MeshLaplacian(LumpedLaplacian):
         L = self._built.L_sym
         if L is None:
             return 0
-        extra = self._built.L.data.nbytes if self.pointwise else 0  # shares the indices
+        P = self._built.L
+        # the point-wise rows share L_sym's indices, not those of a Galerkin pencil
+        shared = P is L or P.indices is L.indices
+        extra = (0 if P is L else P.data.nbytes) + (0 if shared else P.indices.nbytes + P.indptr.nbytes)
         return int(L.data.nbytes + L.indices.nbytes + L.indptr.nbytes + extra)
 
     def estimate_nnz(self, sample: int = 512, seed: int = 0) -> int:
@@ -369,7 +384,7 @@ class MeshLaplacian(LumpedLaplacian):
         if self._half is None:
             w = self.widths
             half = replace(w, h=0.5 * w.h, h_vertex=None if w.h_vertex is None else 0.5 * w.h_vertex)
-            opts = replace(self.options, correction=self.correction, check_psd=False)
+            opts = replace(self.options, correction=self.correction, check_psd=False, quadrature="vertex")
             self._half = pipeline.build(self.geometry, half, opts)
         half_f = self._half.matrix_free(f) if self._half.matrix_free is not None else self._half.L @ f
         diff = np.abs(self @ f - np.asarray(half_f))
@@ -400,6 +415,8 @@ class MeshLaplacian(LumpedLaplacian):
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
         ]
+        if self.quadrature == "galerkin":
+            rows.append(("pencil", f"Galerkin over the cells, h={self.quadrature_h:.4g}"))
         if self.matrix_free:
             rows.append(("storage", "matrix-free"))
         else:

@@ -12,6 +12,7 @@ clouds, curves, volumes and one MPI rank's rows go through the same code.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
@@ -21,18 +22,21 @@ import scipy.sparse as sp
 
 from . import assembly, corrections
 from .assembly import Kernel, MemoryGuard, cutoff_radius
-from .errors import MeshError
+from .errors import MeshError, MeshWarning
 from .geometry import Geometry
 from .geometry.validation import check_positive, check_tol
 from .widths import CURVATURE_LIMIT, Widths
 
-__all__ = ["CORRECTIONS", "POINTWISE", "Built", "Options", "build"]
+__all__ = ["CORRECTIONS", "POINTWISE", "QUADRATURES", "Built", "Options", "build"]
 
 #: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
 CORRECTIONS = ("richardson", "none")
 #: ``pointwise`` values: the degree-2 moment rows (True), none (False), or rows whose width
 #: and degree are chosen per point from the data ("fit", :mod:`meshlap.corrections.rowchoice`).
 POINTWISE = (True, False, "fit")
+#: ``quadrature`` values for the symmetric pencil: one point per vertex (the lumped masses),
+#: or the kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`); None chooses.
+QUADRATURES = ("vertex", "galerkin")
 
 
 @dataclass(frozen=True)
@@ -51,6 +55,7 @@ class Options:
     dtype: np.dtype
     max_memory: int
     pointwise_degree: int | None = None
+    quadrature: str | None = None
 
     @property
     def plain(self) -> bool:
@@ -63,7 +68,7 @@ class Options:
                 neumann: bool | None = None, curvature_limit: float | None = None,
                 check_psd: bool = True, matrix_free: bool = False, tol: float = 1e-8,
                 exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
-                pointwise_degree: int | None = None) -> Options:
+                pointwise_degree: int | None = None, quadrature: str | None = None) -> Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         if correction not in CORRECTIONS:
@@ -106,13 +111,22 @@ class Options:
         if correction == "none" and np.ndim(h) == 1:
             raise MeshError("a per-point h needs the corrected kernel; correction='none' is the paper's "
                             "operator at one h")
+        if quadrature is not None and quadrature not in QUADRATURES:
+            raise MeshError(f"quadrature must be one of {', '.join(QUADRATURES)} or None; got {quadrature!r}")
+        if quadrature == "galerkin":
+            if corrections.galerkin.simplices(geo) is None:
+                raise MeshError("quadrature='galerkin' integrates over simplices: a triangle mesh, a curve's "
+                                f"segments or tetrahedra; this {geo.source} has none")
+            if matrix_free or adaptive or np.ndim(h) == 1:
+                raise MeshError("quadrature='galerkin' uses one h and stores S: not with matrix_free, "
+                                "adaptive or a per-point h")
         from .assembly import available_memory
 
         return cls(correction, arc_distance, pointwise, neumann, bool(adaptive), float(curvature_limit),
                    bool(check_psd), bool(matrix_free), 0.0 if exact else check_tol(tol), dt,
                    int(available_memory() * 0.8) if max_memory is None
                    else int(check_positive(max_memory, "max_memory")),
-                   None if pointwise_degree is None else int(pointwise_degree))
+                   None if pointwise_degree is None else int(pointwise_degree), quadrature)
 
 
 @dataclass
@@ -131,6 +145,8 @@ class Built:
     boundary_rows: int = 0
     matrix_free: assembly.MatrixFree | None = None
     pointwise_choice: Any = None  # the per-point width and degree of pointwise="fit" rows
+    quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
+    quadrature_h: float | None = None  # the Galerkin pencil's width
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -159,6 +175,40 @@ def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options
     # moment correction handles the one-sided rows
     L, unchanged = corrections.moment_correction(free, geo.points, geo.dim)
     return L, unchanged, None
+
+
+def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
+              report: Callable[[float, str], None] | None) -> None:
+    # the symmetric pencil from the kernel integrated over the cells, where asked for or where
+    # the automatic choice measures it ahead; op.L keeps the vertex rows
+    gal = corrections.galerkin
+    if opts.quadrature == "vertex" or (opts.quadrature is None and not (widths.h_auto and gal.wins(geo))):
+        return
+    if report is not None:
+        report(0.95, "Galerkin pencil")
+    tri = gal.simplices(geo)
+    h = gal.H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
+    dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
+    # the vertex pencil's boundary samples (one sampling per build), reflected across for the
+    # quadrature points within the Galerkin kernel's cut-off
+    boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
+    guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
+    folds = gal.creases(geo.points, tri) if geo.faces is not None and geo.ambient_dim == 3 else None
+    S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
+                               tol=opts.tol, guard=guard)
+    inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+    L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
+    if dog and opts.check_psd:
+        margin, reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo), "Galerkin pencil")
+        if reason is not None:
+            if opts.quadrature == "galerkin":  # asked for: say why it is not in effect
+                warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
+                              f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning, stacklevel=4)
+            return  # the vertex pencil stays
+        out.psd_margin = margin
+    out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
+    if not opts.pointwise:
+        out.L = L
 
 
 def build(geo: Geometry, widths: Widths, opts: Options,
@@ -224,6 +274,8 @@ def build(geo: Geometry, widths: Widths, opts: Options,
         if report is not None:
             report(0.9, "point-wise rows")
         out.L, out.pointwise_unchanged, out.pointwise_choice = _pointwise(geo, free, hv, opts)
+    if not opts.plain or opts.quadrature == "galerkin":
+        _galerkin(geo, widths, opts, out, report)
     if report is not None:
         report(1.0, "done")
     return out

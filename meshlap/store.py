@@ -120,9 +120,12 @@ class SavedLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays (the point-wise values share the indices)."""
-        extra = self._applied.data.nbytes if self.pointwise else 0
-        return int(self._sym.data.nbytes + self._sym.indices.nbytes + self._sym.indptr.nbytes + extra)
+        """Bytes held by the CSR arrays (the point-wise values share the indices, unless the
+        pencil has a pattern of its own)."""
+        A, B = self._applied, self._sym
+        own = 0 if A.indices is B.indices else A.indices.nbytes + A.indptr.nbytes
+        extra = 0 if A is B else A.data.nbytes + own
+        return int(B.data.nbytes + B.indices.nbytes + B.indptr.nbytes + extra)
 
     def __matmul__(self, f: Any) -> np.ndarray:
         return np.asarray(self._applied @ check_function(f, self.n_vertices))
@@ -369,9 +372,9 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
             return _rebuild_matrix_free(geo, params, path.name)
         applied = _matrix(data, "", n, path.name)
         sym = applied
-        if "sym_data" in data:
-            sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
-        elif "sym_shape" in data:
+        if "sym_shape" in data:  # a pattern of its own (the Galerkin pencil's)
             sym = _matrix(data, "sym_", n, path.name)
+        elif "sym_data" in data:
+            sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None
     return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo)

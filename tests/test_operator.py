@@ -248,7 +248,7 @@ def test_progress_callback():
     meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
     stages = list(dict.fromkeys(s for _, s in seen))
     assert stages == ["kernel rows", "boundary images", "semidefinite check", "moment scale",
-                      "point-wise rows", "done"]
+                      "point-wise rows", "Galerkin pencil", "done"]
     assert [f for f, _ in seen] == sorted(f for f, _ in seen)
 
 

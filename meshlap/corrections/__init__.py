@@ -4,6 +4,8 @@
   for curves, surfaces, volumes and clouds alike;
 * :mod:`~meshlap.corrections.moments`: the global second-moment scale (symmetric) and the
   point-wise rows exact for quadratics (what ``op @ f`` applies);
+* :mod:`~meshlap.corrections.galerkin`: the symmetric pencil from the kernel integrated over
+  the cells with the hat functions, for coarse meshes (``quadrature="galerkin"``);
 * :mod:`~meshlap.corrections.psd`: the semidefiniteness check of the Richardson kernel, with
   the plain kernel as its fallback;
 * :mod:`~meshlap.corrections.highorder` and :mod:`~meshlap.corrections.rowchoice`: point-wise
@@ -14,9 +16,9 @@ The Richardson (difference of Gaussians) kernel itself is a kernel choice, made 
 :mod:`meshlap.assembly`.
 """
 
-from . import highorder, images, moments, psd, rowchoice
+from . import galerkin, highorder, images, moments, psd, rowchoice
 from .images import neumann_images
 from .moments import moment_correction, second_moment_scale
 
-__all__ = ["highorder", "images", "moment_correction", "moments", "neumann_images", "psd", "rowchoice",
-           "second_moment_scale"]
+__all__ = ["galerkin", "highorder", "images", "moment_correction", "moments", "neumann_images", "psd",
+           "rowchoice", "second_moment_scale"]

@@ -156,27 +156,33 @@ class Geometry:
 
         return self._cached("edges", make)
 
-    def boundary_frames(self, radius: float) -> frames.BoundaryFrames:
-        """``(band, b, ν)`` for the points within ``radius`` of the boundary (see
-        :mod:`meshlap.geometry.frames`); None without a boundary."""
+    def boundary_samples(self, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Samples of the boundary and the outward conormal there, spaced for the cut-off
+        ``radius`` (see :mod:`meshlap.geometry.frames`); None without a boundary."""
 
-        def make() -> frames.BoundaryFrames:
+        def make() -> tuple[np.ndarray, np.ndarray] | None:
             P = self.points
             if self.boundary is None or not self.boundary.any():
                 return None
             step = max(radius / 16, self.spacing / 4)
             if self.faces is not None:
-                s, nu = frames.boundary_samples_surface(P, self.faces, step)
-            elif self.dim == 1 and self.cells is not None:
-                s, nu = frames.boundary_samples_curve(P, self.cells)
-            elif self.dim == 3 and self.cells is not None and self.source == "tetrahedra":
-                s, nu = frames.boundary_samples_volume(P, self.cells, step)
-                if P.shape[1] > 3:
-                    return None
-            else:
-                T, idx = self._pca()
-                s, nu = frames.boundary_samples_cloud(P, self.boundary, T, idx, self.dim)
-            return frames.frames_from_samples(P, s, nu, radius)
+                return frames.boundary_samples_surface(P, self.faces, step)
+            if self.dim == 1 and self.cells is not None:
+                return frames.boundary_samples_curve(P, self.cells)
+            if self.dim == 3 and self.cells is not None and self.source == "tetrahedra":
+                return None if P.shape[1] > 3 else frames.boundary_samples_volume(P, self.cells, step)
+            T, idx = self._pca()
+            return frames.boundary_samples_cloud(P, self.boundary, T, idx, self.dim)
+
+        return self._cached(("boundary samples", radius), make)
+
+    def boundary_frames(self, radius: float) -> frames.BoundaryFrames:
+        """``(band, b, ν)`` for the points within ``radius`` of the boundary (see
+        :mod:`meshlap.geometry.frames`); None without a boundary."""
+
+        def make() -> frames.BoundaryFrames:
+            samples = self.boundary_samples(radius)
+            return None if samples is None else frames.frames_from_samples(self.points, *samples, radius)
 
         return self._cached(("boundary", radius), make)
 

@@ -1,0 +1,338 @@
+"""The symmetric pencil from the kernel integrated over the cells (a Galerkin form).
+
+The vertex operator integrates the kernel with one point per vertex (the lumped masses);
+once the width is near the squared edge length that rule, not the kernel, sets the error.
+Here the kernel is integrated over the cells with the piecewise-linear hat functions φ_i,
+a degree-2 rule of q points per cell (3 per triangle, 4 per tetrahedron, 2 per segment):
+
+    −S_ij = ½ ∫∫ k_h(x, y) (φ_i(x) − φ_i(y)) (φ_j(x) − φ_j(y)) dx dy
+
+(the energy ½∫∫ k (f(x) − f(y))² of f = Σ f_i φ_i), which is −Φᵀ W L_q Φ with L_q the
+kernel operator on the quadrature points x_q of weights W and Φ_qi = φ_i(x_q). The self pairs
+cancel, the rows sum to zero, S is symmetric, and −S is semidefinite wherever L_q is (the
+Richardson kernel's check decides). Mirror images at the boundary work on L_q as on the
+vertices.
+
+The form pairs with the consistent mass C = Φᵀ W Φ. The operator's mass is lumped (the
+diagonal m = C·1 that :mod:`meshlap.spectral` expects), so the pencil is moved onto it by the
+congruence S' = Bᵀ S B, B = I + ½ m⁻¹ (diag(m) − C): to first order in m⁻¹(diag(m) − C),
+which is O(ē² λ) on a mode of eigenvalue λ, (S', diag m) has the eigenvalues of (S, C), and a
+congruence keeps −S' semidefinite.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+from numba import prange
+from pykdtree.kdtree import KDTree
+
+from .._jit import jit
+from ..assembly import Kernel, assemble, cutoff_radius
+from ..assembly.variable import dog_factor
+from ..errors import MeshError
+from ..geometry import frames as frames_mod
+from ..geometry import simplex_volumes
+from ..widths import Widths
+from .images import neumann_images
+
+__all__ = ["AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES",
+           "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
+
+#: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
+#: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
+#: (0.25 ē² loses 1% to the quadrature on the 4,000-vertex square).
+H_SCALE = 0.5
+#: Pairs of cells whose normals differ by more than this (degrees) are across a crease.
+CREASE_ANGLE = 60.0
+#: The automatic choice takes the Galerkin pencil up to this many vertices (its build costs
+#: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
+#: linear FEM on the clean inputs measured).
+AUTO_MAX_POINTS = 10_000
+#: ... whose longest edge is at most this many mean edges: three points on a triangle much
+#: larger than the rest do not resolve the kernel there (a random 6,000-vertex plane, longest
+#: edge 63 mean edges: 22% against the vertex pencil's 1.5%)
+AUTO_MAX_EDGE_RATIO = 2.5
+#: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
+#: follows the noise, the wide vertex kernel averages it out.
+AUTO_MAX_ROUGHNESS = 3.0
+
+#: Degree-2 rules on the simplex of k + 1 corners: (a, b) barycentric coordinates, each point
+#: a at one corner and b at the others, one point per corner, equal weights.
+RULES = {1: (0.5 + 0.5 / np.sqrt(3.0), 0.5 - 0.5 / np.sqrt(3.0)),
+         2: (2.0 / 3.0, 1.0 / 6.0),
+         3: (0.5854101966249685, 0.1381966011250105)}
+
+
+@jit(parallel=True)
+def _unfold_rows(indptr, indices, data, X, N, W, near, h, dogc, norm, cos_crease):  # pragma: no cover
+    # pairs near a crease whose cells' normals differ by more than the crease angle: the
+    # kernel of the distance along the two planes unfolded about their line of intersection
+    n = len(indptr) - 1
+    for q in prange(n):
+        if not near[q]:
+            continue
+        diag = -1
+        s = 0.0
+        for e in range(indptr[q], indptr[q + 1]):
+            r = indices[e]
+            if r == q:
+                diag = e
+                continue
+            c = 2.0 if not near[r] else N[q, 0] * N[r, 0] + N[q, 1] * N[r, 1] + N[q, 2] * N[r, 2]
+            if c < cos_crease:
+                ux = N[q, 1] * N[r, 2] - N[q, 2] * N[r, 1]
+                uy = N[q, 2] * N[r, 0] - N[q, 0] * N[r, 2]
+                uz = N[q, 0] * N[r, 1] - N[q, 1] * N[r, 0]
+                uu = ux * ux + uy * uy + uz * uz
+                if uu > 1e-12:  # not opposite faces
+                    d1 = N[q, 0] * X[q, 0] + N[q, 1] * X[q, 1] + N[q, 2] * X[q, 2]
+                    d2 = N[r, 0] * X[r, 0] + N[r, 1] * X[r, 1] + N[r, 2] * X[r, 2]
+                    # z0 on the line: d1 (n_r × u) + d2 (u × n_q), over |u|²
+                    z0 = np.empty(3)
+                    z0[0] = (d1 * (N[r, 1] * uz - N[r, 2] * uy) + d2 * (uy * N[q, 2] - uz * N[q, 1])) / uu
+                    z0[1] = (d1 * (N[r, 2] * ux - N[r, 0] * uz) + d2 * (uz * N[q, 0] - ux * N[q, 2])) / uu
+                    z0[2] = (d1 * (N[r, 0] * uy - N[r, 1] * ux) + d2 * (ux * N[q, 1] - uy * N[q, 0])) / uu
+                    inv = 1.0 / math.sqrt(uu)
+                    u = np.empty(3)
+                    u[0], u[1], u[2] = ux * inv, uy * inv, uz * inv
+                    sq = 0.0
+                    sr = 0.0
+                    for a in range(3):
+                        sq += (X[q, a] - z0[a]) * u[a]
+                        sr += (X[r, a] - z0[a]) * u[a]
+                    aq = 0.0
+                    ar = 0.0
+                    chord = 0.0
+                    for a in range(3):
+                        aq += (X[q, a] - z0[a] - sq * u[a]) ** 2
+                        ar += (X[r, a] - z0[a] - sr * u[a]) ** 2
+                        chord += (X[q, a] - X[r, a]) ** 2
+                    d2u = (math.sqrt(aq) + math.sqrt(ar)) ** 2 + (sq - sr) ** 2
+                    ex = math.exp(-max(d2u, chord) / (4.0 * h))
+                    data[e] = W[r] * norm * (ex * (dogc * ex - 1.0) if dogc != 0.0 else ex)
+            s += data[e]
+        if diag >= 0:
+            data[diag] = -s
+
+
+def _unfold(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, W: np.ndarray,
+            crease_edges: np.ndarray, h: float, dim: int, dog: bool, radius: float) -> sp.csr_matrix:
+    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    N = np.ascontiguousarray(np.repeat(n, 3, axis=0))
+    # the quadrature points within the cut-off of a crease (its edges sampled 8 times each)
+    s = np.linspace(0.0, 1.0, 9)[:, None, None]
+    a, b = P[crease_edges[:, 0]], P[crease_edges[:, 1]]
+    samples = ((1.0 - s) * a + s * b).reshape(-1, 3)
+    dist, _ = KDTree(samples).query(np.ascontiguousarray(X), k=1, distance_upper_bound=radius)
+    near = np.isfinite(dist)
+    Lq = sp.csr_matrix(Lq, dtype=np.float64, copy=True)
+    norm = 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
+    _unfold_rows(Lq.indptr, Lq.indices, Lq.data, np.ascontiguousarray(X, dtype=np.float64), N, W, near,
+                 float(h), dog_factor(dim) if dog else 0.0, norm, math.cos(math.radians(CREASE_ANGLE)))
+    return Lq
+
+
+def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
+    """Points, weights and hat-function values of the degree-2 rule on every simplex.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray
+        Vertex positions.
+    cells : (c, k + 1) int ndarray
+        Simplices: segments, triangles or tetrahedra.
+
+    Returns
+    -------
+    X : (c (k + 1), d) ndarray
+        Quadrature points, k + 1 per cell.
+    W : (c (k + 1),) ndarray
+        Weights (the cell's k-volume shared equally).
+    Phi : (c (k + 1), n) scipy.sparse.csr_matrix
+        φ_i(x_q): the barycentric coordinates of each point.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> X, W, Phi = quadrature_points(P, np.array([[0, 1, 2]]))
+    >>> X.shape, float(W.sum()), bool(np.allclose(Phi.sum(axis=1), 1))
+    ((3, 3), 0.5, True)
+    """
+    cells = np.asarray(cells, dtype=np.int64)
+    k = cells.shape[1] - 1
+    if k not in RULES:
+        raise MeshError(f"the Galerkin pencil needs segments, triangles or tetrahedra; got cells of {k + 1}")
+    a, b = RULES[k]
+    B = np.full((k + 1, k + 1), b) + (a - b) * np.eye(k + 1)  # row q: the point near corner q
+    X = np.einsum("qa,cad->cqd", B, P[cells]).reshape(-1, P.shape[1])
+    W = np.repeat(simplex_volumes(P, cells) / (k + 1), k + 1)
+    rows = np.repeat(np.arange(len(X)), k + 1)
+    cols = np.repeat(cells, k + 1, axis=0).ravel()
+    Phi = sp.csr_matrix((np.tile(B, (len(cells), 1)).ravel(), (rows, cols)), shape=(len(X), len(P)))
+    return X, W, Phi
+
+
+def _mass_congruence(S: sp.csr_matrix, Phi: sp.csr_matrix, W: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
+    C = (Phi.T @ sp.diags(W) @ Phi).tocsr()
+    m = np.asarray(C.sum(axis=1)).ravel()
+    inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+    B = sp.eye(len(m), format="csr") + 0.5 * (sp.eye(len(m)) - sp.diags(inv) @ C)
+    out = (B.T @ S @ B).tocsr()
+    return 0.5 * (out + out.T), m
+
+
+def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog: bool = True,
+                    crease_edges: np.ndarray | None = None, boundary: tuple | None = None, tol: float = 1e-8,
+                    guard: Any = None) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The Galerkin pencil ``(S, m)`` of the kernel of width ``h`` on the simplices ``cells``.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray
+        Vertex positions.
+    cells : (c, k + 1) int ndarray
+        Segments, triangles or tetrahedra.
+    h : float
+        Kernel width.
+    dim : int
+        Intrinsic dimension k (the kernel's normalization).
+    dog : bool, default True
+        The Richardson kernel 2K_{h/2} − K_h; False: one Gaussian.
+    crease_edges : (e, 2) int ndarray, optional
+        Crease edges of a triangle mesh in R³ (:func:`creases`): a pair of quadrature points
+        within the cut-off of one, whose faces' normals differ by more than
+        :data:`CREASE_ANGLE`, gets the kernel of its distance along the two face planes
+        unfolded about their line of intersection (the geodesic across a straight crease)
+        instead of the chord.
+    boundary : (samples, ν), optional
+        Boundary samples and outward conormals (:mod:`meshlap.geometry.frames`): mirror images
+        for Neumann spectra.
+    tol : float, default 1e-8
+        Kernel tolerance (its cut-off).
+    guard : MemoryGuard, optional
+        Called with the quadrature operator's entry count before it is allocated.
+
+    Returns
+    -------
+    S : scipy.sparse.csr_matrix
+        Symmetric, rows summing to zero, negative semidefinite for a positive kernel.
+    m : (n,) ndarray
+        The lumped masses C·1 the pencil goes with (a third of the adjacent triangles' area).
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(300, seed=0)
+    >>> S, m = galerkin_pencil(V, F, 0.5 * 0.2**2, 2)
+    >>> bool(abs(S - S.T).max() < 1e-12), bool(np.abs(S @ np.ones(300)).max() < 1e-9)
+    (True, True)
+    """
+    X, W, Phi = quadrature_points(P, cells)
+    widths = Widths(float(h), None, False)
+    Lq = assemble(X, W, widths, Kernel(dim, dog=dog, tol=tol), guard=guard)
+    if crease_edges is not None and len(crease_edges):
+        Lq = _unfold(Lq, P, cells, X, W, crease_edges, h, dim, dog, cutoff_radius(h, tol))
+    if boundary is not None:
+        samples, nu = boundary
+        fr = frames_mod.frames_from_samples(X, samples, nu, cutoff_radius(h, tol))
+        Lq = neumann_images(Lq, X, fr, W, np.full(len(X), float(h)), dog, dim)
+    WP = sp.diags(W) @ Phi
+    S = (WP.T @ Lq @ Phi).tocsr()
+    return _mass_congruence(0.5 * (S + S.T), Phi, W)
+
+
+def simplices(geo: Any) -> np.ndarray | None:
+    """The geometry's cells as simplices of k + 1 corners (a triangle mesh's faces, a curve's
+    segments, tetrahedra), or None when it has none (clouds, polygons other than triangles)."""
+    faces = getattr(geo, "faces", None)
+    if faces is not None:
+        return faces.indices.reshape(-1, 3) if (faces.n_faces and (faces.sizes == 3).all()) else None
+    cells = getattr(geo, "cells", None)
+    if cells is not None and getattr(geo, "source", None) in ("polyline", "tetrahedra") \
+            and cells.shape[1] == geo.dim + 1:
+        return np.asarray(cells, dtype=np.int64)
+    return None
+
+
+def _face_pairs(P: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    # unit face normals, and for every interior edge its two faces and its two vertices
+    n = np.cross(P[tri[:, 1]] - P[tri[:, 0]], P[tri[:, 2]] - P[tri[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    sides = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+    face = np.tile(np.arange(len(tri)), 3)
+    key = sides[:, 0] * np.int64(len(P)) + sides[:, 1]
+    order = np.argsort(key, kind="stable")
+    pair = np.flatnonzero(key[order][1:] == key[order][:-1])
+    return n, face[order][pair], face[order][pair + 1], sides[order][pair]
+
+
+def creases(P: np.ndarray, tri: np.ndarray, angle: float = CREASE_ANGLE) -> np.ndarray:
+    """The edges (vertex pairs) of a triangle mesh in R³ whose faces meet at more than
+    ``angle`` degrees between their normals.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> creases(V, F).shape
+    (0, 2)
+    """
+    n, f1, f2, edges = _face_pairs(P, tri)
+    return edges[(n[f1] * n[f2]).sum(axis=1) < math.cos(math.radians(angle))]
+
+
+def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
+    """``(largest dihedral angle in degrees, roughness)`` of a triangle mesh in R³.
+
+    The roughness is the median squared change of the face normal across an edge over the
+    same after the normals are averaged twice over each face and its edge neighbours: about
+    1 where the normals vary smoothly (1.1-1.6 on the spheres and the torus of
+    benchmarks/bench_spectra.py), ten and more where they are noise (11 on the sphere with
+    0.5% radial noise), 0 on a flat mesh.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> angle, rough = shape_measures(V, F)
+    >>> bool(angle < 15), bool(rough < 2)
+    (True, True)
+    """
+    n, f1, f2, _ = _face_pairs(P, tri)
+    if not len(f1):
+        return 0.0, 0.0
+    angle = float(np.degrees(np.arccos(np.clip((n[f1] * n[f2]).sum(axis=1), -1.0, 1.0))).max())
+    A = sp.csr_matrix((np.ones(2 * len(f1)), (np.r_[f1, f2], np.r_[f2, f1])), shape=(len(tri),) * 2)
+    A = A + sp.eye(len(tri), format="csr")
+    avg = n
+    for _ in range(2):
+        avg = A @ avg
+        avg /= np.maximum(np.linalg.norm(avg, axis=1, keepdims=True), 1e-300)
+    raw = float(np.median(((n[f1] - n[f2]) ** 2).sum(axis=1)))
+    smooth = float(np.median(((avg[f1] - avg[f2]) ** 2).sum(axis=1)))
+    if smooth <= 1e-24:
+        return angle, 0.0 if raw <= 1e-24 else math.inf
+    return angle, raw / smooth
+
+
+def wins(geo: Any) -> bool:
+    """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
+    :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long,
+    whose normals are not noise (roughness below
+    :data:`AUTO_MAX_ROUGHNESS`), where benchmarks/RESULTS.md measures it ahead of the vertex
+    pencil and of linear FEM."""
+    tri = simplices(geo)
+    if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
+        return False
+    P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
+    E = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    length = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
+    if length.max() > AUTO_MAX_EDGE_RATIO * length.mean():
+        return False
+    return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS

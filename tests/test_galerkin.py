@@ -1,0 +1,166 @@
+"""The Galerkin pencil: symmetric, semidefinite, and its spectra on coarse meshes."""
+
+import math
+
+import igl
+import numpy as np
+import pytest
+import scipy.linalg as sla
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+import meshlap
+from meshlap import MeshError, shapes, spectral
+from meshlap.corrections import galerkin
+
+
+def _err(lam, ref):
+    return float(np.abs(lam[1:10] / ref[1:10] - 1).max())
+
+
+def _sphere_exact():
+    return np.array([d * (d + 1) for d in range(4) for _ in range(2 * d + 1)], float)[:10]
+
+
+def _square_exact():  # Neumann on [-1, 1]²
+    return np.array(sorted((math.pi / 2) ** 2 * (a * a + b * b) for a in range(5) for b in range(5))[:10])
+
+
+def _cot_refined(V, F):
+    # linear FEM on the mesh refined 16× (two midpoint subdivisions), the reference of
+    # benchmarks/bench_spectra.py
+    for _ in range(2):
+        V, F = igl.upsample(V, F)
+    L, M = igl.cotmatrix(V, F), igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+    return np.sort(eigsh(sp.csc_matrix(-L), 10, sp.csc_matrix(M), sigma=-1e-6, which="LM")[0])
+
+
+def test_quadrature_rule_is_exact_for_quadratics():
+    # degree 2 on a triangle in R³ and on a tetrahedron: ∫x² over the simplex
+    P = np.array([[0.0, 0, 0], [2, 0, 0], [0, 1, 0], [0, 0, 3]])
+    X, W, Phi = galerkin.quadrature_points(P, np.array([[0, 1, 2]]))
+    assert np.allclose(Phi @ P, X)
+    assert abs(W @ X[:, 0] ** 2 - 2 / 3) < 1e-12  # area 1: A (Σ x_i² + Σ_{i<j} x_i x_j) / 6
+    X, W, _ = galerkin.quadrature_points(P, np.array([[0, 1, 2, 3]]))
+    assert abs(W.sum() - 1.0) < 1e-12 and abs(W @ X[:, 0] ** 2 - 0.4) < 1e-12  # the same over 10
+
+
+def test_pencil_symmetric_semidefinite_and_energy_of_a_neumann_mode():
+    V, F = shapes.sphere(500, seed=0)
+    S, m = galerkin.galerkin_pencil(V, F, 0.5 * 0.176**2, 2)
+    assert abs(S - S.T).max() < 1e-12
+    assert np.abs(S @ np.ones(len(V))).max() < 1e-9
+    assert np.allclose(m, meshlap.geometry.from_mesh(V, F).mass)
+    lam = sla.eigh(-S.toarray(), np.diag(m), eigvals_only=True)
+    assert lam[0] > -1e-10 * lam[-1]
+    # the energy of a Neumann mode f = cos(π(x + 1)/2) on [-1, 1]², ∫|∇f|² = π²/2: the kernel
+    # misses 5.5% in the boundary band, the mirror images restore it to within 1%
+    # (measured -5.5%, -0.6%; Richardson with images +0.8%)
+    Vq, Fq = shapes.plane(400, seed=0, kind="stratified")
+    g = meshlap.geometry.from_mesh(Vq, Fq)
+    h = 0.5 * g.spacing**2
+    bnd = g.boundary_samples(meshlap.assembly.cutoff_radius(h, 1e-8))
+    f = np.cos(math.pi * (Vq[:, 0] + 1) / 2)
+    cases = ((None, False, -0.07, -0.04), (bnd, False, -0.01, 0.01), (bnd, True, 0, 0.012))
+    for boundary, dog, lo, hi in cases:
+        S, _ = galerkin.galerkin_pencil(Vq, Fq, h, 2, dog=dog, boundary=boundary)
+        assert lo < -f @ S @ f / (math.pi**2 / 2) - 1 < hi
+
+
+@pytest.mark.parametrize("name, tol", [("torus", 0.013), ("sphere", 0.013), ("square", 0.008)])
+def test_coarse_rows_of_bench_spectra(name, tol):
+    # measured 0.95%, 0.96%, 0.57% (libigl's cotangent FEM: 2.25%, 1.85%, 2.45%)
+    if name == "torus":
+        V, F = shapes.torus(600, seed=0)
+        ref = _cot_refined(V, F)
+    elif name == "sphere":
+        V, F = shapes.sphere(500, seed=0)
+        ref = _sphere_exact()
+    else:
+        V, F = shapes.plane(400, seed=0, kind="stratified")
+        ref = _square_exact()
+    op = meshlap.laplacian(V, F)
+    assert op.quadrature == "galerkin" and op.psd_margin > -1e-6
+    S = op.S
+    assert abs(S - S.T).max() < 1e-12
+    assert _err(spectral.eigs(op, 10)[0], ref) < tol
+
+
+def test_pointwise_rows_unchanged_and_vertex_option():
+    V, F = shapes.sphere(500, seed=0)
+    gal, vert = meshlap.laplacian(V, F), meshlap.laplacian(V, F, quadrature="vertex")
+    assert vert.quadrature == "vertex" and vert.quadrature_h is None
+    assert (gal.L != vert.L).nnz == 0  # op @ f is the vertex rows either way
+    assert abs(gal.L_sym - vert.L_sym).max() > 0
+    assert "Galerkin" in repr(gal)
+
+
+def test_automatic_choice_keeps_the_vertex_pencil_on_noise_and_large_meshes():
+    V, F = shapes.sphere(2000, seed=0)
+    noisy = V * (1 + 0.005 * np.random.default_rng(1).standard_normal((len(V), 1)))
+    assert galerkin.wins(meshlap.geometry.from_mesh(V, F))
+    assert not galerkin.wins(meshlap.geometry.from_mesh(noisy, F))
+    angle, rough = galerkin.shape_measures(noisy, F)
+    assert rough > galerkin.AUTO_MAX_ROUGHNESS  # measured 3.65 (smooth: about 1)
+    # the 12 edges of a box are creases (90° between faces), its face diagonals are not
+    Vb = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    Fb = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                   [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    assert galerkin.shape_measures(Vb, Fb)[0] > 89
+    assert galerkin.creases(Vb, Fb).shape == (12, 2)
+    Vp, Fp = shapes.plane(6000, seed=0)  # random points: a few long edges
+    assert not galerkin.wins(meshlap.geometry.from_mesh(Vp, Fp))
+    Vs, Fs = shapes.sphere(galerkin.AUTO_MAX_POINTS + 1, seed=0)
+    assert not galerkin.wins(meshlap.geometry.from_mesh(Vs, Fs))
+    # the paper's operator and an explicit h are never changed
+    assert meshlap.laplacian(V, F, correction="none").quadrature == "vertex"
+    assert meshlap.laplacian(V, F, h=0.01).quadrature == "vertex"
+
+
+def test_bad_quadrature_options():
+    V, F = shapes.sphere(200, seed=0)
+    with pytest.raises(MeshError, match="quadrature must be one of"):
+        meshlap.laplacian(V, F, quadrature="gauss")
+    with pytest.raises(MeshError, match="integrates over simplices"):
+        meshlap.point_cloud_laplacian(V, quadrature="galerkin")
+    with pytest.raises(MeshError, match="matrix_free"):
+        meshlap.laplacian(V, F, quadrature="galerkin", matrix_free=True)
+
+
+def _cube_surface(m):
+    # the surface of [-½, ½]³, m segments per edge, 6 m² squares cut along one diagonal
+    g = np.linspace(-0.5, 0.5, m + 1)
+    V, F, index = [], [], {}
+
+    def vid(p):
+        key = tuple(np.round(p, 12))
+        if key not in index:
+            index[key] = len(V)
+            V.append(p)
+        return index[key]
+
+    for axis in range(3):
+        for side in (-0.5, 0.5):
+            for i in range(m):
+                for j in range(m):
+                    q = []
+                    for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                        p = np.empty(3)
+                        p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, g[i + di], g[j + dj]
+                        q.append(vid(p))
+                    a, b, c, d = q if side > 0 else q[::-1]
+                    F += [[a, b, c], [a, c, d]]
+    return np.array(V), np.array(F)
+
+
+def test_cube_surface_across_its_creases():
+    # 386 vertices: measured 0.23% (libigl's cotangent FEM 1.52%; the vertex pencil 17.9%,
+    # the Galerkin pencil with chord distances across the creases 18.9%)
+    V, F = _cube_surface(8)
+    ref = _cot_refined(V, F)
+    op = meshlap.laplacian(V, F)
+    assert op.quadrature == "galerkin" and op.psd_margin > -1e-6
+    assert _err(spectral.eigs(op, 10)[0], ref) < 0.004
+    e = meshlap.geometry.from_mesh(V, F).spacing
+    S, m = galerkin.galerkin_pencil(V, F, 0.5 * e * e, 2)
+    assert _err(sla.eigh(-S.toarray(), np.diag(m), eigvals_only=True, subset_by_index=[0, 9]), ref) > 0.1
