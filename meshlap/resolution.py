@@ -33,11 +33,12 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from .corrections import galerkin
 from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
-__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "RATIO_LIMIT", "Resolution", "ResolutionWarning",
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "RATIO_LIMIT", "Resolution", "ResolutionWarning",
            "assess", "default_terms", "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
@@ -53,6 +54,10 @@ CREASE_HEIGHT = 0.1
 #: ``benchmarks/calibrate_resolution.py``, which prints new ones after a change of the numerics.
 DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.95,
                  "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
+#: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
+#: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
+#: squares and discs; 0.19-0.52), rounded up.
+GALERKIN_FEM_RATIO = 0.55
 #: The constants of linear FEM's, fitted on the same inputs.
 FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5}
 
@@ -248,16 +253,21 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
 
 
-def assess(geo: Geometry, widths: Any, correction: str) -> Resolution | None:
+def assess(geo: Geometry, widths: Any, correction: str, quadrature: str = "vertex") -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
+    With the Galerkin pencil (``quadrature="galerkin"``) on an input inside the regime where it
+    was measured (:func:`meshlap.corrections.galerkin.wins`), the prediction is
+    :data:`GALERKIN_FEM_RATIO` times linear FEM's; outside it, the vertex pencil's model.
 
     Examples
     --------
     >>> import meshlap
-    >>> op = meshlap.laplacian(*meshlap.shapes.plane(400, seed=0, kind="stratified"))
-    >>> r = op.resolution
+    >>> V, F = meshlap.shapes.plane(400, seed=0, kind="stratified")
+    >>> meshlap.laplacian(V, F).resolution.too_coarse        # the Galerkin pencil: 0.57%
+    False
+    >>> r = meshlap.laplacian(V, F, quadrature="vertex").resolution   # 11% against FEM's 2.5%
     >>> r.too_coarse, r.alternative
     (True, 'meshlap.baselines.cotangent(V, F)')
     """
@@ -295,8 +305,10 @@ def assess(geo: Geometry, widths: Any, correction: str) -> Resolution | None:
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
                      crease, 0.0, None, "", None, "")
     terms = default_terms(fig)
-    predicted = float(sum(terms.values()))
     fem = fem_error(fig, geo.source, geo.faces is not None)
+    if quadrature == "galerkin" and fem is not None and galerkin.wins(geo):
+        terms = {"the Galerkin pencil, measured at a fraction of linear FEM's error": GALERKIN_FEM_RATIO * fem}
+    predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
                    else "meshlap.baselines.cotangent(V, F)")
     coarse = fem is not None and predicted > RATIO_LIMIT * fem
