@@ -38,8 +38,8 @@ from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
-__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "RATIO_LIMIT", "Resolution", "ResolutionWarning",
-           "assess", "default_terms", "fem_error"]
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "RATIO_LIMIT", "Resolution",
+           "ResolutionWarning", "assess", "default_terms", "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -307,7 +307,7 @@ def assess(geo: Geometry, widths: Any, correction: str, quadrature: str = "verte
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
     if quadrature == "galerkin" and fem is not None and galerkin.wins(geo):
-        terms = {"the Galerkin pencil, measured at a fraction of linear FEM's error": GALERKIN_FEM_RATIO * fem}
+        terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
                    else "meshlap.baselines.cotangent(V, F)")
