@@ -363,9 +363,9 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
             return _rebuild_matrix_free(geo, params, path.name)
         applied = _matrix(data, "", n, path.name)
         sym = applied
-        if "sym_data" in data:
-            sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
-        elif "sym_shape" in data:
+        if "sym_shape" in data:  # a pattern of its own (the fitted rows'), before "sym_data" alone
             sym = _matrix(data, "sym_", n, path.name)
+        elif "sym_data" in data:
+            sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None
     return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo)

@@ -100,6 +100,7 @@ class DistributedLaplacian:
         self.correction = "none" if attrs is None or not attrs.dog else "richardson"
         self.fallback_reason: str | None = None
         self.moment_scale = 1.0
+        self.pointwise_choice = None  # the fitted point-wise rows' choice on this rank's own rows
         # the halo reaches as far as the widest pair: the largest width sets the radius
         widest = h if table is None or not len(table) else float(table[:, 0].max())
         widest = comm.allreduce(widest, op=MPI.MAX)
@@ -251,7 +252,8 @@ class DistributedLaplacian:
         MPI, PETSc = _mpi()
         N, n = self.n_vertices, self.n_local
         L_sym, L_pw, info = local_rows(self.comm, self._Vloc, self._mloc, self._Tloc, n, self._grid,
-                                       self._rows, self.attrs)
+                                       self._rows, self.attrs, self._uloc)
+        self.pointwise_choice = info["pointwise_choice"]  # this rank's rows
         self.correction = info["correction"]
         self.fallback_reason = info["fallback_reason"]
         self.moment_scale = info["moment_scale"]
