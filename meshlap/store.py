@@ -118,8 +118,12 @@ class SavedLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays (the point-wise values share the indices)."""
-        extra = self._applied.data.nbytes if self.pointwise else 0
+        """Bytes held by the CSR arrays (the moment rows' values share the pencil's indices)."""
+        A = self._applied
+        shared = A.indices is self._sym.indices and A.indptr is self._sym.indptr
+        extra = 0
+        if self.pointwise:
+            extra = A.data.nbytes + (0 if shared else A.indices.nbytes + A.indptr.nbytes)
         return int(self._sym.data.nbytes + self._sym.indices.nbytes + self._sym.indptr.nbytes + extra)
 
     def __matmul__(self, f: Any) -> np.ndarray:
