@@ -21,6 +21,11 @@ a random subset of the level-3 limit points, as a cloud only.
 
 Peers skipped by name when missing: pycompadre (GMLS on the manifold, degrees 2–4, its default
 power weight and neighbour search), robust-laplacian; libigl cotangent runs on meshes only.
+
+Columns of meshlap: default = ``meshlap.laplacian(V, F)`` / ``point_cloud_laplacian(P)`` (the
+fitted point-wise rows, issue 20); moments = the same with ``pointwise=True`` (the degree-2
+moment rows, the default before, whose build time the default's is compared with in the same
+run); paper = ``correction="none"``.
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from scipy.spatial import cKDTree
 
 import meshlap
 from meshlap import baselines, shapes
-from meshlap.corrections import highorder, rowchoice
+from meshlap.corrections import highorder
 
 sys.path.insert(0, str(Path(__file__).parent))
 from results_file import write_section  # noqa: E402
@@ -214,15 +219,7 @@ def spot_cases() -> list[Case]:
 
 
 # -- methods ----------------------------------------------------------------------------------
-def run_new(case: Case) -> tuple[float, float, float, str]:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", meshlap.MeshWarning)
-        (L, choice), t = timed(lambda: rowchoice.choose_rows(case.V))
-    return e2(case, lambda f: L @ f), t, L.nnz / len(case.V), choice.summary()
-
-
-def run_meshlap(case: Case, mesh: bool, correction: str | None) -> tuple[float, float, float]:
-    kw = {} if correction is None else {"correction": correction}
+def run_meshlap(case: Case, mesh: bool, kw: dict, summary: list | None = None) -> tuple[float, float, float]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", meshlap.MeshWarning)
         if mesh:
@@ -230,6 +227,8 @@ def run_meshlap(case: Case, mesh: bool, correction: str | None) -> tuple[float, 
         else:
             op, t = timed(lambda: meshlap.point_cloud_laplacian(case.V, **kw))
         _, t2 = timed(lambda: op @ case.funcs[0][0])  # the point-wise rows may be built lazily
+    if summary is not None:
+        summary.append(op.pointwise_choice.summary() if op.pointwise_choice is not None else "—")
     return e2(case, lambda f: op @ f), t + t2, op.L.nnz / len(case.V)
 
 
@@ -276,10 +275,10 @@ def run_gmls(case: Case, degree: int) -> tuple[float, float, float]:
 
 def evaluate(case: Case, mesh: bool, have_gmls: bool, have_robust: bool) -> str:
     r = case.results
-    e, t, nnz, summary = run_new(case)
-    r["new"] = (e, t, nnz)
-    r["default"] = run_meshlap(case, mesh, None)
-    r["paper"] = run_meshlap(case, mesh, "none")
+    summary: list[str] = []
+    r["moments"] = run_meshlap(case, mesh, {"pointwise": True})
+    r["default"] = run_meshlap(case, mesh, {}, summary)
+    r["paper"] = run_meshlap(case, mesh, {"correction": "none"})
     if mesh:
         r["COT"] = run_cot(case)
     if have_robust:
@@ -287,7 +286,7 @@ def evaluate(case: Case, mesh: bool, have_gmls: bool, have_robust: bool) -> str:
     if have_gmls:
         for q in (2, 3, 4):
             r[f"GMLS{q}"] = run_gmls(case, q)
-    return summary
+    return summary[0]
 
 
 # -- convergence ------------------------------------------------------------------------------
@@ -297,18 +296,22 @@ def convergence(ns: list[int]) -> list[str]:
         "|---|---|" + "---|" * len(ns) + "---|",
     ]
     for surface in ("sphere", "torus"):
-        for degree, K in ((2, 20), (4, 30), (6, 52)):
+        for degree, K in ((2, 20), (4, 30), (6, 52), ("default", 0)):
             errs, hs = [], []
             for n in ns:
                 case = sphere_cases(n)[1] if surface == "sphere" else torus_cases(n)[0]
-                indptr, indices, dist = highorder.knn_pattern(case.V, K)
-                h = dist.reshape(len(case.V), K)[:, -1] ** 2 / 32
-                L = highorder.pointwise_rows(case.V, indptr, indices, h, degree)
+                if degree == "default":  # the operator itself: meshlap.laplacian(V, F) @ f
+                    L = meshlap.laplacian(case.V, case.F).L
+                else:
+                    indptr, indices, dist = highorder.knn_pattern(case.V, K)
+                    h = dist.reshape(len(case.V), K)[:, -1] ** 2 / 32
+                    L = highorder.pointwise_rows(case.V, indptr, indices, h, degree)
                 errs.append(e2(case, lambda f, L=L: L @ f))
                 hs.append(math.sqrt(1.0 / len(case.V)))
             order = np.polyfit(np.log(hs), np.log(errs), 1)[0]
+            what = "the default (`meshlap.laplacian(V, F)`)" if degree == "default" else f"{degree} (K = {K})"
             lines.append(
-                f"| {surface} ({'random' if surface == 'sphere' else 'grid'}) | {degree} (K = {K}) | "
+                f"| {surface} ({'random' if surface == 'sphere' else 'grid'}) | {what} | "
                 + " | ".join(f"{x:.2e}" for x in errs)
                 + f" | {order:.2f} |"
             )
@@ -342,15 +345,18 @@ def main() -> None:
         "spot": spot_cases,
     }
     methods = (
-        ["new", "default", "paper", "COT"]
+        ["default", "moments", "paper", "COT"]
         + (["robust"] if have_robust else [])
         + (["GMLS2", "GMLS3", "GMLS4"] if have_gmls else [])
     )
     acc = [
-        "| input | n | " + " | ".join(methods) + " | best peer | new ≤ 1.5× best peer | new ≤ paper |",
+        "| input | n | " + " | ".join(methods)
+        + " | best peer | default ≤ 1.5× best peer | default ≤ paper |",
         "|---|---|" + "---|" * len(methods) + "---|---|---|",
     ]
-    cost = ["| input | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+    cost = ["| input | " + " | ".join(methods) + " | default / moments build |",
+            "|---|" + "---|" * len(methods) + "---|"]
+    ratios = []
     chosen = []
     for name in args.shapes.split(","):
         for case in builders[name]():
@@ -358,17 +364,18 @@ def main() -> None:
                 summary = evaluate(case, mesh, have_gmls, have_robust)
                 r = case.results
                 label = f"{case.shape} {'mesh' if mesh else 'cloud'}, {case.condition}"
-                best = min((v[0], k) for k, v in r.items() if k not in ("new", "default"))
+                best = min((v[0], k) for k, v in r.items() if k not in ("default", "moments"))
                 cells = [f"{r[m][0]:.2g}" if m in r else "—" for m in methods]
                 acc.append(
                     f"| {label} | {len(case.V):,} | " + " | ".join(cells) + f" | {best[1]} {best[0]:.2g} | "
-                    f"{'yes' if r['new'][0] <= 1.5 * best[0] else 'no'} | "
-                    f"{'yes' if r['new'][0] <= r['paper'][0] else 'no'} |"
+                    f"{'yes' if r['default'][0] <= 1.5 * best[0] else 'no'} | "
+                    f"{'yes' if r['default'][0] <= r['paper'][0] else 'no'} |"
                 )
+                ratios.append(r["default"][1] / r["moments"][1])
                 cost.append(
                     f"| {label} | "
                     + " | ".join(f"{r[m][1]:.2f} s / {r[m][2]:.0f}" if m in r else "—" for m in methods)
-                    + " |"
+                    + f" | {ratios[-1]:.2f} |"
                 )
                 chosen.append(f"| {label} | {summary} |")
                 print(acc[-1], flush=True)
@@ -377,10 +384,11 @@ def main() -> None:
     print("\n".join(conv))
     lines = [
         f"`python benchmarks/bench_pointwise.py --n {args.n}` (2 shared cores; {time.strftime('%Y-%m-%d')}). "
-        "new = `meshlap.rowchoice.choose_rows(V)` (PCA frames, the same rows for a mesh and its "
-        "vertices as a cloud); default = `meshlap.laplacian(V, F)` / `point_cloud_laplacian(P)`, its "
-        '`op @ f`; paper = the same with `correction="none"`; COT = libigl cotangent (meshes); robust = '
-        "robust-laplacian; GMLSq = pycompadre, degree q. Conventions: see the benchmark's docstring.",
+        "default = `meshlap.laplacian(V, F)` / `point_cloud_laplacian(P)`, its `op @ f` (the fitted "
+        "point-wise rows: PCA frames, the same rows for a mesh and its vertices as a cloud); moments = "
+        "the same with `pointwise=True` (the degree-2 moment rows, the default before issue 20); paper = "
+        '`correction="none"`; COT = libigl cotangent (meshes); robust = robust-laplacian; GMLSq = '
+        "pycompadre, degree q. Conventions: see the benchmark's docstring.",
         "",
         "E2 = ‖Lf − Δf‖/‖Δf‖ (the larger over the two functions):",
         "",
@@ -388,17 +396,18 @@ def main() -> None:
         "",
         *NOTES,
         "",
-        "Build time / entries per row of what `op @ f` applies:",
+        "Build time / entries per row of what `op @ f` applies (the default's build against the moment "
+        f"rows' in the same run: at most {max(ratios):.2f}×, median {float(np.median(ratios)):.2f}×):",
         "",
         *cost,
         "",
-        "What the new rows chose:",
+        "What the default's rows chose (`op.pointwise_choice.summary()`):",
         "",
         "| input | degree, neighbours, width, noise |",
         "|---|---|",
         *chosen,
         "",
-        "Convergence of the new rows with a fixed degree (K nearest, h = d_K²/32) on clean inputs, E2 "
+        "Convergence of the fitted rows with a fixed degree (K nearest, h = d_K²/32) on clean inputs, E2 "
         "against n; the order is the slope of log E2 against log √(1/n):",
         "",
         *conv,

@@ -31,8 +31,9 @@ __all__ = ["CORRECTIONS", "POINTWISE", "QUADRATURES", "Built", "Options", "build
 
 #: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
 CORRECTIONS = ("richardson", "none")
-#: ``pointwise`` values: the degree-2 moment rows (True), none (False), or rows whose width
-#: and degree are chosen per point from the data ("fit", :mod:`meshlap.corrections.rowchoice`).
+#: ``pointwise`` values: rows whose width and degree are chosen per point from the data ("fit",
+#: :mod:`meshlap.corrections.rowchoice`; the default), the degree-2 moment rows of the kernel's
+#: stencil (True), or none (False).
 POINTWISE = (True, False, "fit")
 #: ``quadrature`` values for the symmetric pencil: one point per vertex (the lumped masses),
 #: or the kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`); None chooses.
@@ -94,7 +95,10 @@ class Options:
             pointwise = True
         if pointwise is not None and pointwise not in POINTWISE:
             raise MeshError(f"pointwise must be True, False or 'fit'; got {pointwise!r}")
-        pointwise = on if pointwise is None else ("fit" if pointwise == "fit" else bool(pointwise))
+        # the default: rows whose width and degree follow the data (issue 20); True keeps the
+        # degree-2 moment rows of the kernel's own stencil
+        pointwise = ("fit" if on else False) if pointwise is None else (
+            "fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
         if curvature_limit is None:
             curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals) else 0.0
@@ -162,10 +166,15 @@ def _psd_faces(geo: Geometry) -> Any:
 
 
 def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options) -> tuple:
-    # the rows op @ f applies: degree-2 moments of the kernel's rows (default), fitted rows of
-    # a fixed degree on the kernel's stencil, or width and degree chosen per point ("fit")
+    # the rows op @ f applies: width and degree chosen per point ("fit", the default), fitted
+    # rows of a fixed degree on the kernel's stencil, or degree-2 moments of the kernel's rows
     if opts.pointwise == "fit":
-        L, choice = corrections.rowchoice.choose_rows(geo.points, k=geo.dim)
+        # the positions f was sampled at: a denoised cloud's input points, whose noise the rows
+        # must average out (the projected points would hide it)
+        P = geo._cache.get("input_points", geo.points)
+        L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim)
+        if L.dtype != opts.dtype:
+            L.data = L.data.astype(opts.dtype)
         return L, None, choice
     if opts.pointwise_degree is not None:
         L = corrections.highorder.pointwise_rows(geo.points, free.indptr, free.indices, hv,

@@ -120,8 +120,8 @@ class SavedLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays (the point-wise values share the indices, unless the
-        pencil has a pattern of its own)."""
+        """Bytes held by the CSR arrays (the moment rows' values share the pencil's indices; the
+        fitted rows and a Galerkin pencil have patterns of their own)."""
         A, B = self._applied, self._sym
         own = 0 if A.indices is B.indices else A.indices.nbytes + A.indptr.nbytes
         extra = 0 if A is B else A.data.nbytes + own
@@ -372,7 +372,7 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
             return _rebuild_matrix_free(geo, params, path.name)
         applied = _matrix(data, "", n, path.name)
         sym = applied
-        if "sym_shape" in data:  # a pattern of its own (the Galerkin pencil's)
+        if "sym_shape" in data:  # a pattern of its own (the fitted rows', a Galerkin pencil's)
             sym = _matrix(data, "sym_", n, path.name)
         elif "sym_data" in data:
             sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)

@@ -317,6 +317,32 @@ class Checks:
         geo = meshlap.geometry.point_cloud_geometry(P)
         self._corrected("corrected_cloud", geo, None, meshlap.MeshLaplacian(geo))
 
+    def fitted_noisy(self):
+        """The fitted point-wise rows where the data are noisy (wide rows from subsets drawn by
+        global id), on a mesh and on a denoised cloud (rows at the input points): gathered L equal
+        to the single machine's, entry for entry."""
+        import meshlap
+        from meshlap import distributed
+
+        V, F = meshlap.shapes.sphere(3000, kind="random", seed=1)
+        W = V * (1 + 0.01 * np.random.default_rng(5).normal(size=(len(V), 1)))
+        rng = np.random.default_rng(3)
+        P = rng.standard_normal((3000, 3))
+        P /= np.linalg.norm(P, axis=1, keepdims=True)
+        P *= 1 + 0.03 * rng.normal(size=(len(P), 1))
+        geo = meshlap.geometry.point_cloud_geometry(P)
+        details = []
+        for name, args in (("mesh", (W, F)), ("cloud", (geo, None))):
+            A = distributed.laplacian(*args, comm=self.comm).to_scipy()
+            if self.rank == 0:
+                serial = meshlap.laplacian(*args) if name == "mesh" else meshlap.MeshLaplacian(geo)
+                choice = serial.pointwise_choice
+                assert choice is not None and choice.neighbors.max() > 96, (name, choice and choice.summary())
+                details.append(f"{name} {same_entries(A, serial.L)}")
+        if self.rank == 0:
+            assert "denoised" in geo.notes, geo.notes
+            self.report("fitted_noisy", "; ".join(details))
+
     # -- eigenpairs -----------------------------------------------------------------------
     def _eigs(self, name, V, F, h, k, **kw):
         import meshlap

@@ -59,10 +59,17 @@ def test_matrix_equals_serial_exactly(n):
 @pytest.mark.parametrize("n", [2, 3])
 def test_corrected_default_equals_serial(n):
     """The single machine's default (Richardson kernel, curvature-capped widths, arc distances,
-    mirror images, moment scale, point-wise rows) on n ranks: gathered matrices to 1e-12
+    mirror images, moment scale, fitted point-wise rows) on n ranks: gathered matrices to 1e-12
     relative, eigenvalues to 1e-10, for a mesh with boundary and a point cloud; and from scattered
     input (chunks of points, shares of the faces) by global reductions."""
     mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered")
+
+
+@needs_mpi
+def test_fitted_rows_on_noisy_input_equal_serial():
+    """The default's fitted rows on 2 ranks where the data are noisy (a mesh, a denoised cloud):
+    the single machine's rows entry for entry."""
+    mpirun(2, "fitted_noisy")
 
 
 @needs_mpi
@@ -167,7 +174,7 @@ def test_clear_errors():
     with pytest.raises(meshlap.MeshError, match="zero mass"):
         distributed.laplacian(V, mass=np.zeros(100), correction="none", h=0.01, comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="not built on many ranks"):
-        distributed.laplacian(V, F, comm=MPI.COMM_SELF, pointwise="fit")
+        distributed.laplacian(V, F, comm=MPI.COMM_SELF, pointwise_degree=4)
     with pytest.raises(meshlap.MeshError, match="partition"):
         distributed.laplacian(V, F, correction="none", h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
 

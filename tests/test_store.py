@@ -52,12 +52,15 @@ def test_every_kind_round_trips_bit_for_bit(kind, tmp_path):
 
 def test_default_operator_keeps_its_point_wise_rows(tmp_path):
     # op @ f applies the point-wise rows; the spectra use the symmetric pencil: both are saved,
-    # the second as values only, on the first one's sparsity pattern (the vertex pencil; a
-    # Galerkin one is saved with its own pattern)
-    op = meshlap.laplacian(V, F, quadrature="vertex")
+    # the moment rows' vertex pencil as values only on their sparsity pattern; the fitted rows'
+    # (the default) and a Galerkin pencil with patterns of their own
+    moments = meshlap.laplacian(V, F, pointwise=True, quadrature="vertex")
+    with np.load(io.save_operator(tmp_path / "moments", moments)) as data:
+        assert "sym_data" in data and "sym_indices" not in data
+    op = KINDS["default"]()
     path = io.save_operator(tmp_path / "op", op)
     with np.load(path) as data:
-        assert "sym_data" in data and "sym_indices" not in data
+        assert "sym_data" in data and "sym_indices" in data
     back = io.load_operator(path)
     f = V[:, 0] ** 2
     assert np.abs((back.L_sym - back.L) @ f).max() > 1e-3  # two different matrices

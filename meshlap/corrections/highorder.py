@@ -148,6 +148,18 @@ def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compi
             B[r, a] = vec[a, d - 1 - r]
 
 
+@jit(fastmath=True)
+def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
+    # the lower triangle of G = W Phiᵀ over the first m monomials (W = θ-weighted Phi): sums
+    # over contiguous rows, which the compiler vectorizes
+    for al in range(m):
+        for be in range(al + 1):
+            s = 0.0
+            for j in range(K):
+                s += W[al, j] * Phi[be, j]
+            G[al, be] = s
+
+
 @jit()
 def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
           degree, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
@@ -185,20 +197,22 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             rho2 = max(rho2, s2)
         rho = math.sqrt(rho2) if rho2 > 0.0 else 1.0
         U /= rho
-        # Vandermonde with two more degrees, for the probes of the error model
+        # Vandermonde with two more degrees, for the probes of the error model; stored by
+        # monomial (rows contiguous over the neighbours, for the sums over them)
         top = min(degree + 2, len(count) - 1)
         mb = count[top]
-        Phi = np.ones((K, mb))
-        for j in range(K):
-            for al in range(1, mb):
-                Phi[j, al] = Phi[j, parent[al]] * U[j, var[al]]
+        Phi = np.ones((mb, K))
+        for al in range(1, mb):
+            pa, va = parent[al], var[al]
+            for j in range(K):
+                Phi[al, j] = Phi[pa, j] * U[j, va]
         m = count[degree]
         G = np.zeros((m, m))
-        for j in range(K):
-            for al in range(m):
-                t = th[j] * Phi[j, al]
-                for be in range(al + 1):
-                    G[al, be] += t * Phi[j, be]
+        W = np.empty((m, K))
+        for al in range(m):
+            for j in range(K):
+                W[al, j] = th[j] * Phi[al, j]
+        _gram(W, Phi, m, K, G)
         floor = np.empty(m)  # a pivot must stay above this fraction of its diagonal entry
         for al in range(m):
             floor[al] = _PIVOT_TOL * G[al, al]
@@ -222,18 +236,20 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             for al in range(mq):
                 s = 0.0
                 for j in range(K):
-                    s += th[j] * Phi[j, al] * Z[j, c]
+                    s += W[al, j] * Z[j, c]
                 coef[al] = s
             chol_solve(G, coef, mq)
             for i in range(k):
                 ag[c, i] = coef[idx1[i]] / rho
                 for jj in range(k):
                     gh[c, i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
+            zr = Z[:, c].copy()
+            for al in range(mq):
+                ca = coef[al]
+                for j in range(K):
+                    zr[j] -= ca * Phi[al, j]
             for j in range(K):
-                s = Z[j, c]
-                for al in range(mq):
-                    s -= coef[al] * Phi[j, al]
-                res += th[j] * s * s
+                res += th[j] * zr[j] * zr[j]
         if not want_noise:
             resid[r] = math.sqrt(res / (max(nc, 1) * th.sum()))
         # E[Σθr²] = σ² (Σθ − Σ θ_j² Φ_j G⁻¹ Φ_jᵀ): the degrees of freedom the fit leaves
@@ -243,7 +259,7 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         for j in range(K_lev):
             lev = 0.0
             for i in range(mq):
-                s = Phi[j, i]
+                s = Phi[i, j]
                 for q2 in range(i):
                     s -= G[i, q2] * x[q2]
                 x[i] = s / G[i, i]
@@ -284,11 +300,13 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             lam[idx1[i]] -= vl / rho
         chol_solve(G, lam, mq)
         s2 = 0.0
+        acc = np.zeros(K)
+        for al in range(mq):
+            la = lam[al]
+            for j in range(K):
+                acc[j] += Phi[al, j] * la
         for j in range(K):
-            s = 0.0
-            for al in range(mq):
-                s += Phi[j, al] * lam[al]
-            s *= th[j]
+            s = acc[j] * th[j]
             out[a0 + j] = s
             s2 += s * s
         # the basis holds the constants, so the row sums to zero up to rounding: make it exact
@@ -308,13 +326,13 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             if qq > top:
                 bias[r, e] = np.nan
                 continue
-            acc = 0.0
+            pacc = 0.0
             for al in range(count[qq - 1], count[qq]):
                 s = 0.0
                 for j in range(K):
-                    s += out[a0 + j] * Phi[j, al]
-                acc += s * s
-            bias[r, e] = math.sqrt(acc) * rho ** qq
+                    s += out[a0 + j] * Phi[al, j]
+                pacc += s * s
+            bias[r, e] = math.sqrt(pacc) * rho ** qq
 
 
 @dataclass
@@ -491,8 +509,11 @@ def _rows_matrix(n: int, centers: np.ndarray, indptr: np.ndarray, indices: np.nd
         take = np.concatenate([np.arange(indptr[r], indptr[r + 1]) for r in order]) if len(order) else \
             np.zeros(0, dtype=np.int64)
         idx, dat = indices[take], data[take]
-    # no sort: rows keep their neighbours' order (a repeated neighbour still sums in L @ f)
-    return sp.csr_matrix((dat, idx, full), shape=(n, n))
+    # no sort: rows keep their neighbours' order (a repeated neighbour still sums in L @ f);
+    # the arrays are consistent by construction, so scipy need not check or copy them
+    L = sp.csr_matrix((n, n))
+    L.data, L.indices, L.indptr = dat, idx, full
+    return L
 
 
 def mean_curvature_normal(L: Any, P: Any) -> np.ndarray:

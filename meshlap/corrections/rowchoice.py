@@ -23,14 +23,29 @@ The predicted relative error of a candidate, for a function that varies on the s
 
 with β = 0.1 and γ = 0.6 measured on spheres (the prediction is within a factor of about
 two of the error of x² and eˣ from 2,000 to 16,000 points, 0 to 1% noise). Each point takes
-the candidate of least E; the ladder of widths grows (×2.5 in K) only at the points whose
-noise term still dominates. The widest rungs hold the paper's width and more, so a noisy
-input gets rows at least as wide as the heat-kernel operator's at h = (2ē)².
+the candidate of least E; the ladder of widths grows (×4 in K, up to 1,000 neighbours) only at
+the points whose noise term still dominates. The widest rungs hold the paper's width and more,
+so a noisy input gets rows at least as wide as the heat-kernel operator's at h = (2ē)².
+
+The noise term assumes f sampled at the noisy points (its noise σ|∇f|). A smooth f on a
+noisy surface (the paper's Table 4: f of the clean sphere at the noisy vertices) has none, and
+there the least-error row, often degree 2 and wide, errs by its bias. So each point takes,
+among the candidates within :data:`ROBUST` (2×) of the least predicted error, the one of least
+bias: on Table 4's 8,000-vertex sphere E2 0.025 → 0.0097 (the paper's operator 0.015), at
+most 2× the predicted error where f is noisy.
+
+A wide rung holds at most :data:`SAMPLE` points, drawn from a random subset of the cloud
+whose nearest points span the rung's width (:class:`_Spread`): the bias of a row is set by
+its width, its noise factor falls only as the square root of the points it holds, so on
+16,000 noisy sphere points 96 points spread over the width of 1,000 lose 10-40% of the
+accuracy of all 1,000 at a sixth of the cost (build and ``op @ f``).
 """
 
 from __future__ import annotations
 
 import math
+import os
+import sys
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -43,7 +58,7 @@ from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
 from .highorder import RowFit, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
-__all__ = ["RowChoice", "choose_rows", "predicted_error"]
+__all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
 
 #: Weight of the probes (bias) and of the noise factor in the predicted error.
 BETA, GAMMA = 0.1, 0.6
@@ -55,7 +70,11 @@ _K_NOISE, _K_CURVATURE = 64, 200
 # noise/spacing above which the scale is taken from the wider curvature fit
 _NOISY = 1e-3
 # The ladder of wide stencils: K grows by this factor up to max_neighbors
-_LADDER = 2.5
+_LADDER = 4.0
+#: Most points a row holds; wider stencils take them from a subset of the points
+SAMPLE = 96
+#: A candidate within this factor of the least predicted error may win by a lower bias
+ROBUST = 2.0
 
 
 @dataclass
@@ -142,8 +161,83 @@ def _nearest(tree: cKDTree, P: np.ndarray, K: int, centers: np.ndarray) -> tuple
     return np.asarray(idx, dtype=np.int64).reshape(len(centers), K), np.asarray(dist).reshape(len(centers), K)
 
 
+class _Spread:
+    """Neighbourhoods as wide as the K nearest points, held by at most ``sample`` of them.
+
+    A wide row averages noise; its bias is set by its width, its noise factor by the number
+    of points it holds, which falls only as the square root. So beyond ``sample`` neighbours
+    a stencil takes its points from a random subset of the cloud, n·sample/K of its points
+    (nested subsets, one fixed permutation), whose ``sample`` nearest reach as far as the K
+    nearest of the whole cloud; the centre is always among them. The cost of a row then
+    stays that of ``sample`` neighbours however wide it is.
+    """
+
+    def __init__(self, P: np.ndarray, tree: cKDTree, sample: int, ids: np.ndarray | None = None,
+                 n: int | None = None) -> None:
+        # ids, n: the points' global ids among n in all (one rank's share of them), so that
+        # every rank draws the same subsets
+        self.P, self.tree, self.sample = P, tree, sample
+        self.n = len(P) if n is None else int(n)
+        order = np.random.default_rng(0).permutation(self.n)
+        rank = np.empty(self.n, dtype=np.int64)
+        rank[order] = np.arange(self.n)
+        self.rank = rank if ids is None else rank[ids]  # each point's place in the permutation
+        self.trees: dict[int, tuple[np.ndarray, cKDTree]] = {}
+
+    def __call__(self, K: int, centers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+        n, S = self.n, self.sample
+        if K <= 1.25 * S or n <= 2 * S:
+            K = min(K, len(self.P))
+            idx, dist = _nearest(self.tree, self.P, K, centers)
+            return idx, dist, K
+        m = max(S + 1, int(math.ceil(n * S / K)))
+        if m not in self.trees:
+            sub = np.flatnonzero(self.rank < m)
+            self.trees[m] = (sub, cKDTree(self.P[sub]))
+        sub, tree = self.trees[m]
+        S = min(S, len(sub))
+        dist, loc = tree.query(self.P[centers], k=S, workers=-1)
+        idx = sub[np.asarray(loc, dtype=np.int64).reshape(len(centers), S)]
+        dist = np.asarray(dist).reshape(len(centers), S)
+        inside = idx[:, 0] == centers  # the centre is in the subset: its own nearest
+        out_i = np.where(inside[:, None], idx, np.column_stack([centers, idx[:, :-1]]))
+        out_d = np.where(inside[:, None], dist, np.column_stack([np.zeros(len(centers)), dist[:, :-1]]))
+        return out_i, out_d, S
+
+
+def _assemble(n: int, pick: np.ndarray, local: list) -> sp.csr_matrix:
+    # the chosen rows gathered from their candidates' CSR arrays, without a sort through COO
+    counts = np.zeros(n, dtype=np.int64)
+    chosen = []
+    for i, (fit, _) in enumerate(local):
+        rows = np.flatnonzero(pick == i)
+        if len(rows):
+            M = fit.matrix
+            counts[rows] = M.indptr[rows + 1] - M.indptr[rows]
+            chosen.append((rows, M))
+    total = int(counts.sum())
+    # 32-bit indices where they fit (12 bytes an entry, as the kernel's rows)
+    index = np.int32 if max(n, total) < np.iinfo(np.int32).max else np.int64
+    indptr = np.zeros(n + 1, dtype=index)
+    np.cumsum(counts, out=indptr[1:])
+    data = np.empty(total)
+    indices = np.empty(total, dtype=index)
+    for rows, M in chosen:
+        K = counts[rows]
+        rep = np.repeat(np.arange(len(rows)), K)
+        within = np.arange(len(rep)) - np.repeat(np.cumsum(K) - K, K)
+        src = M.indptr[rows][rep] + within
+        dst = indptr[rows][rep] + within
+        data[dst] = M.data[src]
+        indices[dst] = M.indices[src]
+    L = sp.csr_matrix((n, n))  # consistent by construction: no check, no copy
+    L.data, L.indices, L.indptr = data, indices, indptr
+    return L
+
+
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
-                max_neighbors: int | None = None, noise: float | None = None
+                max_neighbors: int | None = None, noise: float | None = None,
+                sample: int = SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None
                 ) -> tuple[sp.csr_matrix, RowChoice]:
     """Point-wise Laplacian rows whose width and degree follow the data at every point.
 
@@ -159,9 +253,20 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         Highest degree tried (2 to 6); the compact candidates are the even degrees from 2 up
         to it and ``max_degree`` itself.
     max_neighbors : int, optional
-        Widest stencil of the ladder (default min(1000, n/4)).
+        Widest stencil of the ladder, in neighbours of the whole cloud (default
+        min(1000, n/4)).
     noise : float, optional
         Known normal noise level σ; default: estimated per point from the fits.
+    sample : int
+        Most points a row holds: a wider stencil takes them from a random subset of the
+        points (see :class:`_Spread`), so that noisy inputs cost little more than clean ones.
+    rows, ids, comm : optional
+        For one MPI rank's share (:mod:`meshlap.distributed`): ``rows`` the local points
+        whose rows are built (default all; the others are neighbours only, a halo wide
+        enough for the widest stencil), ``ids`` the global ids of all local points and
+        ``comm`` the communicator over which the global figures (spacing, noise median,
+        extent, number of points) are reduced, each point counted by the rank that owns it.
+        The rows are then those of the single machine.
 
     Returns
     -------
@@ -189,47 +294,66 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     count = monomials(k, max_degree)[1] if 1 <= k <= d else None
     if count is None:
         raise MeshError(f"k must be between 1 and the dimension {d}; got {k!r}")
+    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) or sample < int(count[-1]) + 2:
+        raise MeshError(f"sample must be an integer of at least {int(count[-1]) + 2}; got {sample!r}")
+    own = np.ones(n, dtype=bool) if rows is None else np.zeros(n, dtype=bool)
+    if rows is not None:
+        own[np.asarray(rows, dtype=np.int64)] = True
+    ids = None if ids is None else np.asarray(ids, dtype=np.int64)
+    total = n if comm is None else comm.allreduce(int(own.sum()))
     least = int(count[2]) + 2
-    if n < least:
-        raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {n}")
+    if total < least:
+        raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {total}")
     notes: list[str] = []
+    _tick("start")
     tree = cKDTree(P)
-    spacing_d, _ = tree.query(P, k=min(7, n), workers=-1)
-    spacing = float(np.asarray(spacing_d)[:, 1:].mean())
+    spread = _Spread(P, tree, int(sample), ids, total)
     everyone = np.arange(n)
     degrees = sorted({max_degree, *range(2, max_degree + 1, 2)}, reverse=True)
     cands: list[tuple[RowFit, int]] = []
     sig = np.full(n, np.inf)
     Ks = [min(n, int(round(_K_PER_MONOMIAL * count[q] + 4))) for q in degrees]
     Kn = min(n, _K_NOISE)
-    # one query serves every compact candidate: the K nearest are a prefix of the Kq nearest
-    idx_all, dist_all = _nearest(tree, P, max(Ks + [Kn]), everyone)
+    if comm is not None:  # a rank's share and its halo: as many neighbours as the whole would give
+        Ks, Kn = [min(total, K) for K in Ks], min(total, _K_NOISE)
+    # one query serves every compact candidate, the spacing and the neighbourhood medians:
+    # the K nearest are a prefix of the Kq nearest
+    idx_all, dist_all = _nearest(tree, P, max(Ks + [Kn, min(16, n)]), everyone)
+    spacing = _sum(comm, float(dist_all[own, 1:min(7, n)].mean(axis=1).sum())) / total
+    nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
+    _tick("queries")
     for q, K in zip(degrees, Ks, strict=True):
         fit = _candidate(P, idx_all[:, :K], dist_all[:, :K], q, _C_COMPACT, k, normals, everyone)
         cands.append((fit, K))
         sig = np.minimum(sig, fit.residual)
+        _tick(f"compact {q}")
     fit = _candidate(P, idx_all[:, :Kn], dist_all[:, :Kn], 2, _C_WIDE, k, normals, everyone)
     cands.append((fit, Kn))
     sig = np.minimum(sig, fit.residual)
+    _tick("noise fit")
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
     # are clean, on ~200 where noise would inflate the curvature of a small fit
     curv_fit = fit
-    if np.median(sig[np.isfinite(sig)]) > _NOISY * spacing if np.isfinite(sig).any() else False:
-        Kc = min(n, _K_CURVATURE, max(Kn, n // 10))
-        idx, dist = _nearest(tree, P, Kc, everyone)
+    own_sig = sig[own & np.isfinite(sig)]
+    typical = _median(comm, own_sig)
+    if typical is not None and typical > _NOISY * spacing:
+        Kc = min(total, _K_CURVATURE, max(Kn, total // 10))
+        idx, dist, _ = _Spread(P, tree, Kn, ids, total)(Kc, everyone)
         curv_fit = _candidate(P, idx, dist, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
+        _tick("curvature fit")
     # neighbourhood medians: one noisy fit does not decide a point's row
-    _, nb = tree.query(P, k=min(16, n), workers=-1)
-    nb = np.asarray(nb, dtype=np.int64).reshape(n, -1)
     finite = np.where(np.isfinite(sig), sig, np.nan)
-    if np.isnan(finite).all():
+    if typical is None:
         sig = np.zeros(n)
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     else:
-        sig = np.nan_to_num(np.nanmedian(finite[nb], axis=1), nan=float(np.nanmedian(finite)))
+        with warnings.catch_warnings():  # an all-NaN neighbourhood takes the typical level
+            warnings.simplefilter("ignore", RuntimeWarning)
+            sig = np.nan_to_num(np.nanmedian(finite[nb], axis=1), nan=typical)
     if noise is not None:
         sig = np.full(n, float(noise))
-    diameter = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+    lo, hi = _bounds(comm, P[own])
+    diameter = float(np.linalg.norm(hi - lo))
     kappa = np.median(curv_fit.curvature[nb], axis=1) if k < d else np.zeros(n)
     scale = np.minimum(1.0 / np.maximum(kappa, 1e-300), diameter)
     scale = np.maximum(scale, 4.0 * spacing)
@@ -237,14 +361,18 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     best = np.full(n, np.inf)
     pick = np.full(n, -1)
     dominated = np.zeros(n, dtype=bool)  # the chosen row's error is mostly noise
-    local = []  # (fit, K, rows the fit covers as positions in everyone)
+    local = []  # (fit, K) of every candidate, in the order pick refers to
+    scores = []  # (rows, predicted error, its bias part) of every candidate
+    widths = np.zeros(n, dtype=np.int64)  # neighbours of the whole cloud the chosen row spans
 
     def consider(fit: RowFit, K: int) -> np.ndarray:
         rows = fit.centers
         err = predicted_error(fit, sig[rows], scale[rows])
+        scores.append((rows, err, predicted_error(fit, np.zeros(len(rows)), scale[rows])))
         better = err < best[rows]
         best[rows[better]] = err[better]
         pick[rows[better]] = len(local)
+        widths[rows[better]] = K
         local.append((fit, K))
         noisy = GAMMA * sig[rows] * scale[rows] * fit.amplification > 0.5 * err
         dominated[rows[better]] = noisy[better]
@@ -252,22 +380,36 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
 
     for fit, K in cands:
         consider(fit, K)
-    Kmax = min(n, max_neighbors or min(1000, n // 4))
+    _tick("compare")
+    Kmax = min(total, max_neighbors or min(1000, total // 4))
     K = Kn
-    active = np.flatnonzero(dominated)
+    pick[~own] = -1  # the halo's rows are not built here
+    active = np.flatnonzero(dominated & own)
     while len(active) and K < Kmax:
         K = min(Kmax, int(round(K * _LADDER)))
         grown = []
-        idx, dist = _nearest(tree, P, K, active)
+        idx, dist, _ = spread(K, active)
         for q in (2, 4) if max_degree >= 4 else (2,):
             fit = _candidate(P, idx, dist, q, _C_WIDE, k, normals, active, noise_dof=False)
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
-    capped = len(active) and Kmax < n
+        _tick(f"rung {K}")
+    # robust to clean f on a noisy surface: among the candidates within ROBUST of the least
+    # predicted error, the one of least bias (the noise term assumes f sampled at the noisy
+    # points; a smooth f there is served by the lower bias)
+    least_bias = np.full(n, np.inf)
+    least = best.copy()
+    for i, (rows, err, bias) in enumerate(scores):
+        ok = (err <= ROBUST * least[rows]) & (bias < least_bias[rows]) & (pick[rows] >= 0)
+        least_bias[rows[ok]] = bias[ok]
+        pick[rows[ok]] = i
+        widths[rows[ok]] = local[i][1]
+        best[rows[ok]] = err[ok]
+    capped = len(active) and Kmax < total
     if capped:
         notes.append(f"{len(active)} points would take rows wider than {Kmax} neighbours: the noise is "
                      "more than the widest stencil averages out; pass max_neighbors or a fixed h")
-    failed = pick < 0
+    failed = (pick < 0) & own
     if failed.any():
         notes.append(f"{int(failed.sum())} points have no row of degree >= 2 (degenerate neighbourhoods)")
     # reaching the widest rung is reported (RowChoice.notes), not warned: the rows are then
@@ -277,20 +419,88 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
             warnings.warn(f"choose_rows: {note}", MeshWarning, stacklevel=2)
 
     degree = np.full(n, -1)
-    neighbors = np.zeros(n, dtype=np.int64)
     hv = np.zeros(n)
-    blocks = []
-    for i, (fit, K) in enumerate(local):
+    for i, (fit, _) in enumerate(local):
         rows = np.flatnonzero(pick == i)
-        if not len(rows):
-            continue
-        pos = np.searchsorted(fit.centers, rows)
-        degree[rows] = fit.degree[pos]
-        neighbors[rows] = K
-        hv[rows] = fit.h[pos]
-        blocks.append(fit.matrix[rows].tocoo())
-        blocks[-1].row = rows[blocks[-1].row]
-    L = sp.coo_matrix((np.concatenate([b.data for b in blocks]),
-                       (np.concatenate([b.row for b in blocks]), np.concatenate([b.col for b in blocks]))),
-                      shape=(n, n)).tocsr() if blocks else sp.csr_matrix((n, n))
-    return L, RowChoice(degree, neighbors, hv, sig, scale, best, spacing, notes)
+        if len(rows):
+            pos = np.searchsorted(fit.centers, rows)
+            degree[rows] = fit.degree[pos]
+            hv[rows] = fit.h[pos]
+    L = _assemble(n, pick, local)
+    _tick("assemble")
+    return L, RowChoice(degree, widths, hv, sig, scale, best, spacing, notes)
+
+
+def wider_rows(P: Any, choice: RowChoice, *, k: int = 2, normals: Any = None, factor: float = 2.0
+               ) -> sp.csr_matrix:
+    """The rows of ``choice`` again, each of its degree on ``factor`` times its neighbours and
+    width h: the second operator of :meth:`meshlap.MeshLaplacian.error_estimate`.
+
+    A row of degree q errs as ρ^{q−1} on clean data (ρ its radius, measured orders 1.0, 3.0,
+    5.1 for q = 2, 4, 6), so its error is about |L f − L' f| / (factor^{(q−1)/2} − 1); where
+    noise dominates, the wider row averages more of it and the difference is the noise.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> P = meshlap.shapes.fibonacci_sphere(2000)
+    >>> L, choice = choose_rows(P)
+    >>> W = wider_rows(P, choice)
+    >>> x = P[:, 0]
+    >>> bool(np.abs(W @ x**2 - (2 - 6 * x**2)).max() < 1e-3)
+    True
+    """
+    P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
+    n = len(P)
+    tree = cKDTree(P)
+    spread = _Spread(P, tree, SAMPLE)
+    out = sp.csr_matrix((n, n))
+    ok = choice.degree >= 2
+    for q, K in sorted(set(zip(choice.degree[ok].tolist(), choice.neighbors[ok].tolist(), strict=True))):
+        centers = np.flatnonzero(ok & (choice.degree == q) & (choice.neighbors == K))
+        idx, _, Kw = spread(int(round(factor * K)), centers)
+        indptr = np.arange(len(centers) + 1, dtype=np.int64) * Kw
+        out = out + pointwise_rows(P, indptr, idx.ravel(), factor * choice.h[centers], q, k=k,
+                                   normals=normals, centers=centers)
+    return sp.csr_matrix(out)
+
+
+def _sum(comm: Any, x: float) -> float:
+    return x if comm is None else float(comm.allreduce(x))
+
+
+def _median(comm: Any, values: np.ndarray) -> float | None:
+    # the median over every rank's values (None when there are none)
+    if comm is not None:
+        values = np.concatenate(comm.allgather(np.asarray(values, dtype=np.float64)))
+    return float(np.median(values)) if len(values) else None
+
+
+def _bounds(comm: Any, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d = P.shape[1]
+    lo = P.min(axis=0) if len(P) else np.full(d, np.inf)
+    hi = P.max(axis=0) if len(P) else np.full(d, -np.inf)
+    if comm is not None:
+        from mpi4py import MPI
+
+        glo, ghi = np.empty(d), np.empty(d)
+        comm.Allreduce(np.ascontiguousarray(lo, dtype=np.float64), glo, op=MPI.MIN)
+        comm.Allreduce(np.ascontiguousarray(hi, dtype=np.float64), ghi, op=MPI.MAX)
+        lo, hi = glo, ghi
+    return lo, hi
+
+
+_T0 = [0.0]
+
+
+def _tick(what: str) -> None:
+    # stage timer for profiling (MESHLAP_ROWCHOICE_TIMES=1 prints CPU and wall seconds)
+    if not os.environ.get("MESHLAP_ROWCHOICE_TIMES"):
+        return
+    import time
+
+    now = (time.perf_counter(), time.process_time())
+    if what != "start":
+        print(f"  rowchoice {what:14s} wall {now[0] - _T0[0]:6.2f}  cpu {now[1] - _T0[1]:6.2f}",
+              file=sys.stderr)
+    _T0[:] = [now[0], now[1]]

@@ -44,26 +44,34 @@ class PointAttributes:
     dog: bool
     arc: bool
     neumann: bool
-    pointwise: bool
+    pointwise: bool | str
     check_psd: bool
     tol: float
+    points_dim: int = 0  # the geometry's own dimension d (0: 3)
+
+    raw: bool = False  # d more columns: a denoised cloud's input points, where f was sampled
 
     @property
     def d(self) -> int:
-        return (self.table.shape[1] - 2) // 3
+        return (self.table.shape[1] - 2) // (4 if self.raw else 3)
 
     def columns(self, T: np.ndarray) -> tuple[np.ndarray, ...]:
         """(h, band, normals, b, ν) of a table with these columns (this one's rows or a halo's)."""
         d = self.d
         return (np.ascontiguousarray(T[:, 0]), T[:, 1] > 0, np.ascontiguousarray(T[:, 2:2 + d]),
-                np.ascontiguousarray(T[:, 2 + d:2 + 2 * d]), np.ascontiguousarray(T[:, 2 + 2 * d:]))
+                np.ascontiguousarray(T[:, 2 + d:2 + 2 * d]), np.ascontiguousarray(T[:, 2 + 2 * d:2 + 3 * d]))
+
+    def fit_points(self, T: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """Where the fitted rows fit f: the input points of a denoised cloud, else P."""
+        d = self.d
+        return np.ascontiguousarray(T[:, 2 + 3 * d:2 + 4 * d]) if self.raw else P
 
 
 def check_supported(opts: Options) -> None:
-    """The options the ranks build: the fitted point-wise rows are single-machine only so far."""
-    if opts.pointwise == "fit" or opts.pointwise_degree is not None:
-        raise MeshError("pointwise='fit' and pointwise_degree are not built on many ranks yet: use the "
-                        "default point-wise rows (pointwise=True) or meshlap.laplacian on one machine")
+    """The options the ranks build: every one but rows of a fixed degree on the kernel's stencil."""
+    if opts.pointwise_degree is not None:
+        raise MeshError("pointwise_degree is not built on many ranks yet: use the default point-wise rows "
+                        "(the fitted rows, or pointwise=True) or meshlap.laplacian on one machine")
 
 
 def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
@@ -84,8 +92,11 @@ def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
         T[band, 2 + 2 * d:2 + 2 * d + d0] = nu
     if opts.arc_distance:
         T[:, 2:2 + d0] = geo.normals()
+    raw = geo._cache.get("input_points") if opts.pointwise == "fit" else None
+    if raw is not None:
+        T = np.column_stack([T, assembly.pad3(raw)])
     return PointAttributes(T, geo.dim, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
-                           opts.check_psd, opts.tol)
+                           opts.check_psd, opts.tol, d0, raw is not None)
 
 
 def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) -> sp.csr_matrix:
@@ -100,14 +111,22 @@ def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) 
 
 
 def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: int, g, rows: np.ndarray,
-               attrs: PointAttributes, report: Callable[[float, str], None] | None = None,
+               attrs: PointAttributes, ids: np.ndarray | None = None,
+               report: Callable[[float, str], None] | None = None,
                ) -> tuple[sp.csr_matrix, sp.csr_matrix, dict]:
     """The own rows (local indices < n_own) of L_sym and of the point-wise L over the local
     points P (own, then halo) with their attribute ``table`` (collective: reductions).
 
+    The fitted point-wise rows (the default) come from
+    :func:`meshlap.corrections.rowchoice.choose_rows` on the local points, the halo serving as
+    the neighbours of the own rows, with the global figures reduced over the ranks and the
+    subsets of its wide stencils drawn by global id (``ids``): the single machine's rows,
+    wherever the halo (the kernel's cut-off radius) holds the widest stencil.
+
     Returns CSR matrices over all local points (rows beyond n_own empty) and a dict with the
-    correction in effect, the moment scale, the PSD margin and the fallback reason.
-    ``report(fraction, stage)`` is called at each stage's start (the same on every rank).
+    correction in effect, the moment scale, the PSD margin, the fallback reason and the
+    fitted rows' choice. ``report(fraction, stage)`` is called at each stage's start (the same
+    on every rank).
     """
     from mpi4py import MPI
 
@@ -118,7 +137,7 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
     hv, band, normals, b, nu = attrs.columns(table)
     frames = (np.flatnonzero(band), b[band], nu[band]) if band.any() else None
     info: dict = {"correction": "richardson" if attrs.dog else "none", "moment_scale": 1.0,
-                  "psd_margin": None, "fallback_reason": None}
+                  "psd_margin": None, "fallback_reason": None, "pointwise_choice": None}
 
     def stage(dog: bool) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         free = _rows_csr(P, mass, g, rows, hv, attrs, normals, dog)
@@ -155,6 +174,12 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
     Lp = L
     if attrs.pointwise:
         tell(0.9, "point-wise rows")
+    if attrs.pointwise == "fit":
+        d0 = attrs.points_dim or P.shape[1]  # the ranks pad lower dimensions with zeros
+        Lp, info["pointwise_choice"] = corrections.rowchoice.choose_rows(
+            np.ascontiguousarray(attrs.fit_points(table, P)[:, :d0]), k=attrs.dim, rows=np.arange(n_own),
+            ids=ids, comm=comm)
+    elif attrs.pointwise:
         Lp, _ = corrections.moment_correction(free, P, attrs.dim)
     return L, Lp, info
 

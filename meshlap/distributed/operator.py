@@ -104,6 +104,7 @@ class DistributedLaplacian:
         self.correction = "none" if attrs is None or not attrs.dog else "richardson"
         self.fallback_reason: str | None = None
         self.moment_scale = 1.0
+        self.pointwise_choice = None  # the fitted point-wise rows' choice on this rank's own rows
         # the halo reaches as far as the widest pair: the largest width sets the radius
         widest = h if table is None or not len(table) else float(table[:, 0].max())
         widest = comm.allreduce(widest, op=MPI.MAX)
@@ -258,12 +259,12 @@ class DistributedLaplacian:
         MPI, PETSc = _mpi()
         N, n = self.n_vertices, self.n_local
         L_sym, L_pw, info = local_rows(self.comm, self._Vloc, self._mloc, self._Tloc, n, self._grid,
-                                       self._rows, self.attrs, report=lambda f, s: tell(0.3 + 0.6 * f, s))
+                                       self._rows, self.attrs, self._uloc,
+                                       report=lambda f, s: tell(0.3 + 0.6 * f, s))
         tell(0.9, "PETSc matrices")
-        self.correction = info["correction"]
-        self.fallback_reason = info["fallback_reason"]
-        self.moment_scale = info["moment_scale"]
-        self.psd_margin = info["psd_margin"]
+        # the facts of the build; pointwise_choice: this rank's rows
+        for key in ("pointwise_choice", "correction", "fallback_reason", "moment_scale", "psd_margin"):
+            setattr(self, key, info[key])
         mats = []
         for A in (L_sym, L_pw) if L_pw is not L_sym else (L_sym,):
             indptr = A.indptr[: n + 1].astype(PETSc.IntType)

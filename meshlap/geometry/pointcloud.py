@@ -361,6 +361,7 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         denoise = ratio > NOISY
         if denoise:
             notes = f"denoised: normal noise {ratio:.3g} of the squared spacing"
+    raw = P
     if denoise:
         P = project_to_tangent(P, k, kwargs.get("neighbors"))
         pca = None  # the points moved: their frames are computed anew when asked for
@@ -370,4 +371,6 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
                    source="point cloud", notes=notes)
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
+    if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
+        geo._cache["input_points"] = raw
     return geo
