@@ -3,10 +3,9 @@
 Belkin, Sun and Wang, "Discrete Laplace operator on meshed surfaces", SoCG 2008, eq. (1),
 distributed: every rank owns a spatial share of the points, builds its own rows with the
 compiled kernel of :mod:`meshlap.assembly` from its points plus a halo of width
-r = sqrt(4h ln(1/tol)), and hands them to PETSc (petsc4py) as an MPIAIJ matrix, or keeps
-only its points and recomputes the rows in every product (a PETSc shell matrix). Solves go
-through PETSc (KSP) and SLEPc. See ``docs/distributed.md`` for the design and the measured
-figures that decide scaling.
+r = sqrt(4h ln(1/tol)), and hands them to PETSc (petsc4py) as an MPIAIJ matrix, or keeps only
+its points and recomputes the rows in every product (a PETSc shell matrix). Solves go through
+PETSc (KSP) and SLEPc; ``docs/distributed.md`` has the design and the measured scaling.
 
 The data flow, in order:
 
