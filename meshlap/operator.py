@@ -232,7 +232,7 @@ class MeshLaplacian(LumpedLaplacian):
         #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
         #: the paper's operator): :class:`meshlap.resolution.Resolution`.
         self.resolution = resolution.assess(self.geometry, self.widths, self._built.correction,
-                                            self._built.quadrature)
+                                            self._built.galerkin_regime)
         if self.resolution is not None and self.resolution.too_coarse:
             warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None

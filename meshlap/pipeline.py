@@ -151,6 +151,7 @@ class Built:
     pointwise_choice: Any = None  # the per-point width and degree of pointwise="fit" rows
     quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
     quadrature_h: float | None = None  # the Galerkin pencil's width
+    galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -191,7 +192,10 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     # the symmetric pencil from the kernel integrated over the cells, where asked for or where
     # the automatic choice measures it ahead; op.L keeps the vertex rows
     gal = corrections.galerkin
-    if opts.quadrature == "vertex" or (opts.quadrature is None and not (widths.h_auto and gal.wins(geo))):
+    if opts.quadrature == "vertex" or (opts.quadrature is None and not widths.h_auto):
+        return
+    regime = gal.wins(geo)  # where it was measured ahead; the resolution report reads it too
+    if opts.quadrature is None and not regime:
         return
     if report is not None:
         report(0.95, "Galerkin pencil")
@@ -215,7 +219,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
                               f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning, stacklevel=4)
             return  # the vertex pencil stays
         out.psd_margin = margin
-    out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
+    out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
     if not opts.pointwise:
         out.L = L
 

@@ -33,7 +33,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .corrections import galerkin
 from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
@@ -254,13 +253,13 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
 
 
-def assess(geo: Geometry, widths: Any, correction: str, quadrature: str = "vertex") -> Resolution | None:
+def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False) -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
-    With the Galerkin pencil (``quadrature="galerkin"``) on an input inside the regime where it
-    was measured (:func:`meshlap.corrections.galerkin.wins`), the prediction is
-    :data:`GALERKIN_FEM_RATIO` times linear FEM's; outside it, the vertex pencil's model.
+    ``galerkin_regime``: the Galerkin pencil is in effect on an input inside the regime where it
+    was measured (:func:`meshlap.corrections.galerkin.wins`); the prediction is then
+    :data:`GALERKIN_FEM_RATIO` times linear FEM's, else the vertex pencil's model.
 
     Examples
     --------
@@ -307,7 +306,7 @@ def assess(geo: Geometry, widths: Any, correction: str, quadrature: str = "verte
                      crease, 0.0, None, "", None, "")
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
-    if quadrature == "galerkin" and fem is not None and galerkin.wins(geo):
+    if galerkin_regime and fem is not None:
         terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"

@@ -27,10 +27,9 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 from pykdtree.kdtree import KDTree
 
-from .._jit import jit
+from .._jit import in_blocks, jit
 from ..assembly import Kernel, assemble, cutoff_radius
 from ..assembly.variable import dog_factor
 from ..errors import MeshError
@@ -67,12 +66,14 @@ RULES = {1: (0.5 + 0.5 / np.sqrt(3.0), 0.5 - 0.5 / np.sqrt(3.0)),
          3: (0.5854101966249685, 0.1381966011250105)}
 
 
-@jit(parallel=True)
-def _unfold_rows(indptr, indices, data, X, N, W, near, h, dogc, norm, cos_crease):  # pragma: no cover
+@jit()
+def _unfold_rows(start, stop, indptr, indices, data, X, N, W, near, h, dogc, norm,
+                 cos_crease):  # pragma: no cover
     # pairs near a crease whose cells' normals differ by more than the crease angle: the
     # kernel of the distance along the two planes unfolded about their line of intersection
-    n = len(indptr) - 1
-    for q in prange(n):
+    z0 = np.empty(3)  # a point of the line, and its direction: scratch of this block
+    u = np.empty(3)
+    for q in range(start, stop):
         if not near[q]:
             continue
         diag = -1
@@ -92,12 +93,10 @@ def _unfold_rows(indptr, indices, data, X, N, W, near, h, dogc, norm, cos_crease
                     d1 = N[q, 0] * X[q, 0] + N[q, 1] * X[q, 1] + N[q, 2] * X[q, 2]
                     d2 = N[r, 0] * X[r, 0] + N[r, 1] * X[r, 1] + N[r, 2] * X[r, 2]
                     # z0 on the line: d1 (n_r × u) + d2 (u × n_q), over |u|²
-                    z0 = np.empty(3)
                     z0[0] = (d1 * (N[r, 1] * uz - N[r, 2] * uy) + d2 * (uy * N[q, 2] - uz * N[q, 1])) / uu
                     z0[1] = (d1 * (N[r, 2] * ux - N[r, 0] * uz) + d2 * (uz * N[q, 0] - ux * N[q, 2])) / uu
                     z0[2] = (d1 * (N[r, 0] * uy - N[r, 1] * ux) + d2 * (ux * N[q, 1] - uy * N[q, 0])) / uu
                     inv = 1.0 / math.sqrt(uu)
-                    u = np.empty(3)
                     u[0], u[1], u[2] = ux * inv, uy * inv, uz * inv
                     sq = 0.0
                     sr = 0.0
@@ -132,8 +131,9 @@ def _unfold(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, W:
     near = np.isfinite(dist)
     Lq = sp.csr_matrix(Lq, dtype=np.float64, copy=True)
     norm = 1.0 / (h * (4.0 * math.pi * h) ** (0.5 * dim))
-    _unfold_rows(Lq.indptr, Lq.indices, Lq.data, np.ascontiguousarray(X, dtype=np.float64), N, W, near,
-                 float(h), dog_factor(dim) if dog else 0.0, norm, math.cos(math.radians(CREASE_ANGLE)))
+    in_blocks(_unfold_rows, len(Lq.indptr) - 1, Lq.indptr, Lq.indices, Lq.data,
+              np.ascontiguousarray(X, dtype=np.float64), N, W, near, float(h),
+              dog_factor(dim) if dog else 0.0, norm, math.cos(math.radians(CREASE_ANGLE)))
     return Lq
 
 
