@@ -247,8 +247,8 @@ def test_error_estimate_follows_the_exact_error():
         op = meshlap.laplacian(V, F)
         for name, (f, lap) in funcs.items():
             err = np.linalg.norm(op @ f(V) - lap(V))
-            if err < 1e-9 * np.linalg.norm(lap(V)):
-                continue  # x² on the plane is exact
+            if err < 1e-8 * np.linalg.norm(lap(V)):
+                continue  # x² on the plane is exact: what is left is rounding (measured 1.3e-9)
             ratio = np.linalg.norm(op.error_estimate(f(V))) / err
             assert 0.3 < ratio < 3, (name, ratio)
     # the paper's operator: its O(h) bias, estimated from h and h/2
