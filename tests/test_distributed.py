@@ -137,7 +137,7 @@ def test_lobpcg_clear_errors():
 @needs_mpi
 @pytest.mark.slow
 def test_eigenpairs_sphere_and_bunny():
-    """First 20 eigenvalues of a 16,000-vertex sphere and of the bunny (1,113 zero-mass
+    """First 20 eigenvalues of an 8,000-vertex sphere and of the bunny (1,113 zero-mass
     vertices) to 1e-8 relative of spectral.eigs, on 2 ranks; both matrices bit for bit."""
     mpirun(2, "eigs_sphere", "eigs_bunny")
 

@@ -223,10 +223,11 @@ def test_flat_torus_in_r4():
 @pytest.mark.slow
 def test_three_sphere_cloud_within_two_percent():
     # the target for S³ ⊂ R⁴ (k = 3): eigenvalue 3 (×4) within 2%; at 16,000 points
-    # the coarse 3-D spacing leaves it 2.0% low, at 32,000 points 1.3% (benchmarks/RESULTS.md)
-    P = samples.three_sphere_points(32000, seed=0)
-    op = meshlap.point_cloud_laplacian(P, h=0.006, k=3, correction="none")
-    lam = spectral.eigs(op, 6, tol=1e-5)[0]
+    # the coarse 3-D spacing leaves it 2.0% low, at 24,000 points (h = 0.007) 1.6%, at 32,000
+    # 1.3% (benchmarks/RESULTS.md); eigenvalues to 1e-3 are enough to tell 2%
+    P = samples.three_sphere_points(24000, seed=0)
+    op = meshlap.point_cloud_laplacian(P, h=0.007, k=3, correction="none")
+    lam = spectral.eigs(op, 5, tol=1e-3)[0]
     assert np.abs(lam[1:5] / 3 - 1).max() < 0.02
 
 
