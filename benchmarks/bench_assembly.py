@@ -196,8 +196,8 @@ def table(rows: list[dict], mem: dict) -> list[str]:
 
 def default_vs_paper(n: int = 16000, repeat: int = 3) -> dict:
     """The default build against the paper's operator at the same h on a random n-vertex
-    sphere, best of ``repeat`` each (wall and CPU), with the default's stages timed through
-    its progress callback."""
+    sphere, best of ``repeat`` each by CPU time (wall beside it), with the default's stages
+    (wall and CPU seconds) timed through its progress callback."""
     import meshlap
 
     V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
@@ -210,15 +210,18 @@ def default_vs_paper(n: int = 16000, repeat: int = 3) -> dict:
             marks = []
 
             def note(fraction, stage, marks=marks):
-                marks.append((stage, time.perf_counter()))
+                marks.append((stage, time.perf_counter(), time.process_time()))
 
             t, c = time.perf_counter(), time.process_time()
             op = meshlap.laplacian(V, F, progress=note, **kw)
             wall, cpu = time.perf_counter() - t, time.process_time() - c
-            if best is None or wall < best[0]:
-                stages = {}
-                for (stage, a), (_, b) in zip(marks, marks[1:] + [("end", t + wall)], strict=True):
-                    stages[stage] = stages.get(stage, 0.0) + b - a
+            # the CPU ratio is the steadier figure on a shared machine: the best run by CPU
+            if best is None or cpu < best[1]:
+                stages = {}  # stage: (wall, CPU) seconds, from its mark to the next
+                ends = marks[1:] + [("end", t + wall, c + cpu)]
+                for (stage, a, ca), (_, b, cb) in zip(marks, ends, strict=True):
+                    w0, c0 = stages.get(stage, (0.0, 0.0))
+                    stages[stage] = (w0 + b - a, c0 + cb - ca)
                 best = (wall, cpu, stages, op.nnz)
         out[name] = best
     return out
@@ -316,7 +319,7 @@ def main() -> None:
 
 def write_default_vs_paper(r: dict, no_write: bool) -> None:
     (pw, pc, _, pnnz), (dw, dc, stages, dnnz) = r["paper"], r["default"]
-    parts = ", ".join(f"{k} {v:.3f} s" for k, v in stages.items() if k != "done")
+    parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in stages.items() if k != "done")
     print(f"random sphere {r['n']:,}, h = {r['h']:.4g}: paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
           f"default {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}); default / paper {dw / pw:.2f}x wall, "
           f"{dc / pc:.2f}x CPU; stages: {parts}", flush=True)
@@ -328,15 +331,15 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         "",
         f"`meshlap.shapes.sphere({r['n']}, kind='random', seed=0)`; the default `meshlap.laplacian(V, F)` "
         f"(h = {r['h']:.4g}) against the paper's `meshlap.laplacian(V, F, h=h, correction='none')`, "
-        "best of 3 each after a warm-up, in the same process; the default's stages timed by its "
-        "progress callback.",
+        "best of 3 each (by CPU time) after a warm-up, in the same process; the default's stages "
+        "timed by its progress callback.",
         "",
         "| build | time (CPU) | entries | / paper's, wall | / paper's, CPU |",
         "|---|---|---|---|---|",
         f"| paper's operator | {pw:.3f} s ({pc:.2f} s) | {pnnz:,} | 1.00× | 1.00× |",
         f"| default | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} | **{dw / pw:.2f}×** | {dc / pc:.2f}× |",
         "",
-        f"The default's stages (wall): {parts}.",
+        f"The default's stages, wall (CPU): {parts}.",
     ])
 
 

@@ -177,6 +177,11 @@ def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options
         if L.dtype != opts.dtype:
             L.data = L.data.astype(opts.dtype)
         return L, None, choice
+    # the rows below share free's index arrays: canonical first, or scipy's in-place sort of
+    # one matrix would reorder the other's columns under its values
+    if not free.has_sorted_indices:
+        assembly.variable.sort_rows(free.indptr, free.indices, free.data)
+        free.has_sorted_indices = True
     if opts.pointwise_degree is not None:
         L = corrections.highorder.pointwise_rows(geo.points, free.indptr, free.indices, hv,
                                                  opts.pointwise_degree, k=geo.dim)

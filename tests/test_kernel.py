@@ -183,3 +183,23 @@ def test_peak_memory_of_a_build():
     mesh = V.nbytes + F.nbytes
     assert op.nbytes > 20 * mesh  # the matrix dominates: the bound below is meaningful
     assert peak < 1.3 * op.nbytes + 4 * mesh
+
+
+def test_unsorted_kernel_rows_and_sorted_shared_patterns():
+    # the corrected kernel's rows stay in the fill's order, the diagonal first (issue 19: the
+    # sort cost as much as the fill); rows that share the kernel's index arrays (the moment
+    # rows, pointwise=True) get them canonical, so an in-place sort of one cannot reorder the other
+    V, F = meshlap.shapes.sphere(1500, kind="random", seed=1)
+    op = meshlap.laplacian(V, F)
+    L = op.L_sym
+    n = L.shape[0]
+    assert (L.indices[L.indptr[:-1]] == np.arange(n)).all()
+    f = np.cos(2 * V[:, 0]) + V[:, 1] * V[:, 2]
+    canon = L.copy()
+    canon.sort_indices()
+    assert np.abs(canon @ f - L @ f).max() <= 1e-12 * np.abs(L @ f).max()
+    moments = meshlap.laplacian(V, F, pointwise=True, quadrature="vertex")
+    R = moments.L
+    rows = np.repeat(np.arange(n), np.diff(R.indptr))
+    step = np.diff(R.indices.astype(np.int64))
+    assert R.has_sorted_indices and (step[rows[1:] == rows[:-1]] > 0).all()

@@ -283,3 +283,30 @@ def test_eigs_progress_reports_stages_in_order():
     dense = []
     spectral.eigs(op, 4, method="dense", progress=lambda f, s: dense.append(s))
     assert dense == ["dense", "done"]
+
+
+def test_spatial_order_is_the_same_problem_permuted(monkeypatch):
+    # LOBPCG runs on L_sym restricted to the vertices with mass, in spatial order (issue 19):
+    # exactly the submatrix, permuted, and the same eigenpairs as in the input's order
+    V, F = shapes.sphere(1600, kind="random", seed=4)
+    V2, F2 = np.vstack([1.01 * V[:25], V]), F + 25  # 25 unreferenced vertices: zero mass
+    with pytest.warns(UserWarning, match="unreferenced"):
+        op = meshlap.laplacian(V2, F2, h=0.01, correction="none")
+    P = np.flatnonzero(op.mass > 0)
+    B, order = spectral._ordered_L(op, P)
+    assert sorted(order.tolist()) == list(range(len(P)))
+    rows = P[order]
+    ref = op.L_sym[rows][:, rows]
+    assert abs(B - ref).max() == 0 and B.nnz == ref.nnz
+    # neighbours in the order are neighbours in space: consecutive points far closer than random ones
+    step = np.linalg.norm(np.diff(op.V[rows], axis=0), axis=1).mean()
+    assert step < 0.3 * np.linalg.norm(np.diff(op.V[P], axis=0), axis=1).mean()
+    lam, phi = spectral.eigs(op, 12, method="lobpcg", tol=1e-12)
+    monkeypatch.setattr(spectral, "_ordered_L", lambda op, P: None)
+    lam0, phi0 = spectral.eigs(op, 12, method="lobpcg", tol=1e-12)
+    assert np.abs(lam - lam0).max() < 1e-10 * lam[-1]
+    check_eigenpairs(op, lam, phi, 1e-6)
+    # the same subspaces: each eigenvector of the one lies in the span of the other's
+    W = np.sqrt(op.mass)[:, None]
+    Q = np.linalg.qr(W * phi0)[0]
+    assert np.linalg.norm(W * phi - Q @ (Q.T @ (W * phi)), axis=0).max() < 1e-5

@@ -243,10 +243,9 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
     indptr, indices, data = variable.variable_csr(P, g, hv, kernel.tol, normals,
                                                   kernel.dog, index_dtype, np.dtype(dtype), max_nnz=check,
                                                   dim=kernel.dim)
-    variable.sort_rows(indptr, indices, data)
-    L = csr(data, indices, indptr, n)
-    L.has_sorted_indices = True
-    return L
+    # unsorted, as on the one-h path: sorting cost as much as the fill (issue 19), and a matrix
+    # that shares these index arrays sorts them first (meshlap.pipeline)
+    return csr(data, indices, indptr, n)
 
 
 @dataclass

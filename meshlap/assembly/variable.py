@@ -48,9 +48,10 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
             dy = ys[j] - y
             dz = zs[j] - z
             d2 = dx * dx + dy * dy + dz * dz
-            if use_normals:
-                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
             hp = 0.5 * (hw + hs[j])
+            # the factor is at least 1: a pair already beyond the cut-off needs none
+            if use_normals and d2 <= lnt4 * hp:
+                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
             sj[pos] = j
             sd[pos] = d2
             sh[pos] = hp
