@@ -32,8 +32,8 @@ __all__ = ["DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "smooth_function", "mean_
 
 #: Denoising time step per step in units of σ̂², σ̂ the normal noise the fitted rows measure
 #: (the median of ``op.pointwise_choice.noise``): two steps of 4σ̂² diffuse over √(2·8σ̂²) = 4σ̂.
-#: Chosen on fandisk and spot at noise of 0.15, 0.3 and 0.5 mean edges, where 6σ̂² to 8σ̂² in
-#: all is within 3% of the best total time (benchmarks/bench_smoothing.py).
+#: Chosen on fandisk and spot at noise of 0.15, 0.3 and 0.5 mean edges ē: the RMS error is within
+#: 1% of the flow's at its best dt but on spot at 0.15ē (7%; benchmarks/bench_smoothing.py).
 DENOISE_DT = 4.0
 #: Steps of the denoising flow.
 DENOISE_STEPS = 2
@@ -132,7 +132,7 @@ def mean_curvature_flow(
 
     Measured on fandisk and spot with Gaussian normal noise of 0.15, 0.3 and 0.5 mean edges
     (benchmarks/bench_smoothing.py, RMS distance of the vertices to their clean positions):
-    the defaults are 8-14% below the cotangent flow at its best single time step.
+    the defaults are 8-15% below the cotangent flow at its best single time step.
 
     Parameters
     ----------
