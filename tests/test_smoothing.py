@@ -70,3 +70,12 @@ def test_default_flow_leaves_a_clean_mesh_and_keeps_the_plain_flow_with_dt():
         mean_curvature_flow(V, F, denoise=False)
     with pytest.raises(MeshError, match="fitted rows"):
         mean_curvature_flow(V, F, laplacian=cotangent)
+
+
+def test_relative_flow_does_not_shrink_a_sphere():
+    V, F = shapes.sphere(1500, seed=0)
+    kept, _ = mean_curvature_flow(V, F, dt=0.01, steps=2, denoise=True)
+    shrunk, _ = mean_curvature_flow(V, F, dt=0.01, steps=2)  # R² − 4t: 0.959
+    r = np.linalg.norm(kept, axis=1)
+    assert abs(r.mean() - 1) < 1e-3 and r.std() < 1e-3
+    assert abs(np.linalg.norm(shrunk, axis=1).mean() - math.sqrt(1 - 0.08)) < 0.005
