@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from meshlap._dense import spd_inverse, sym_eigh
+from meshlap._dense import chol_solve, cholesky, sym_eigh
 
 
 def _covariances(d, count, rng):
@@ -33,12 +33,15 @@ def test_sym_eigh_matches_lapack(d):
         assert np.abs(V.T @ V - np.eye(d)).max() <= 1e-14
 
 
-def test_spd_inverse():
+def test_cholesky_solves_and_reports_the_failing_pivot():
     rng = np.random.default_rng(0)
-    for k in (1, 2, 3):
-        a = rng.normal(size=(4, k))
-        A = np.eye(k) + a.T @ a  # a metric I + Σ ∇g ∇gᵀ
-        out = np.empty((k, k))
-        assert spd_inverse(A, np.empty((k, k)), np.zeros(k), np.empty(k), out)
-        assert np.abs(out - np.linalg.inv(A)).max() <= 1e-14 * np.abs(out).max()
-    assert not spd_inverse(-np.eye(2), np.empty((2, 2)), np.zeros(2), np.empty(2), np.empty((2, 2)))
+    a = rng.normal(size=(8, 4))
+    A = a.T @ a
+    G, x = A.copy(), rng.normal(size=4)
+    assert cholesky(G, 4, np.zeros(4)) == 4
+    want = np.linalg.solve(A, x)
+    chol_solve(G, x, 4)
+    assert np.abs(x - want).max() <= 1e-12 * np.abs(want).max()
+    A[3] = A[2]  # the fourth monomial repeats the third
+    A[:, 3] = A[:, 2]
+    assert cholesky(A, 4, 1e-11 * np.diag(A).copy()) == 3

@@ -38,7 +38,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .._dense import chol_solve, cholesky, spd_inverse, sym_eigh
+from .._dense import chol_solve, cholesky, sym_eigh
 from .._jit import in_blocks, jit
 from ..errors import MeshError
 from ..geometry import check_points
@@ -223,7 +223,11 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         # monomial (rows contiguous over the neighbours, for the sums over them)
         top = min(degree + 2, len(count) - 1)
         mb = count[top]
-        Phi = np.ones((mb, K))
+        # np.empty and np.zeros of one and two dimensions only: each other allocation
+        # (np.ones, a third dimension) is one more numba overload to compile
+        Phi = np.empty((mb, K))
+        for j in range(K):
+            Phi[0, j] = 1.0
         for al in range(1, mb):
             pa, va = parent[al], var[al]
             for j in range(K):
@@ -251,7 +255,7 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         mq = count[q]
         # the graph z = g(u): its gradient a and Hessian gh at u = 0, in unscaled units
         ag = np.zeros((nc, k))
-        gh = np.zeros((nc, k, k))
+        gh = np.zeros((nc * k, k))  # ∂_ij g_c at row c·k + i
         res = 0.0
         coef = np.empty(mq)
         zr = np.empty(K)
@@ -265,7 +269,7 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             for i in range(k):
                 ag[c, i] = coef[idx1[i]] / rho
                 for jj in range(k):
-                    gh[c, i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
+                    gh[c * k + i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
             for j in range(K):
                 zr[j] = Z[j, c]
             for al in range(mq):
@@ -296,7 +300,7 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         for c in range(nc):
             for i in range(k):
                 for jj in range(k):
-                    ks += gh[c, i, jj] * gh[c, i, jj]
+                    ks += gh[c * k + i, jj] * gh[c * k + i, jj]
         kap[r] = math.sqrt(ks / k)
         for i in range(k):
             for jj in range(k):
@@ -305,14 +309,24 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             for i in range(k):
                 for jj in range(k):
                     Gm[i, jj] += ag[c, i] * ag[c, jj]
-        spd_inverse(Gm, Lk, kfloor, kcol, Gi)  # Gm ≥ I: always positive definite
+        # Gi = Gm⁻¹ column by column through Cholesky (Gm ≥ I is positive definite)
+        for i in range(k):
+            for jj in range(k):
+                Lk[i, jj] = Gm[i, jj]
+        cholesky(Lk, k, kfloor)
+        for jj in range(k):
+            for i in range(k):
+                kcol[i] = 1.0 if i == jj else 0.0
+            chol_solve(Lk, kcol, k)
+            for i in range(k):
+                Gi[i, jj] = kcol[i]
         # Γ contracted with G^{ij}: v_l = G^{lm} Σ_c ∂_m g_c (G^{ij} ∂_ij g_c)
         t = np.zeros(k)
         for c in range(nc):
             tr = 0.0
             for i in range(k):
                 for jj in range(k):
-                    tr += Gi[i, jj] * gh[c, i, jj]
+                    tr += Gi[i, jj] * gh[c * k + i, jj]
             for i in range(k):
                 t[i] += ag[c, i] * tr
         lam = np.zeros(mq)
