@@ -179,7 +179,6 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     vec = np.empty((d, d))
     ev = np.empty(d)
     v = np.empty(d)
-    Gm = np.empty((k, k))
     Gi = np.empty((k, k))
     Lk = np.empty((k, k))
     kfloor = np.zeros(k)
@@ -302,17 +301,15 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                 for jj in range(k):
                     ks += gh[c * k + i, jj] * gh[c * k + i, jj]
         kap[r] = math.sqrt(ks / k)
+        # the metric G = I + Σ_c ∇g_c ∇g_cᵀ, factored in place; Gi = G⁻¹ column by column
+        # (G ≥ I is positive definite)
         for i in range(k):
             for jj in range(k):
-                Gm[i, jj] = 1.0 if i == jj else 0.0
+                Lk[i, jj] = 1.0 if i == jj else 0.0
         for c in range(nc):
             for i in range(k):
                 for jj in range(k):
-                    Gm[i, jj] += ag[c, i] * ag[c, jj]
-        # Gi = Gm⁻¹ column by column through Cholesky (Gm ≥ I is positive definite)
-        for i in range(k):
-            for jj in range(k):
-                Lk[i, jj] = Gm[i, jj]
+                    Lk[i, jj] += ag[c, i] * ag[c, jj]
         cholesky(Lk, k, kfloor)
         for jj in range(k):
             for i in range(k):
