@@ -5,8 +5,9 @@
 Each case runs in its own process with an empty cache folder (XDG_CACHE_HOME), as on a new
 machine: a 500-vertex sphere (``meshlap.shapes.sphere(500, seed=0)``) with the default
 operator and with ``pointwise="fit"``, and a 500-point cloud. Figures are process CPU time
-(``time.process_time``), the best of ``--repeat`` runs: on a shared machine wall time
-measures the neighbours. ``--src`` times another checkout of meshlap (its root folder), e.g.
+(``time.process_time``), the best of ``--repeat`` runs and their range, and the load average
+over the runs: on a shared machine wall time measures the neighbours, and even CPU time grows
+with the load. ``--src`` times another checkout of meshlap (its root folder), e.g.
 an older commit for a before/after comparison in the same session.
 """
 
@@ -69,15 +70,20 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--src", type=Path, default=Path(__file__).resolve().parents[1])
     args = ap.parse_args()
-    load = os.getloadavg()[0]
-    print(f"| case | first build, CPU s (best of {args.repeat}) | kernels compiled (CPU s) |")
+    loads = [os.getloadavg()[0]]
+    print(f"| case | first build, CPU s (best of {args.repeat}, range) | kernels in the best (CPU s) |")
     print("|---|---|---|")
     for case, what in CASES.items():
-        best = min((run(case, args.src) for _ in range(args.repeat)), key=lambda r: r["build"])
+        runs = []
+        for _ in range(args.repeat):
+            runs.append(run(case, args.src))
+            loads.append(os.getloadavg()[0])
+        best = min(runs, key=lambda r: r["build"])
+        worst = max(r["build"] for r in runs)
         kernels = ", ".join(f"{k.split('.')[-1]} {v:.1f}" for k, v in
                             sorted(best["kernels"].items(), key=lambda kv: -kv[1]))
-        print(f"| {what} | {best['build']:.1f} | {kernels} |")
-    print(f"\nload average at the start: {load:.1f}")
+        print(f"| {what} | {best['build']:.1f} ({best['build']:.1f}-{worst:.1f}) | {kernels} |")
+    print(f"\nload average over the runs: {min(loads):.1f}-{max(loads):.1f} on {os.cpu_count()} cores")
 
 
 if __name__ == "__main__":

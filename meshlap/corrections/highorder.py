@@ -38,10 +38,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from .._dense import chol_solve, cholesky, sym_eigh
 from .._jit import in_blocks, jit
 from ..errors import MeshError
 from ..geometry import check_points
-from ._cholesky import chol_solve, cholesky
 
 __all__ = ["RowFit", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]
@@ -97,8 +97,8 @@ def _recursion(exps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @jit()
-def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compiled
-    # B: orthonormal rows, the first k tangent, the rest normal
+def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no cover - compiled
+    # B: orthonormal rows, the first k tangent, the rest normal; C, vec (d × d), ev, v (d) scratch
     d = P.shape[1]
     if use_normal:
         # a hypersurface: the given normal, tangents by Gram–Schmidt of the coordinate axes
@@ -108,8 +108,8 @@ def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compi
         for e in range(d):
             if row == d - 1:
                 break
-            v = np.zeros(d)
-            v[e] = 1.0
+            for a in range(d):
+                v[a] = 1.0 if a == e else 0.0
             for r in range(row):
                 dot = 0.0
                 for a in range(d):
@@ -121,19 +121,27 @@ def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compi
                 dot += v[a] * normal[a]
             for a in range(d):
                 v[a] -= dot * normal[a]
-            nv = math.sqrt((v * v).sum())
+            nv = 0.0
+            for a in range(d):
+                nv += v[a] * v[a]
+            nv = math.sqrt(nv)
             if nv > 0.3:
                 for a in range(d):
                     B[row, a] = v[a] / nv
                 row += 1
         return
-    tot = th.sum()
-    mean = np.zeros(d)
+    tot = 0.0
     for j in range(len(nbr)):
-        for a in range(d):
-            mean[a] += th[j] * P[nbr[j], a]
-    mean /= tot
-    C = np.zeros((d, d))
+        tot += th[j]
+    mean = v
+    for a in range(d):
+        s = 0.0
+        for j in range(len(nbr)):
+            s += th[j] * P[nbr[j], a]
+        mean[a] = s / tot
+    for a in range(d):
+        for b in range(d):
+            C[a, b] = 0.0
     for j in range(len(nbr)):
         for a in range(d):
             xa = P[nbr[j], a] - mean[a]
@@ -142,7 +150,7 @@ def _frame(P, w, nbr, th, normal, use_normal, k, B):  # pragma: no cover - compi
     for a in range(d):
         for b in range(a):
             C[b, a] = C[a, b]
-    _, vec = np.linalg.eigh(C)
+    sym_eigh(C, ev, vec)
     for r in range(d):
         for a in range(d):
             B[r, a] = vec[a, d - 1 - r]
@@ -165,6 +173,16 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
           degree, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
     d = P.shape[1]
     nc = d - k
+    # the frame's and the metric's scratch, once per block
+    B = np.empty((d, d))
+    C = np.empty((d, d))
+    vec = np.empty((d, d))
+    ev = np.empty(d)
+    v = np.empty(d)
+    Gi = np.empty((k, k))
+    Lk = np.empty((k, k))
+    kfloor = np.zeros(k)
+    kcol = np.empty(k)
     for r in range(start, stop):
         w = centers[r]
         a0 = indptr[r]
@@ -172,14 +190,15 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         nbr = indices[a0:a0 + K]
         inv4h = 1.0 / (4.0 * hv[r])
         th = np.empty(K)
+        th_sum = 0.0
         for j in range(K):
             s = 0.0
             for a in range(d):
                 t = P[nbr[j], a] - P[w, a]
                 s += t * t
             th[j] = math.exp(-s * inv4h)
-        B = np.zeros((d, d))
-        _frame(P, w, nbr, th, normals[w if use_normals else 0], use_normals, k, B)
+            th_sum += th[j]
+        _frame(P, w, nbr, th, normals[w if use_normals else 0], use_normals, B, C, ev, vec, v)
         U = np.empty((K, k))
         Z = np.empty((K, nc))
         rho2 = 0.0
@@ -196,12 +215,18 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                     Z[j, b - k] = s
             rho2 = max(rho2, s2)
         rho = math.sqrt(rho2) if rho2 > 0.0 else 1.0
-        U /= rho
+        for j in range(K):
+            for b in range(k):
+                U[j, b] /= rho
         # Vandermonde with two more degrees, for the probes of the error model; stored by
         # monomial (rows contiguous over the neighbours, for the sums over them)
         top = min(degree + 2, len(count) - 1)
         mb = count[top]
-        Phi = np.ones((mb, K))
+        # np.empty and np.zeros of one and two dimensions only: each other allocation
+        # (np.ones, a third dimension) is one more numba overload to compile
+        Phi = np.empty((mb, K))
+        for j in range(K):
+            Phi[0, j] = 1.0
         for al in range(1, mb):
             pa, va = parent[al], var[al]
             for j in range(K):
@@ -229,9 +254,10 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         mq = count[q]
         # the graph z = g(u): its gradient a and Hessian gh at u = 0, in unscaled units
         ag = np.zeros((nc, k))
-        gh = np.zeros((nc, k, k))
+        gh = np.zeros((nc * k, k))  # ∂_ij g_c at row c·k + i
         res = 0.0
         coef = np.empty(mq)
+        zr = np.empty(K)
         for c in range(nc):
             for al in range(mq):
                 s = 0.0
@@ -242,8 +268,9 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             for i in range(k):
                 ag[c, i] = coef[idx1[i]] / rho
                 for jj in range(k):
-                    gh[c, i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
-            zr = Z[:, c].copy()
+                    gh[c * k + i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
+            for j in range(K):
+                zr[j] = Z[j, c]
             for al in range(mq):
                 ca = coef[al]
                 for j in range(K):
@@ -251,7 +278,7 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             for j in range(K):
                 res += th[j] * zr[j] * zr[j]
         if not want_noise:
-            resid[r] = math.sqrt(res / (max(nc, 1) * th.sum()))
+            resid[r] = math.sqrt(res / (max(nc, 1) * th_sum))
         # E[Σθr²] = σ² (Σθ − Σ θ_j² Φ_j G⁻¹ Φ_jᵀ): the degrees of freedom the fit leaves
         dof = 0.0
         K_lev = K if want_noise else 0
@@ -266,28 +293,37 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                 lev += x[i] * x[i]
             dof += th[j] - th[j] * th[j] * lev
         if want_noise:
-            tot = th.sum()
-            resid[r] = math.sqrt(res / (nc * dof)) if nc > 0 and dof > 1e-3 * tot else (
+            resid[r] = math.sqrt(res / (nc * dof)) if nc > 0 and dof > 1e-3 * th_sum else (
                 0.0 if nc == 0 else np.inf)
         ks = 0.0
         for c in range(nc):
             for i in range(k):
                 for jj in range(k):
-                    ks += gh[c, i, jj] * gh[c, i, jj]
+                    ks += gh[c * k + i, jj] * gh[c * k + i, jj]
         kap[r] = math.sqrt(ks / k)
-        Gm = np.eye(k)
+        # the metric G = I + Σ_c ∇g_c ∇g_cᵀ, factored in place; Gi = G⁻¹ column by column
+        # (G ≥ I is positive definite)
+        for i in range(k):
+            for jj in range(k):
+                Lk[i, jj] = 1.0 if i == jj else 0.0
         for c in range(nc):
             for i in range(k):
                 for jj in range(k):
-                    Gm[i, jj] += ag[c, i] * ag[c, jj]
-        Gi = np.linalg.inv(Gm)
+                    Lk[i, jj] += ag[c, i] * ag[c, jj]
+        cholesky(Lk, k, kfloor)
+        for jj in range(k):
+            for i in range(k):
+                kcol[i] = 1.0 if i == jj else 0.0
+            chol_solve(Lk, kcol, k)
+            for i in range(k):
+                Gi[i, jj] = kcol[i]
         # Γ contracted with G^{ij}: v_l = G^{lm} Σ_c ∂_m g_c (G^{ij} ∂_ij g_c)
         t = np.zeros(k)
         for c in range(nc):
             tr = 0.0
             for i in range(k):
                 for jj in range(k):
-                    tr += Gi[i, jj] * gh[c, i, jj]
+                    tr += Gi[i, jj] * gh[c * k + i, jj]
             for i in range(k):
                 t[i] += ag[c, i] * tr
         lam = np.zeros(mq)

@@ -22,8 +22,8 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
+from .._dense import chol_solve, cholesky, sym_eigh
 from .._jit import in_blocks, jit
-from ._cholesky import chol_solve, cholesky
 
 __all__ = ["moment_correction", "second_moment_scale"]
 
@@ -32,12 +32,17 @@ __all__ = ["moment_correction", "second_moment_scale"]
 def _moment_rows(start, stop, indptr, indices, data, P, k, out, failed):  # pragma: no cover - compiled
     d = P.shape[1]
     m = k + k * (k + 1) // 2  # linear and quadratic monomials in k tangent coordinates
+    C = np.empty((d, d))
+    vec = np.empty((d, d))
+    ev = np.empty(d)
     for w in range(start, stop):
         a, b = indptr[w], indptr[w + 1]
         for q in range(a, b):
             out[q] = data[q]
         # tangent space from the |weight|-weighted covariance of the neighbourhood
-        C = np.zeros((d, d))
+        for i in range(d):
+            for j in range(d):
+                C[i, j] = 0.0
         tot = 0.0
         for q in range(a, b):
             p = indices[q]
@@ -57,7 +62,7 @@ def _moment_rows(start, stop, indptr, indices, data, P, k, out, failed):  # prag
         sigma2 /= tot
         if sigma2 <= 0.0:
             continue
-        _, vec = np.linalg.eigh(C)
+        sym_eigh(C, ev, vec)
         inv = 1.0 / math.sqrt(sigma2)
         # target moments: 0 for u_a and u_a u_b (a ≠ b), 2/σ² for u_a² (units of σ)
         G = np.zeros((m, m))

@@ -62,9 +62,7 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     const = float(one @ (m * r))
     deflate = math.sqrt(float(m @ (r * r))) <= 1e-10 * scale
     if len(P) <= _DENSE_DIRECT:
-        S = (m[:, None] * Lp.toarray())
-        low = sla.eigh(-0.5 * (S + S.T), np.diag(m), eigvals_only=True, subset_by_index=[0, 0])
-        return float(low[0]), scale
+        return _dense_lowest(Lp, m), scale
 
     def project(X: np.ndarray) -> np.ndarray:  # onto the M-orthogonal complement of the constant
         return X - one[:, None] * (one @ (m[:, None] * X))[None, :] if deflate else X
@@ -88,10 +86,20 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
             # that is affordable, else count it as failed (the plain kernel is safe)
             if len(P) > _DENSE_MAX:
                 return -math.inf, scale
-            S = (m[:, None] * Lp.toarray())
-            return float(sla.eigh(-0.5 * (S + S.T), np.diag(m), eigvals_only=True,
-                                  subset_by_index=[0, 0])[0]), scale
+            return _dense_lowest(Lp, m), scale
     return min(const, float(out.lam[0])), scale
+
+
+def _dense_lowest(Lp: sp.csr_matrix, m: np.ndarray) -> float:
+    # the smallest eigenvalue of (-S, M) by LAPACK, on one BLAS thread: a threaded BLAS on a
+    # busy machine spins while it waits for its other threads, and the first build's check of
+    # a 500-vertex mesh took 1-2 s of CPU instead of 0.05 s
+    from ..spectral import _one_blas_thread
+
+    S = m[:, None] * Lp.toarray()
+    with _one_blas_thread():
+        low = sla.eigh(-0.5 * (S + S.T), np.diag(m), eigvals_only=True, subset_by_index=[0, 0])
+    return float(low[0])
 
 
 def check(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from scipy.spatial import Delaunay, QhullError
 
+from .._dense import sym_eigh
 from .._jit import jit
 
 __all__ = []
@@ -43,7 +44,9 @@ def _tangent(P, p, nbr, kdim, T):
             xa = P[q, a] - mean[a]
             for b in range(d):
                 C[a, b] += xa * (P[q, b] - mean[b])
-    w, v = np.linalg.eigh(C)
+    w = np.empty(d)
+    v = np.empty((d, d))
+    sym_eigh(C, w, v)
     for a in range(kdim):
         for b in range(d):
             T[a, b] = v[b, d - 1 - a]
