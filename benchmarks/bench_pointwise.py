@@ -16,8 +16,9 @@ spot (tests/data, a real mesh) is replaced by the limit surface of its Loop subd
 and its ring have valence 6 the limit surface is Loop's quartic box spline, C², and its
 tangents and second derivatives at the vertex are exact masks of the ring (the left
 eigenvectors of the subdivision matrix, eigenvalues 1/2 and 1/4): Δf there is exact
-(:func:`loop_exact`). The curvature is singular at the original vertices of valence ≠ 6 (about
-half of spot's), and Δf with it; E2 leaves out the points within 4 level-1 edges of them. The
+(``meshlap.shapes.loop_limit``). The curvature is singular at the original vertices of valence
+≠ 6 (about half of spot's), and Δf with it; E2 leaves out the points within 4 level-1 edges of
+them. The
 table states the share kept and how far from the exact Δf a degree-6 fit on the level-3 limit
 points (187,000, four times finer; the reference before) is. "irregular" for spot is a random
 subset of the level-3 limit points, as a cloud only, Δf exact at the level-3 vertices.
@@ -145,63 +146,6 @@ def torus_cases(n: int) -> list[Case]:
     return out
 
 
-def _loop_limit(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    # the limit mask of the Loop scheme as libigl runs it (Warren's β = 3/(8n), 3/16 at n = 3):
-    # v∞ = (1 − nχ) v + χ Σ neighbours, χ = 1/(n + 3/(8β)) (closed mesh)
-    A = igl.adjacency_matrix(F).tocsr()
-    val = np.diff(A.indptr).astype(float)
-    beta = np.where(val > 3, 3 / (8 * val), 3 / 16)
-    chi = 1 / (val + 3 / (8 * beta))
-    return (1 - val * chi)[:, None] * V + chi[:, None] * (A @ V)
-
-
-def _rings(F: np.ndarray, n: int) -> np.ndarray:
-    # the ring of every vertex of valence 6 in cyclic order, (n, 6); −1 rows elsewhere. In a
-    # face (i, j, k) the ring of i steps from j to k (closed, consistently oriented mesh)
-    w = F.T.ravel()
-    a, b = np.roll(F, -1, axis=1).T.ravel(), np.roll(F, -2, axis=1).T.ravel()
-    order = np.argsort(w * n + a, kind="stable")
-    key, nxt = (w * n + a)[order], b[order]
-    regular = np.flatnonzero(np.bincount(w, minlength=n) == 6)
-    R = np.empty((len(regular), 6), dtype=np.int64)
-    R[:, 0] = a[order][np.searchsorted(key, regular * n)]
-    for i in range(1, 6):
-        R[:, i] = nxt[np.searchsorted(key, regular * n + R[:, i - 1])]
-    out = np.full((n, 6), -1, dtype=np.int64)
-    out[regular] = R
-    return out
-
-
-def loop_exact(V: np.ndarray, F: np.ndarray):
-    """The Loop limit surface at the vertices of the control mesh (V, F): unit normals, mean
-    curvature vectors ΔX and where they are exact (the vertex and its ring of valence 6, so
-    that the surface around it is the regular box spline; :func:`_loop_limit` the points)."""
-    R = _rings(np.asarray(F, dtype=np.int64), len(V))
-    ok = (R >= 0).all(axis=1)
-    ok &= (R[np.maximum(R, 0)] >= 0).all(axis=(1, 2))
-    # on the lattice of unit spacing, ring i at angle 2πi/6: the masks exact on quadratics
-    # and invariant under the lattice's symmetries (the left eigenvectors of the subdivision
-    # matrix for the eigenvalues 1/2 and 1/4)
-    th = np.pi * np.arange(6) / 3
-    Vr = V[np.maximum(R, 0)]
-    ring = lambda c: np.einsum("i,nid->nd", c, Vr)  # noqa: E731
-    Xs, Xt = ring(np.cos(th)) / 3, ring(np.sin(th)) / 3
-    lap = (2 / 3) * (Vr.sum(axis=1) - 6 * V)
-    aniso, Xst = (4 / 3) * ring(np.cos(2 * th)), (2 / 3) * ring(np.sin(2 * th))
-    Xss, Xtt = (lap + aniso) / 2, (lap - aniso) / 2
-    N = np.cross(Xs, Xt)
-    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
-    E, Fm, G = (Xs * Xs).sum(1), (Xs * Xt).sum(1), (Xt * Xt).sum(1)
-    two_h = (G * (Xss * N).sum(1) - 2 * Fm * (Xst * N).sum(1) + E * (Xtt * N).sum(1)) / (E * G - Fm**2)
-    return N, two_h[:, None] * N, ok
-
-
-def _spot_laplacians(X: np.ndarray, N: np.ndarray, HN: np.ndarray) -> list[np.ndarray]:
-    # Δ_S φ(x) = φ''(x)(1 − n_x²) + φ'(x) (ΔX)_x for φ(x) = x² and eˣ
-    x, t = X[:, 0], 1 - N[:, 0] ** 2
-    return [2 * t + 2 * x * HN[:, 0], np.exp(x) * (t + HN[:, 0])]
-
-
 def spot_cases() -> list[Case]:
     V, F = meshlap.io.read_mesh(DATA / "spot.obj")
     F = np.asarray(F, dtype=np.int64)
@@ -211,8 +155,7 @@ def spot_cases() -> list[Case]:
     for _ in range(3):
         levels.append(igl.loop(*levels[-1], 1))
     (V1, F1), (V3, F3) = levels[1], levels[3]
-    L1, L3 = _loop_limit(V1, F1), _loop_limit(V3, F3)
-    (N1, H1, ok1), (N3x, H3, ok3) = loop_exact(V1, F1), loop_exact(V3, F3)
+    (L1, N1, H1, ok1), (L3, N3x, H3, ok3) = shapes.loop_limit(V1, F1), shapes.loop_limit(V3, F3)
     N3 = igl.per_vertex_normals(L3, F3)
     extraordinary = np.flatnonzero(np.diff(igl.adjacency_matrix(F).tocsr().indptr) != 6)
     edge1 = float(np.mean(np.linalg.norm(L1[F1[:, 0]] - L1[F1[:, 1]], axis=1)))
@@ -222,7 +165,7 @@ def spot_cases() -> list[Case]:
     idx1 = np.arange(len(L1))
     mask1 = near_bad.query(L1, k=1)[0] > 4 * edge1
     assert ok1[mask1].all()  # 4 edges from valence ≠ 6: the box spline, Δf exact
-    ref1 = _spot_laplacians(L1, N1, H1)
+    ref1 = [lap for _, lap in shapes.x_functions(L1, N1, H1).values()]
     f3s = [L3[:, 0] ** 2, np.exp(L3[:, 0])]
     # the reference before: a degree-6 fit on the level-3 limit points
     indptr, indices, dist = highorder.knn_pattern(L3, 52, centers=idx1)
@@ -239,7 +182,7 @@ def spot_cases() -> list[Case]:
     sub = np.sort(np.random.default_rng(3).choice(len(L3), len(L1), replace=False))
     mask_sub = near_bad.query(L3[sub], k=1)[0] > 4 * edge1
     assert ok3[sub][mask_sub].all()
-    refs = _spot_laplacians(L3[sub], N3x[sub], H3[sub])
+    refs = [lap for _, lap in shapes.x_functions(L3[sub], N3x[sub], H3[sub]).values()]
     funcs = [(f3[sub], r) for f3, r in zip(f3s, refs, strict=True)]
     out.append(Case("spot", "irregular", L3[sub], None, funcs, mask_sub))
     for i, level in enumerate(NOISE):

@@ -75,7 +75,7 @@ def test_fitted_rows_on_noisy_input_equal_serial():
 @needs_mpi
 def test_fixed_degree_rows_equal_serial():
     """pointwise_degree=4 on 2 ranks: the single machine's rows of degree 4 on the kernel's
-    stencil (a plane with boundary, a sphere), to 1e-12 relative."""
+    stencil (a plane with boundary, a sphere), entry for entry."""
     mpirun(2, "fixed_degree")
 
 

@@ -172,10 +172,12 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
             np.ascontiguousarray(attrs.fit_points(table, P)[:, :d0]), k=attrs.dim, rows=np.arange(n_own),
             ids=ids, comm=comm)
     elif attrs.degree is not None:  # the single machine's rows of that degree on the kernel's stencil
-        end = free.indptr[n_own]
+        ptr, idx = free.indptr[:n_own + 1], free.indices[:free.indptr[n_own]]
+        if ids is not None:  # each row's neighbours in global order: the single machine's sums
+            idx = idx[np.lexsort((ids[idx], np.repeat(np.arange(n_own), np.diff(ptr))))]
         Lp = corrections.highorder.pointwise_rows(
-            np.ascontiguousarray(P[:, :attrs.points_dim or P.shape[1]]), free.indptr[:n_own + 1],
-            free.indices[:end], hv[:n_own], attrs.degree, k=attrs.dim, centers=np.arange(n_own))
+            np.ascontiguousarray(P[:, :attrs.points_dim or P.shape[1]]), ptr, idx, hv[:n_own], attrs.degree,
+            k=attrs.dim, centers=np.arange(n_own))
     elif attrs.pointwise:
         Lp, _ = corrections.moment_correction(free, P, attrs.dim)
     return L, Lp, info
