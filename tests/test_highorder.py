@@ -153,8 +153,7 @@ def test_noisy_sphere_beats_the_papers_operator():
     assert ours < 0.15 and ours < 0.8 * theirs  # measured 0.099 against 0.16
     # the noise is seen (σ = 0.01) and the rows widen
     assert 0.005 < np.median(choice.noise) < 0.02
-    # wider than the widest compact row, 52 (measured 64; 256 with the compact rows' e^-8 weights)
-    assert np.median(choice.neighbors) > 52
+    assert np.median(choice.neighbors) >= 160
 
 
 def test_noise_sweep_never_worse_than_the_papers_operator():

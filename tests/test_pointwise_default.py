@@ -108,7 +108,7 @@ def test_spot_limit_surface_against_cotangent():
 
     e, e_cot = err(meshlap.laplacian(X, F1)), err(baselines.cotangent(X, F1))
     e_paper = err(quiet(meshlap.laplacian, X, F1, correction="none"))
-    # measured 0.040 against the cotangent's 0.042 and the paper's 0.34 (0.080 before the
+    # measured 0.035 against the cotangent's 0.042 and the paper's 0.34 (0.080 before the
     # residual's excess counted as bias)
     assert e < 0.06 and e <= 1.3 * e_cot and e < e_paper, (e, e_cot, e_paper)
 

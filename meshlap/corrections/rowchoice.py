@@ -29,10 +29,12 @@ so a noisy input gets rows at least as wide as the heat-kernel operator's at h =
 
 The probes are polynomials and miss a surface rough at the spacing: spot's Loop limit surface
 (C² only) where its curvature turns within a few spacings, next to the horns. There a fit's
-own residual r exceeds σ̂; the excess is shape the fit misses, it reaches Δf as noise of that
-size would, so E takes σ̂ + max(r − σ̂, 0) in its noise term and counts the excess as bias.
-With it and compact rows whose weights reach e^{−12} at the K-th neighbour (e^{−8} before),
-the clean spot of bench_pointwise, Δf exact: E2 0.080 → 0.040 (libigl's cotangent 0.042).
+own residual r exceeds σ̂ by far; the excess is shape the fit misses, it reaches Δf as noise of
+that size would, so E takes σ̂ + max(r − 2σ̂, 0) in its noise term and counts the excess as
+bias (2σ̂: a residual's own noise estimate fluctuates well within it, so noisy data keep their
+wide rows). With it and compact rows whose weights reach e^{−12} at the K-th neighbour (e^{−8}
+before), the clean spot of bench_pointwise, Δf exact: E2 0.080 → 0.035 (libigl's cotangent
+0.042).
 
 The noise term assumes f sampled at the noisy points (its noise σ|∇f|). A smooth f on a
 noisy surface (the paper's Table 4: f of the clean sphere at the noisy vertices) has none, and
@@ -82,6 +84,9 @@ _LADDER = 4.0
 SAMPLE = 96
 #: A candidate within this factor of the least predicted error may win by a lower bias
 ROBUST = 2.0
+# A fit's residual beyond this multiple of the noise level is shape it misses (a noise estimate
+# from a residual fluctuates well within it)
+_EXCESS = 2.0
 
 
 @dataclass
@@ -374,9 +379,9 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
 
     def consider(fit: RowFit, K: int) -> np.ndarray:
         rows = fit.centers
-        # a fit's residual beyond the noise level is shape its polynomials miss (a surface
+        # a fit's residual well beyond the noise level is shape its polynomials miss (a surface
         # rough at the spacing): it reaches Δf as noise of that size would, and is bias
-        excess = np.maximum(np.nan_to_num(fit.residual, posinf=0.0) - sig[rows], 0.0)
+        excess = np.maximum(np.nan_to_num(fit.residual, posinf=0.0) - _EXCESS * sig[rows], 0.0)
         err = predicted_error(fit, sig[rows] + excess, scale[rows])
         scores.append((rows, err, predicted_error(fit, excess, scale[rows])))
         better = err < best[rows]
