@@ -12,12 +12,16 @@ the sphere of the same area: radial noise on the unit sphere); f is evaluated at
 positions and Δf is the exact value of the clean surface at the clean positions.
 
 spot (tests/data, a real mesh) is replaced by the limit surface of its Loop subdivision, so that
-Δf exists: the input is the level-1 mesh pushed to the limit (11,714 points), the reference the
-new rows (degree 6) on the level-3 limit points (187,000, four times finer) at the same points.
-The limit surface's curvature is singular at the original vertices of valence ≠ 6 (about
-half of spot's), and Δf with it; E2 leaves out the points within 4 level-1 edges of them and
-the table states the share kept and the reference's own uncertainty. "irregular" for spot is
-a random subset of the level-3 limit points, as a cloud only.
+Δf exists: the input is the level-1 mesh pushed to the limit (11,714 points). Where a vertex
+and its ring have valence 6 the limit surface is Loop's quartic box spline, C², and its
+tangents and second derivatives at the vertex are exact masks of the ring (the left
+eigenvectors of the subdivision matrix, eigenvalues 1/2 and 1/4): Δf there is exact
+(``meshlap.shapes.loop_limit``). The curvature is singular at the original vertices of valence
+≠ 6 (about half of spot's), and Δf with it; E2 leaves out the points within 4 level-1 edges of
+them. The
+table states the share kept and how far from the exact Δf a degree-6 fit on the level-3 limit
+points (187,000, four times finer; the reference before) is. "irregular" for spot is a random
+subset of the level-3 limit points, as a cloud only, Δf exact at the level-3 vertices.
 
 Peers skipped by name when missing: pycompadre (GMLS on the manifold, degrees 2–4, its default
 power weight and neighbour search), robust-laplacian; libigl cotangent runs on meshes only.
@@ -142,16 +146,6 @@ def torus_cases(n: int) -> list[Case]:
     return out
 
 
-def _loop_limit(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    # the limit mask of the Loop scheme as libigl runs it (Warren's β = 3/(8n), 3/16 at n = 3):
-    # v∞ = (1 − nχ) v + χ Σ neighbours, χ = 1/(n + 3/(8β)) (closed mesh)
-    A = igl.adjacency_matrix(F).tocsr()
-    val = np.diff(A.indptr).astype(float)
-    beta = np.where(val > 3, 3 / (8 * val), 3 / 16)
-    chi = 1 / (val + 3 / (8 * beta))
-    return (1 - val * chi)[:, None] * V + chi[:, None] * (A @ V)
-
-
 def spot_cases() -> list[Case]:
     V, F = meshlap.io.read_mesh(DATA / "spot.obj")
     F = np.asarray(F, dtype=np.int64)
@@ -160,49 +154,37 @@ def spot_cases() -> list[Case]:
     levels = [(V, F)]
     for _ in range(3):
         levels.append(igl.loop(*levels[-1], 1))
-    V1, F1 = levels[1][0], levels[1][1]
-    V3, F3 = levels[3]
-    L1, L3 = _loop_limit(V1, F1), _loop_limit(V3, F3)
+    (V1, F1), (V3, F3) = levels[1], levels[3]
+    (L1, N1, H1, ok1), (L3, N3x, H3, ok3) = shapes.loop_limit(V1, F1), shapes.loop_limit(V3, F3)
     N3 = igl.per_vertex_normals(L3, F3)
     extraordinary = np.flatnonzero(np.diff(igl.adjacency_matrix(F).tocsr().indptr) != 6)
     edge1 = float(np.mean(np.linalg.norm(L1[F1[:, 0]] - L1[F1[:, 1]], axis=1)))
-    tree3 = cKDTree(L3)
     # the vertices of a level come first in the next, and a vertex's limit point stays put
     assert np.abs(L3[: len(L1)] - L1).max() < 1e-8
     near_bad = cKDTree(L3[extraordinary])
-
-    def reference(idx: np.ndarray, f3s: list[np.ndarray], degree: int = 6) -> list[np.ndarray]:
-        K = 52 if degree == 6 else 30
-        indptr, indices, dist = highorder.knn_pattern(L3, K, centers=idx, tree=tree3)
-        h = dist.reshape(len(idx), -1)[:, -1] ** 2 / 32
-        Lr = highorder.pointwise_rows(L3, indptr, indices, h, degree, centers=idx)
-        return [np.asarray(Lr @ f3)[idx] for f3 in f3s]
-
-    f3s = [L3[:, 0] ** 2, np.exp(L3[:, 0])]
     idx1 = np.arange(len(L1))
-    ref1 = reference(idx1, f3s)
     mask1 = near_bad.query(L1, k=1)[0] > 4 * edge1
-    ref4 = reference(idx1, f3s, degree=4)
-    spread = max(
-        np.linalg.norm((a - b)[mask1]) / np.linalg.norm(b[mask1]) for a, b in zip(ref4, ref1, strict=True)
-    )
+    assert ok1[mask1].all()  # 4 edges from valence ≠ 6: the box spline, Δf exact
+    ref1 = [lap for _, lap in shapes.x_functions(L1, N1, H1).values()]
+    f3s = [L3[:, 0] ** 2, np.exp(L3[:, 0])]
+    # the reference before: a degree-6 fit on the level-3 limit points
+    indptr, indices, dist = highorder.knn_pattern(L3, 52, centers=idx1)
+    Lr = highorder.pointwise_rows(L3, indptr, indices, dist.reshape(len(idx1), -1)[:, -1] ** 2 / 32, 6,
+                                  centers=idx1)
+    fitted = max(np.linalg.norm((np.asarray(Lr @ f3)[idx1] - r)[mask1]) / np.linalg.norm(r[mask1])
+                 for f3, r in zip(f3s, ref1, strict=True))
     NOTES.append(
-        f"spot: E2 over {mask1.mean():.0%} of the points; the reference's own uncertainty (degree 4 against "
-        f"degree 6 on the level-3 limit points) is {spread:.2g}"
+        f"spot: E2 over {mask1.mean():.0%} of the points (Δf exact there: the limit surface is the regular "
+        f"box spline); a degree-6 fit on the level-3 limit points, the reference before, is {fitted:.2g} "
+        "from it"
     )
     out = [Case("spot", "clean", L1, F1, [(f3[idx1], r) for f3, r in zip(f3s, ref1, strict=True)], mask1)]
     sub = np.sort(np.random.default_rng(3).choice(len(L3), len(L1), replace=False))
-    refs = reference(sub, f3s)
-    out.append(
-        Case(
-            "spot",
-            "irregular",
-            L3[sub],
-            None,
-            [(f3[sub], r) for f3, r in zip(f3s, refs, strict=True)],
-            near_bad.query(L3[sub], k=1)[0] > 4 * edge1,
-        )
-    )
+    mask_sub = near_bad.query(L3[sub], k=1)[0] > 4 * edge1
+    assert ok3[sub][mask_sub].all()
+    refs = [lap for _, lap in shapes.x_functions(L3[sub], N3x[sub], H3[sub]).values()]
+    funcs = [(f3[sub], r) for f3, r in zip(f3s, refs, strict=True)]
+    out.append(Case("spot", "irregular", L3[sub], None, funcs, mask_sub))
     for i, level in enumerate(NOISE):
         Vn = _noisy(L1, N3[idx1], level, 4 * math.pi, seed=30 + i)
         out.append(

@@ -19,6 +19,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.spatial import ConvexHull, Delaunay
 
 from .errors import MeshError
@@ -29,6 +30,7 @@ __all__ = [
     "PLANE_KINDS",
     "SPHERE_KINDS",
     "fibonacci_sphere",
+    "loop_limit",
     "mean_edge_estimate",
     "plane",
     "plane_functions",
@@ -38,6 +40,7 @@ __all__ = [
     "torus_angles",
     "torus_functions",
     "triangle_angles",
+    "x_functions",
 ]
 
 #: Plane samplings understood by :func:`plane`.
@@ -374,3 +377,106 @@ def torus_functions(R: float = 1.0, r: float = 0.4) -> dict[str, Func]:
         "x^2": (lambda V: V[:, 0] ** 2, lap_x2),
         "exp(x)": (lambda V: np.exp(V[:, 0]), lap_exp),
     }
+
+
+def _rings(F: np.ndarray, n: int) -> np.ndarray:
+    # the ring of every vertex of valence 6 in cyclic order, (n, 6); −1 rows elsewhere. In a
+    # face (i, j, k) the ring of i steps from j to k (closed, consistently oriented mesh)
+    w = F.T.ravel()
+    a, b = np.roll(F, -1, axis=1).T.ravel(), np.roll(F, -2, axis=1).T.ravel()
+    order = np.argsort(w * n + a, kind="stable")
+    key, nxt = (w * n + a)[order], b[order]
+    regular = np.flatnonzero(np.bincount(w, minlength=n) == 6)
+    R = np.empty((len(regular), 6), dtype=np.int64)
+    R[:, 0] = a[order][np.searchsorted(key, regular * n)]
+    for i in range(1, 6):
+        R[:, i] = nxt[np.searchsorted(key, regular * n + R[:, i - 1])]
+    out = np.full((n, 6), -1, dtype=np.int64)
+    out[regular] = R
+    return out
+
+
+def loop_limit(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The limit surface of Loop subdivision at the vertices of a closed triangle mesh.
+
+    Where a vertex and its ring have valence 6 the limit surface around it is Loop's quartic
+    box spline (C²), and its tangents and second derivatives at the vertex are exact masks of
+    the ring: the left eigenvectors of the subdivision matrix for the eigenvalues 1/2 and 1/4,
+    on a lattice of unit spacing the masks exact for quadratics with the lattice's symmetries.
+
+    Parameters
+    ----------
+    V : (n, 3) ndarray
+        Control points.
+    F : (m, 3) int ndarray
+        Consistently oriented triangles of a closed mesh.
+
+    Returns
+    -------
+    points : (n, 3) ndarray
+        The limit points (the Loop limit mask, Warren's β = 3/(8n), libigl's ``loop``).
+    normals : (n, 3) ndarray
+        Unit normals where ``exact`` (NaN elsewhere).
+    mean_curvature_normal : (n, 3) ndarray
+        ΔX = −κ n, κ = κ₁ + κ₂, where ``exact`` (NaN elsewhere).
+    exact : (n,) bool ndarray
+        The vertex and its ring have valence 6.
+
+    Examples
+    --------
+    >>> V = np.array([[1.0, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+    >>> F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5],
+    ...               [0, 3, 5]])
+    >>> X, N, HN, exact = loop_limit(V, F)      # an octahedron: every vertex of valence 4
+    >>> bool(exact.any()), bool(np.allclose(np.linalg.norm(X, axis=1), 1 / 2))
+    (False, True)
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    n = len(V)
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    adj = sp.csr_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    adj = ((adj + adj.T) > 0).astype(np.float64).tocsr()
+    adj.sort_indices()
+    val = np.diff(adj.indptr).astype(np.float64)
+    ring_sum = adj @ V
+    # v∞ = (1 − nχ) v + χ Σ ring, χ = 1/(n + 3/(8β)), β = 3/(8n) (3/16 at n = 3)
+    beta = np.where(val > 3, 3 / (8 * np.maximum(val, 1)), 3 / 16)
+    chi = 1 / (val + 3 / (8 * beta))
+    X = (1 - val * chi)[:, None] * V + chi[:, None] * ring_sum
+    R = _rings(F, n)
+    exact = (R >= 0).all(axis=1)
+    exact &= (R[np.maximum(R, 0)] >= 0).all(axis=(1, 2))
+    th = np.pi * np.arange(6) / 3  # ring i at angle 2πi/6
+    Vr = V[np.maximum(R, 0)]
+
+    def ring(c: np.ndarray) -> np.ndarray:
+        return np.einsum("i,nid->nd", c, Vr)
+
+    Xs, Xt = ring(np.cos(th)) / 3, ring(np.sin(th)) / 3
+    lap = (2 / 3) * (Vr.sum(axis=1) - 6 * V)
+    aniso, Xst = (4 / 3) * ring(np.cos(2 * th)), (2 / 3) * ring(np.sin(2 * th))
+    Xss, Xtt = (lap + aniso) / 2, (lap - aniso) / 2
+    N = np.cross(Xs, Xt)
+    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    E, Fm, G = (Xs * Xs).sum(1), (Xs * Xt).sum(1), (Xt * Xt).sum(1)
+    det = np.where(exact, E * G - Fm**2, 1.0)
+    trace = (G * (Xss * N).sum(1) - 2 * Fm * (Xst * N).sum(1) + E * (Xtt * N).sum(1)) / det
+    N[~exact] = np.nan
+    return X, N, trace[:, None] * N, exact
+
+
+def x_functions(X: np.ndarray, normals: np.ndarray, mean_curvature_normal: np.ndarray
+                ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """x² and eˣ at points of a surface with their Laplace–Beltrami values, from the unit
+    normals n and ΔX there: Δ_S φ(x) = φ''(x)(1 − n_x²) + φ'(x) (ΔX)_x.
+
+    Examples
+    --------
+    >>> X = fibonacci_sphere(100)                   # the unit sphere: n = X, ΔX = −2X
+    >>> f, lap = x_functions(X, X, -2 * X)["x^2"]
+    >>> bool(np.allclose(lap, sphere_functions()["x^2"][1](X)))
+    True
+    """
+    x, t, hx = X[:, 0], 1 - normals[:, 0] ** 2, mean_curvature_normal[:, 0]
+    return {"x^2": (x**2, 2 * t + 2 * x * hx), "exp(x)": (np.exp(x), np.exp(x) * (t + hx))}

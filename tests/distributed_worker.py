@@ -343,6 +343,29 @@ class Checks:
             assert "denoised" in geo.notes, geo.notes
             self.report("fitted_noisy", "; ".join(details))
 
+    def fixed_degree(self):
+        """pointwise_degree=4 (rows of that degree on the kernel's stencil) on the ranks, on a
+        mesh with boundary and a curved one: gathered L the single machine's, entry for entry
+        (each row's neighbours in global order), exact on a quartic on the plane."""
+        import meshlap
+        from meshlap import distributed
+
+        details = []
+        for name, (V, F) in (("plane", meshlap.shapes.plane(900, seed=2)),
+                             ("sphere", meshlap.shapes.sphere(1500, kind="random", seed=1))):
+            op = distributed.laplacian(V, F, comm=self.comm, pointwise_degree=4)
+            A = op.to_scipy()
+            if self.rank == 0:
+                serial = meshlap.laplacian(V, F, pointwise_degree=4, quadrature="vertex")
+                assert serial.pointwise_choice is None and "degree 4" in repr(serial)
+                same = same_entries(A, serial.L)
+                if name == "plane":  # flat: the rows are exact for degree 4 in (x, y)
+                    f = V[:, 0] ** 4 + V[:, 0] * V[:, 1] ** 2
+                    lap = 12 * V[:, 0] ** 2 + 2 * V[:, 0]
+                    assert np.abs(A @ f - lap).max() < 1e-6 * np.abs(lap).max()
+                details.append(f"{name} {same}")
+        self.report("fixed_degree", "; ".join(details))
+
     # -- eigenpairs -----------------------------------------------------------------------
     def _eigs(self, name, V, F, h, k, **kw):
         import meshlap

@@ -26,12 +26,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import assembly, corrections
-from ..errors import MeshError
 from ..geometry import Geometry
 from ..pipeline import Options
 from ..widths import Widths
 
-__all__ = ["PointAttributes", "attributes", "check_supported", "local_rows"]
+__all__ = ["PointAttributes", "attributes", "local_rows"]
 
 
 @dataclass(frozen=True)
@@ -50,6 +49,7 @@ class PointAttributes:
     points_dim: int = 0  # the geometry's own dimension d (0: 3)
 
     raw: bool = False  # d more columns: a denoised cloud's input points, where f was sampled
+    degree: int | None = None  # pointwise_degree: fitted rows of that degree on the kernel's stencil
 
     @property
     def d(self) -> int:
@@ -67,16 +67,8 @@ class PointAttributes:
         return np.ascontiguousarray(T[:, 2 + 3 * d:2 + 4 * d]) if self.raw else P
 
 
-def check_supported(opts: Options) -> None:
-    """The options the ranks build: every one but rows of a fixed degree on the kernel's stencil."""
-    if opts.pointwise_degree is not None:
-        raise MeshError("pointwise_degree is not built on many ranks yet: use the default point-wise rows "
-                        "(the fitted rows, or pointwise=True) or meshlap.laplacian on one machine")
-
-
 def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
     """Stage 1-2 results of the whole geometry as per-point columns (every rank the same)."""
-    check_supported(opts)
     # the ranks work in three coordinates: lower dimensions are padded with zeros, which
     # leaves distances, normals and reflections as they are
     n, d0 = geo.points.shape
@@ -96,7 +88,7 @@ def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
     if raw is not None:
         T = np.column_stack([T, assembly.pad3(raw)])
     return PointAttributes(T, geo.dim, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
-                           opts.check_psd, opts.tol, d0, raw is not None)
+                           opts.check_psd, opts.tol, d0, raw is not None, opts.pointwise_degree)
 
 
 def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) -> sp.csr_matrix:
@@ -179,6 +171,13 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         Lp, info["pointwise_choice"] = corrections.rowchoice.choose_rows(
             np.ascontiguousarray(attrs.fit_points(table, P)[:, :d0]), k=attrs.dim, rows=np.arange(n_own),
             ids=ids, comm=comm)
+    elif attrs.degree is not None:  # the single machine's rows of that degree on the kernel's stencil
+        ptr, idx = free.indptr[:n_own + 1], free.indices[:free.indptr[n_own]]
+        if ids is not None:  # each row's neighbours in global order: the single machine's sums
+            idx = idx[np.lexsort((ids[idx], np.repeat(np.arange(n_own), np.diff(ptr))))]
+        Lp = corrections.highorder.pointwise_rows(
+            np.ascontiguousarray(P[:, :attrs.points_dim or P.shape[1]]), ptr, idx, hv[:n_own], attrs.degree,
+            k=attrs.dim, centers=np.arange(n_own))
     elif attrs.pointwise:
         Lp, _ = corrections.moment_correction(free, P, attrs.dim)
     return L, Lp, info

@@ -30,7 +30,7 @@ from ..geometry.validation import check_faces, check_h
 from ..pipeline import Options
 from ..widths import DEFAULT_H_SCALE
 from .comm import _exchange
-from .corrected import PointAttributes, check_supported
+from .corrected import PointAttributes
 
 __all__ = ["scattered_attributes"]
 
@@ -91,7 +91,6 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     faces = Polygons(np.zeros(0, np.int64), np.zeros(1, np.int64)) if empty else check_faces(F, ch.n)
     shape = SimpleNamespace(dim=2, ambient_dim=3, source="surface", codim=1)
     opts = Options.resolve(shape, h, correction=correction, tol=tol, **options)
-    check_supported(opts)
     need = np.unique(faces.indices)
     Vn = ch.fetch(need, V)
     local = Polygons(np.searchsorted(need, faces.indices).astype(np.int64), faces.offsets)
@@ -130,7 +129,7 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
             table[idx, 5:8] = b
             table[idx, 8:11] = nu
     attrs = PointAttributes(table, 2, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
-                            opts.check_psd, opts.tol)
+                            opts.check_psd, opts.tol, degree=opts.pointwise_degree)
     return mass, h0, attrs
 
 
