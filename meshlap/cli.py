@@ -227,7 +227,6 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 
 def cmd_smooth(args: argparse.Namespace) -> int:
     """Smooth a surface by implicit mean curvature flow and write the result."""
-    from .io import write_mesh
     from .progress import make_progress
     from .smoothing import mean_curvature_flow
     from .widths import default_h
@@ -236,10 +235,22 @@ def cmd_smooth(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in MESH_FORMATS:
         raise MeshError(f"--output must end in one of {', '.join(MESH_FORMATS)}; got {out.name!r}")
+    report = make_progress(args.progress or None)
+    if args.dt is None and args.h is None and not (args.cot or args.fixed):
+        # the library's default: denoise relative to the fitted surface, dt from the measured noise
+        if report is not None:
+            report(0.0, "smooth")
+        W, info = mean_curvature_flow(V, F, steps=args.steps, keep_volume=args.keep_volume)
+        if report is not None:
+            report(1.0, "done")
+        print(f"{len(info['volume']) - 1} denoising mean-curvature-flow step(s) of dt = 4σ² = "
+              f"{info['dt']:.4g} (measured normal noise σ = {info['noise']:.4g})")
+        return _smoothed(V, W, F, info["volume"], out)
     # (mean edge)² for both: the operator damps frequencies up to about 1/h, and a step of
     # dt = h halves the components at that scale, i.e. noise at the scale of the edges
     h = default_h(V, F) / 4 if args.h is None else args.h
     dt = h if args.dt is None else args.dt
+    args.steps = 3 if args.steps is None else args.steps
     kwargs: dict[str, Any] = {"keep_volume": args.keep_volume}
     if args.cot:
         from .baselines import cotangent
@@ -247,7 +258,6 @@ def cmd_smooth(args: argparse.Namespace) -> int:
         kwargs["laplacian"] = lambda P, Q: cotangent(P, Q)
     else:
         kwargs["laplacian"] = lambda P, Q: _laplacian(P, Q, h, args.tol)
-    report = make_progress(args.progress or None)
     if args.fixed or report is None:
         W, info = mean_curvature_flow(V, F, dt, args.steps, rebuild=not args.fixed, **kwargs)
         volumes = info["volume"]
@@ -258,9 +268,16 @@ def cmd_smooth(args: argparse.Namespace) -> int:
             W, info = mean_curvature_flow(W, F, dt, 1, **kwargs)
             volumes[-1:] = list(info["volume"])
         report(1.0, "done")
-    move = np.linalg.norm(W - V, axis=1)
     print(f"{args.steps} implicit mean-curvature-flow step(s) of dt = {dt:.4g} with "
           f"{'COT' if args.cot else f'BSW (h = {h:.4g})'}{', operator held fixed' if args.fixed else ''}")
+    return _smoothed(V, W, F, volumes, out)
+
+
+def _smoothed(V: np.ndarray, W: np.ndarray, F: Any, volumes: list, out: Path) -> int:
+    """Report how far the vertices moved and the volume, then write the smoothed mesh."""
+    from .io import write_mesh
+
+    move = np.linalg.norm(W - V, axis=1)
     print(f"vertex displacement: mean {move.mean():.4g}, max {move.max():.4g} "
           f"(bounding box diagonal {np.linalg.norm(np.ptp(V, axis=0)):.4g})")
     v0, v1 = volumes[0], volumes[-1]
@@ -485,14 +502,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_eigs)
 
     p = sub.add_parser("smooth", help="smooth a surface by mean curvature flow",
-                       description="Implicit mean curvature flow (M - dt S) X' = M X, the operator "
-                                   "rebuilt from the moving surface at every step; writes the mesh.")
+                       description="Implicit mean curvature flow; writes the mesh. By default the "
+                                   "denoising flow of smoothing.mean_curvature_flow (relative to the "
+                                   "fitted surface, dt from the measured noise); with --dt, --h, --cot "
+                                   "or --fixed the plain flow (M - dt S) X' = M X, the operator rebuilt "
+                                   "from the moving surface at every step unless --fixed.")
     p.add_argument("input", help="mesh file")
     p.add_argument("-o", "--output", required=True, help="output mesh (.obj, .off, .ply or .stl)")
-    p.add_argument("--dt", type=_positive_float, help="time step (default h)")
-    p.add_argument("--steps", type=_positive_int, default=3, help="number of steps (default 3)")
+    p.add_argument("--dt", type=_positive_float,
+                   help="time step of the plain flow (default: the denoising flow, dt = 4σ² from the "
+                        "measured noise σ; with --h, --cot or --fixed: dt = h)")
+    p.add_argument("--steps", type=_positive_int, default=None,
+                   help="number of steps (default 2 for the denoising flow, 3 for the plain one)")
     p.add_argument("--h", type=_positive_float, default=None,
-                   help="kernel width h (default (mean edge length)²: noise at the scale of the edges)")
+                   help="kernel width h of the plain flow (default (mean edge length)²)")
     p.add_argument("--tol", type=float, default=1e-8, help="kernel tolerance (default 1e-8)")
     p.add_argument("--fixed", action="store_true", help="keep the first step's operator (a linear filter)")
     p.add_argument("--keep-volume", action="store_true", help="rescale after each step to keep the volume")
