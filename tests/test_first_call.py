@@ -79,9 +79,10 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     # numba's np.linalg.eigh and inv compiled 7 more functions, 2 s of CPU on a busy machine
     assert not out["lapack"], out["lapack"]
     # the mesh compiles the kernel rows and the fitted point-wise rows (highorder._rows, 8-11 s
-    # of it): 12-18 s of CPU with a load of 6-9 on a 2-core machine, the bound is tight there.
-    # The cloud reuses the mesh's kernels and compiles its masses (4-7 s under that load)
-    assert mesh < 15.0 and cloud < 10.0
+    # of it): 11.9 s of CPU on a quiet 2-core machine, 12-18 s with a load of 6-9; numba's
+    # parallel=True made it 34-37 s. The cloud reuses the mesh's kernels and compiles its
+    # masses (3.6 s quiet, 4-7 s loaded)
+    assert mesh < 20.0 and cloud < 10.0
     out, err = first_calls(tmp_path)
     print(f"warm cache, CPU time: mesh {out['cpu'][1]:.2f} s, cloud {out['cpu'][2]:.2f} s")
     assert "compiling" not in err and not out["mesh"] and not out["cloud"]
