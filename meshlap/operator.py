@@ -93,8 +93,9 @@ class MeshLaplacian(LumpedLaplacian):
         ``correction="none"`` the paper's (2ē)².
     correction : {"richardson", "none"}, default "richardson"
         "richardson", for every geometry: the kernel 2K_{h/2} − K_h, second order in h, with
-        −S checked to be semidefinite (otherwise a :class:`MeshWarning`, ``fallback_reason``,
-        and the plain kernel). "none": the paper's operator, eq. (1), and none of the
+        −S checked to be semidefinite (otherwise ``fallback_reason`` and the plain kernel, and a
+        :class:`MeshWarning` where that pencil is used: not when the Galerkin pencil and the
+        fitted rows replace it). "none": the paper's operator, eq. (1), and none of the
         options below unless asked for. docs/accuracy.md has the measurements.
     adaptive : bool, default False
         Per-vertex widths 4ℓ_w² from the local edge lengths.
@@ -226,7 +227,10 @@ class MeshLaplacian(LumpedLaplacian):
                                         curvature_limit=self.options.curvature_limit)
         self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress))
         level = 2 if type(self) is MeshLaplacian else 3
-        if self._built.fallback_reason is not None:
+        # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
+        # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own)
+        if self._built.fallback_reason is not None and (self._built.quadrature != "galerkin"
+                                                        or self.options.pointwise is True):
             warnings.warn(self._built.fallback_reason + "; pass a larger h to keep the correction",
                           MeshWarning, stacklevel=level)
         #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
