@@ -66,10 +66,10 @@ def warm_up() -> None:
 
     A small mesh and a small point cloud with the defaults; a 1,500-vertex dome (a sphere cut
     flat: creases, and enough vertices for the iterative semidefiniteness check) and its
-    eigenpairs; the paper's operator; a tetrahedral volume. :func:`build` runs it in a
-    subprocess with an empty cache folder; about 15 s of CPU there, and each of these first
-    builds then compiles nothing. Other options (``pointwise=``, ``matrix_free``, float32, ...)
-    still compile on first use.
+    eigenpairs; the paper's operator, stored and matrix-free (``meshlap demo``); a tetrahedral
+    volume. :func:`build` runs it in a subprocess with an empty cache folder (about 20 s of
+    CPU), and each of these first builds then compiles nothing. Other options (e.g.
+    ``pointwise=True``) still compile on first use.
 
     Examples
     --------
@@ -77,15 +77,17 @@ def warm_up() -> None:
     """
     import meshlap
 
-    warnings.simplefilter("ignore")  # the coarse volume's resolution warning: only compiling here
-    V, F = meshlap.shapes.sphere(500, seed=0)
-    meshlap.laplacian(V, F)
-    meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(500))
-    V, F = meshlap.shapes.sphere(1500, seed=0)
-    V[:, 2] = np.maximum(V[:, 2], -0.3)
-    meshlap.spectral.eigs(meshlap.laplacian(V, F), 6)
-    meshlap.laplacian(V, F, correction="none")
-    meshlap.laplacian(*meshlap.samples.cube_tetrahedra(6), k=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the coarse volume's resolution warning: only compiling
+        V, F = meshlap.shapes.sphere(500, seed=0)
+        meshlap.laplacian(V, F)
+        meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(500))
+        V, F = meshlap.shapes.sphere(1500, seed=0)
+        V[:, 2] = np.maximum(V[:, 2], -0.3)
+        meshlap.spectral.eigs(meshlap.laplacian(V, F), 6)
+        meshlap.laplacian(V, F, correction="none")
+        _ = meshlap.laplacian(V, F, h=0.01, correction="none", matrix_free=True) @ V
+        meshlap.laplacian(*meshlap.samples.cube_tetrahedra(6), k=3)
 
 
 def build(package: Path) -> Path:
