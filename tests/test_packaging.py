@@ -53,6 +53,20 @@ def test_the_user_s_numba_cache_dir_is_left_as_it_was(monkeypatch, tmp_path):
     assert tmp_path in Path(one._cache._cache_path).parents
 
 
+def test_a_wheel_s_build_requires_what_meshlap_requires():
+    # the wheel's build step imports meshlap (build_backend.py adds these for a wheel only)
+    tomllib = pytest.importorskip("tomllib")
+    root = PACKAGE.parent
+    project = tomllib.loads((root / "pyproject.toml").read_text())
+    sys.path.insert(0, str(root))
+    try:
+        import build_backend
+    finally:
+        sys.path.remove(str(root))
+    assert project["build-system"]["build-backend"] == "build_backend"
+    assert build_backend.DEPENDENCIES == project["project"]["dependencies"]
+
+
 FIRST_CALLS = """
 import meshlap
 V, F = meshlap.shapes.sphere(500, seed=0)
@@ -68,7 +82,7 @@ def test_a_built_wheel_ships_the_kernels_and_compiles_nothing_at_first_call(tmp_
     # from the package index: about 25 s of CPU, 55 s of wall on a loaded 2-core machine),
     # installed where the build did not run, used with an empty cache
     root = PACKAGE.parent
-    for name in ("pyproject.toml", "setup.py", "README.md", "LICENSE"):
+    for name in ("pyproject.toml", "setup.py", "build_backend.py", "README.md", "LICENSE"):
         shutil.copy(root / name, tmp_path / name)
     shutil.copytree(PACKAGE, tmp_path / "meshlap", ignore=shutil.ignore_patterns("__pycache__", "_kernels"))
     built = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", "dist", "."],
