@@ -126,7 +126,7 @@ def test_first_build_with_the_shipped_kernels(tmp_path):
         {p for p in (site / "_kernels").rglob("*") if p.suffix in (".nbi", ".nbc")}
 
 
-def test_shipped_kernels_of_another_numba_are_not_used(tmp_path):
+def test_shipped_kernels_are_seeded_only_where_they_apply(tmp_path):
     # the manifest names the versions the kernels were compiled with; others compile as before
     shipped = tmp_path / "meshlap" / "_kernels"
     (shipped / "meshlap").mkdir(parents=True)
@@ -135,9 +135,16 @@ def test_shipped_kernels_of_another_numba_are_not_used(tmp_path):
     versions = _prebuilt._versions()
     (shipped / "manifest.json").write_text(json.dumps(dict(versions, numba="0.1")))
     assert not _prebuilt.seed(tmp_path / "cache", shipped) and not (tmp_path / "cache").exists()
-    (shipped / "manifest.json").write_text(json.dumps(versions))
+    (shipped / "manifest.json").write_text(json.dumps(dict(versions, sources="1")))
     assert _prebuilt.seed(tmp_path / "cache", shipped)
-    assert [p.name for p in (tmp_path / "cache").rglob("*.nbi")] == ["_dense.cholesky-25.py311.nbi"]
+    [seeded] = (tmp_path / "cache").rglob("*.nbi")
+    assert seeded.name == "_dense.cholesky-25.py311.nbi" and seeded.read_bytes() == b"index"
+    # a new release at the same place (other sources, same versions) seeds again, over the
+    # older index, which numba would find stale
+    (shipped / "meshlap" / "_dense.cholesky-25.py311.nbi").write_bytes(b"newer")
+    assert _prebuilt.seed(tmp_path / "cache", shipped) and seeded.read_bytes() == b"index"  # seeded once
+    (shipped / "manifest.json").write_text(json.dumps(dict(versions, sources="2")))
+    assert _prebuilt.seed(tmp_path / "cache", shipped) and seeded.read_bytes() == b"newer"
 
 
 def test_threads_do_not_change_the_result():
