@@ -17,9 +17,13 @@ gives nothing that these loops, one independent row per iteration, need; the thr
 same machine code, and each row is still written by one thread, so results do not depend on
 the number of threads.
 
-The first time this process compiles one of meshlap's kernels (a fresh cache: seconds, once
-per installed copy), a one-line notice on stderr says so. numba reports only real
-compilations (cache misses), so a warm cache prints nothing.
+A wheel built by ``pip install .`` ships the kernels of the first default builds, compiled
+at build time (:mod:`meshlap._prebuilt`); before the first kernel is decorated, they are copied
+into this cache folder, so that the first call loads them. Where they do not apply (an
+editable install, another numba or CPU) or a call needs others, the first time this process
+compiles one of meshlap's kernels (seconds, once per installed copy), a one-line notice on
+stderr says so. numba reports only real compilations (cache misses), so a warm cache prints
+nothing.
 """
 
 from __future__ import annotations
@@ -37,6 +41,8 @@ from typing import Any
 import numba
 import numpy as np
 from numba.core import config, event
+
+from meshlap import _prebuilt
 
 __all__ = ["cache_dir", "each_thread", "in_blocks", "jit"]
 
@@ -80,6 +86,9 @@ def _cache_in(path: Path) -> Iterator[None]:
         config.CACHE_DIR = old
 
 
+_seeded: set[Path] = set()  # the cache folders this process has seeded with the shipped kernels
+
+
 def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     """``numba.njit(cache=True, nogil=True, **options)`` with the cache in :func:`cache_dir`.
 
@@ -95,7 +104,11 @@ def jit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
     """
 
     def decorate(fn: Callable[..., Any]) -> Any:
-        with _cache_in(cache_dir()):
+        path = cache_dir()
+        if path not in _seeded:
+            _seeded.add(path)
+            _prebuilt.seed(path)
+        with _cache_in(path):
             return numba.njit(cache=True, nogil=True, **options)(fn)
 
     return decorate
