@@ -40,7 +40,9 @@ def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
 
 @jit(inline="always")
 def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols):
-    # what _gather_var returns, without its stores
+    # what _gather_var returns, without its stores (the count pass 25% faster). The loop
+    # repeats _gather_var's on purpose: with the pair's d² in a shared inline helper numba
+    # compiled both passes 2.5x slower (measured)
     cnt = 0
     for i in range(ncols):
         for j in range(cols[i, 0], cols[i, 1]):
