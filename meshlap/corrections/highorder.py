@@ -282,18 +282,16 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
         # E[Σθr²] = σ² (Σθ − Σ θ_j² Φ_j G⁻¹ Φ_jᵀ): the degrees of freedom the fit leaves
         dof = 0.0
         if want_noise:
-            # the leverages Φ_jᵀ G⁻¹ Φ_j of all neighbours at once: one forward substitution
-            # with the K columns innermost (contiguous, so it vectorizes; 45% of a degree-6
-            # row's cost as one column at a time), each column's operations in the same order
+            # the leverages Φ_jᵀ G⁻¹ Φ_j by one forward substitution, the K columns innermost
+            # (45% of a degree-6 row's cost one column at a time); per column the same operations
             X = np.empty((mq, K))
             lev = np.zeros(K)
             for i in range(mq):
                 for j in range(K):
                     X[i, j] = Phi[i, j]
                 for q2 in range(i):
-                    g = G[i, q2]
                     for j in range(K):
-                        X[i, j] -= g * X[q2, j]
+                        X[i, j] -= G[i, q2] * X[q2, j]
                 gi = G[i, i]
                 for j in range(K):
                     X[i, j] /= gi
