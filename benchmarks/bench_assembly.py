@@ -317,6 +317,22 @@ def main() -> None:
     print(f"wrote the Assembly section of {RESULTS}")
 
 
+#: Below this line the section is written by hand (before/after runs against another commit,
+#: per-stage timings); --default-vs-paper rewrites the table above it and keeps the rest.
+HAND_WRITTEN = "<!-- written by hand below this line; --default-vs-paper keeps it -->"
+
+
+def _kept_notes(title: str) -> list[str]:
+    # the hand-written part of the section ``title``, from its marker to the next section
+    text = RESULTS.read_text() if RESULTS.exists() else ""
+    start = text.find(f"## {title}\n")
+    end = text.find("\n## ", start + 1) if start >= 0 else -1
+    section = text[start:end if end >= 0 else len(text)] if start >= 0 else ""
+    if HAND_WRITTEN not in section:
+        return []
+    return ["", HAND_WRITTEN, "", *section.split(HAND_WRITTEN, 1)[1].strip("\n").splitlines()]
+
+
 def write_default_vs_paper(r: dict, no_write: bool) -> None:
     (pw, pc, _, pnnz), (dw, dc, stages, dnnz) = r["paper"], r["default"]
     parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in stages.items() if k != "done")
@@ -325,7 +341,8 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
           f"{dc / pc:.2f}x CPU; stages: {parts}", flush=True)
     if no_write:
         return
-    write_section("Default build against the paper's operator", [
+    title = "Default build against the paper's operator"
+    write_section(title, [
         "Command: `python benchmarks/bench_assembly.py --default-vs-paper` (written "
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}).",
         "",
@@ -340,6 +357,7 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         f"| default | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} | **{dw / pw:.2f}×** | {dc / pc:.2f}× |",
         "",
         f"The default's stages, wall (CPU): {parts}.",
+        *_kept_notes(title),
     ])
 
 

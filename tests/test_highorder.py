@@ -237,3 +237,29 @@ def test_operator_options_use_the_fitted_rows():
         meshlap.laplacian(V, F, pointwise="cubic")
     with pytest.raises(MeshError, match="pointwise_degree"):
         meshlap.laplacian(V, F, pointwise_degree=9)
+
+
+def test_noise_level_is_the_weighted_residual_over_the_fits_degrees_of_freedom():
+    # RowFit.residual with noise_dof: √(Σθr² / dof), dof = Σθ − Σ θ_j² Φ_jᵀ G⁻¹ Φ_j, against
+    # numpy on a noisy plane whose normals fix the frame (u = x, y; the height is z)
+    rng = np.random.default_rng(5)
+    P = np.column_stack([rng.uniform(-1, 1, (500, 2)), 0.01 * rng.standard_normal(500)])
+    K, degree, h = 40, 4, 0.01
+    indptr, indices, _ = highorder.knn_pattern(P, K)
+    fit = highorder.pointwise_rows(P, indptr, indices, h, degree, normals=np.tile([0.0, 0.0, 1.0], (500, 1)),
+                                   return_fit=True)
+    exps, count = highorder.monomials(2, degree)
+    for w in (0, 17, 250):
+        nb = indices[indptr[w]:indptr[w + 1]]
+        D = P[nb] - P[w]
+        th = np.exp(-(D**2).sum(axis=1) / (4 * h))
+        Phi = np.prod(D[:, None, :2] ** exps[None], axis=2)  # the span of the scaled monomials
+        G = Phi.T @ (th[:, None] * Phi)
+        c = np.linalg.solve(G, Phi.T @ (th * D[:, 2]))
+        r = D[:, 2] - Phi @ c
+        lev = np.einsum("ja,ab,jb->j", Phi, np.linalg.inv(G), Phi)
+        dof = th.sum() - (th**2 * lev).sum()
+        assert fit.degree[w] == degree
+        assert abs(fit.residual[w] / math.sqrt((th * r * r).sum() / dof) - 1) < 1e-8
+    # and the estimate is the noise: 0.01 within its spread over 500 points
+    assert abs(np.median(fit.residual) / 0.01 - 1) < 0.15

@@ -39,6 +39,25 @@ def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
 
 
 @jit(inline="always")
+def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols):
+    # what _gather_var returns, without its stores (the count pass 25% faster). The loop
+    # repeats _gather_var's on purpose: with the pair's d² in a shared inline helper numba
+    # compiled both passes 2.5x slower (measured)
+    cnt = 0
+    for i in range(ncols):
+        for j in range(cols[i, 0], cols[i, 1]):
+            dx = xs[j] - x
+            dy = ys[j] - y
+            dz = zs[j] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            lim = lnt4 * 0.5 * (hw + hs[j])  # = lnt4 * h_wp to the bit (halving is exact)
+            if use_normals and d2 <= lim:
+                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
+            cnt += np.int64((d2 <= lim) & (j != sw))
+    return cnt
+
+
+@jit(inline="always")
 def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols, sj, sd, sh):
     # like _gather, with the per-pair cut-off; sh receives h_wp
     pos = 0
@@ -59,6 +78,29 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
     return pos
 
 
+@jit(inline="always")
+def _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first):
+    # data[first + i] <- m_j K(d², h_wp) over contiguous arrays, one loop per kernel: without
+    # an indirect load or a branch in it the loop vectorizes (the weights cost 3x as much
+    # written inline with the gathers); the same operations per entry, so the same values
+    if half_k == 1.0:  # surfaces, rounded as the plain operator is
+        if dogc != 0.0:
+            for i in range(cnt):
+                hp = sh[i]
+                e = _exp_neg(-sd[i] / (4.0 * hp))
+                data[first + i] = sm[i] * (e * (dogc * e - 1.0)) / (4.0 * math.pi * hp * hp)
+        else:
+            for i in range(cnt):
+                hp = sh[i]
+                data[first + i] = sm[i] * _exp_neg(-sd[i] / (4.0 * hp)) / (4.0 * math.pi * hp * hp)
+        return
+    for i in range(cnt):
+        hp = sh[i]
+        e = _exp_neg(-sd[i] / (4.0 * hp))
+        kern = e * (dogc * e - 1.0) if dogc != 0.0 else e
+        data[first + i] = sm[i] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
+
+
 @jit()
 def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell,
               full, max_columns, chunk, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k, fill,
@@ -71,6 +113,7 @@ def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_sta
     sj = np.empty(1024, dtype=np.int64)
     sd = np.empty(1024, dtype=np.float64)
     sh = np.empty(1024, dtype=np.float64)
+    sm = np.empty(1024, dtype=np.float64)
     while True:
         c = _fetch_add(next_chunk, 0, 1)
         if c >= n_chunks:
@@ -86,26 +129,23 @@ def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_sta
                 sj = np.empty(2 * need, dtype=np.int64)
                 sd = np.empty(2 * need, dtype=np.float64)
                 sh = np.empty(2 * need, dtype=np.float64)
+                sm = np.empty(2 * need, dtype=np.float64)
+            if not fill:
+                counts[w] = _count_var(x, y, z, self_slot[w], hw, nv[w], xs, ys, zs, hs, ns, lnt4,
+                                       use_normals, cols, ncols) + 1
+                continue
             cnt = _gather_var(x, y, z, self_slot[w], hw, nv[w], xs, ys, zs, hs, ns, lnt4,
                               use_normals, cols, ncols, sj, sd, sh)
-            if not fill:
-                counts[w] = cnt + 1
-                continue
             start = indptr[w]
             if cnt != indptr[w + 1] - start - 1:
                 status[0] = 1
                 cnt = min(cnt, indptr[w + 1] - start - 1)
             first = start + 1
-            for i in range(cnt):
+            for i in range(cnt):  # the indirect loads first, as in grid._fill_rows
                 j = sj[i]
-                hp = sh[i]
-                e = _exp_neg(-sd[i] / (4.0 * hp))
-                kern = e * (dogc * e - 1.0) if dogc != 0.0 else e
+                sm[i] = m[j]
                 indices[first + i] = src_index[j]
-                if half_k == 1.0:  # surfaces, rounded as the plain operator is
-                    data[first + i] = m[j] * kern / (4.0 * math.pi * hp * hp)
-                else:
-                    data[first + i] = m[j] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
+            _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first)
             indices[start] = w
             data[start] = -_sum(data, first, cnt)
 

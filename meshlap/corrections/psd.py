@@ -52,7 +52,8 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     from .. import _lobpcg
     from ..spectral import _cot_stiffness, _one_blas_thread, _scale_shift, apply_block
 
-    scale = float(np.max(-L.diagonal()))
+    diag = L.diagonal()  # once: a pass over every entry of the unsorted rows
+    scale = float(np.max(-diag))
     P = np.flatnonzero(mass > 0)
     m = mass[P]
     Lp = sp.csr_matrix(L if len(P) == len(mass) else L[P][:, P], dtype=np.float64)
@@ -69,7 +70,7 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
 
     tri = None if faces is None else (faces.triangles() if isinstance(faces, Polygons) else faces)
     K = None if tri is None or V.shape[1] != 3 else _cot_stiffness(V, tri, P)
-    T = _lobpcg.CotPreconditioner(K, m, -m * Lp.diagonal(), _scale_shift(m))
+    T = _lobpcg.CotPreconditioner(K, m, -m * diag[P], _scale_shift(m))
     rng = np.random.default_rng(0)
     coords = V[P][:, :3] - (m @ V[P][:, :3]) / m.sum()
     smooth = coords if deflate else np.hstack([one[:, None], coords])
