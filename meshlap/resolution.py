@@ -15,7 +15,7 @@ for linear FEM:
   curvature cap narrowed it), β the mass within √(2h) of the boundary, κ_b the boundary's
   curvature times √(2h), c the mass within √(2h) of a crease and ν the noise in mean edges;
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
-  tetrahedra).
+  tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments).
 
 The predictions are fits, not bounds: the constants below were calibrated on the rows of
 ``benchmarks/bench_spectra.py`` and on coarser and finer variants of them (docs/spectral.md
@@ -58,7 +58,10 @@ DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.
 #: squares and discs; 0.19-0.52), rounded up.
 GALERKIN_FEM_RATIO = 0.55
 #: The constants of linear FEM's, fitted on the same inputs.
-FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5}
+FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
+             # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
+             # an ellipse, a trefoil and an open arc of 60-1,000 uniform and random vertices
+             "F_S": 0.1, "F_SQ": 0.7}
 
 
 class ResolutionWarning(MeshWarning):
@@ -240,7 +243,7 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
 
 
 def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float] = FEM_MODEL) -> float | None:
-    """Linear FEM's predicted error on the same cells (None without: a point cloud, a curve).
+    """Linear FEM's predicted error on the same cells (None without: a point cloud).
 
     ``source`` is the geometry's (``"tetrahedra"`` for volumes); ``faces``, whether it has
     faces; ē²λ is ``wavelength / width²``.
@@ -248,6 +251,8 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     e2l = fig.wavelength / fig.width**2
     if source == "tetrahedra":
         return model["F_T"] * e2l
+    if source == "polyline":
+        return (model["F_S"] + model["F_SQ"] * fig.irregularity**2) * e2l
     if not faces:
         return None
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
@@ -310,6 +315,7 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
         terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
+                   else "meshlap.baselines.cotangent(V, E)" if geo.source == "polyline"
                    else "meshlap.baselines.cotangent(V, F)")
     coarse = fem is not None and predicted > RATIO_LIMIT * fem
     verdict = "too coarse" if coarse else "resolved"

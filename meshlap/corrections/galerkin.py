@@ -38,8 +38,9 @@ from ..geometry import simplex_volumes
 from ..widths import Widths
 from .images import neumann_images
 
-__all__ = ["AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS", "CREASE_ANGLE", "H_SCALE", "RULES",
-           "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "wins"]
+__all__ = ["AUTO_MAX_CURVE_POINTS", "AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS",
+           "CREASE_ANGLE", "H_SCALE", "RULES", "SEGMENT_STEP", "creases", "galerkin_pencil",
+           "quadrature_points", "shape_measures", "simplices", "wins"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
 #: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
@@ -51,6 +52,8 @@ CREASE_ANGLE = 60.0
 #: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
 #: linear FEM on the clean inputs measured).
 AUTO_MAX_POINTS = 10_000
+#: Polylines take it up to this many vertices (about 6 quadrature points per vertex).
+AUTO_MAX_CURVE_POINTS = 100_000
 #: ... whose longest edge is at most this many mean edges: three points on a triangle much
 #: larger than the rest do not resolve the kernel there (a random 6,000-vertex plane, longest
 #: edge 63 mean edges: 22% against the vertex pencil's 1.5%)
@@ -58,6 +61,10 @@ AUTO_MAX_EDGE_RATIO = 2.5
 #: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
 #: follows the noise, the wide vertex kernel averages it out.
 AUTO_MAX_ROUGHNESS = 3.0
+
+#: A curve's segments are cut into pieces of at most this times √h, two Gauss points on each
+#: (the circle of 2,000 random angles: 0.0032% at 0.5·√h, 0.0032% at 0.25·√h).
+SEGMENT_STEP = 0.5
 
 #: Degree-2 rules on the simplex of k + 1 corners: (a, b) barycentric coordinates, each point
 #: a at one corner and b at the others, one point per corner, equal weights.
@@ -137,7 +144,25 @@ def _unfold(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, W:
     return Lq
 
 
-def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
+def _segment_points(P: np.ndarray, seg: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
+    # each segment cut into pieces of at most SEGMENT_STEP·√h, two Gauss points on each
+    length = np.linalg.norm(P[seg[:, 1]] - P[seg[:, 0]], axis=1)
+    pieces = np.maximum(np.ceil(length / (SEGMENT_STEP * math.sqrt(h))), 1).astype(np.int64)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    which = np.repeat(np.arange(len(seg)), pieces)
+    g = np.array(RULES[1][::-1])  # the two Gauss points of [0, 1]
+    t = ((np.arange(pieces.sum()) - first)[:, None] + g[None, :]) / pieces[which][:, None]
+    t = t.ravel()
+    owner = np.repeat(which, 2)
+    X = (1.0 - t)[:, None] * P[seg[owner, 0]] + t[:, None] * P[seg[owner, 1]]
+    W = np.repeat(length[which] / pieces[which] / 2.0, 2)
+    Phi = sp.csr_matrix((np.column_stack([1.0 - t, t]).ravel(), (np.repeat(np.arange(len(X)), 2),
+                         seg[owner].ravel())), shape=(len(X), len(P)))
+    return X, W, Phi
+
+
+def quadrature_points(P: np.ndarray, cells: np.ndarray, h: float | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix]:
     """Points, weights and hat-function values of the degree-2 rule on every simplex.
 
     Parameters
@@ -146,14 +171,18 @@ def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.
         Vertex positions.
     cells : (c, k + 1) int ndarray
         Simplices: segments, triangles or tetrahedra.
+    h : float, optional
+        Kernel width. Segments are then cut into pieces of at most :data:`SEGMENT_STEP`·√h
+        with two Gauss points on each (degree 3): a curve's points are cheap, and a random
+        sampling's long segments would not resolve a narrow kernel with two points.
 
     Returns
     -------
-    X : (c (k + 1), d) ndarray
-        Quadrature points, k + 1 per cell.
-    W : (c (k + 1),) ndarray
+    X : (q, d) ndarray
+        Quadrature points, k + 1 per cell (per piece of a segment).
+    W : (q,) ndarray
         Weights (the cell's k-volume shared equally).
-    Phi : (c (k + 1), n) scipy.sparse.csr_matrix
+    Phi : (q, n) scipy.sparse.csr_matrix
         φ_i(x_q): the barycentric coordinates of each point.
 
     Examples
@@ -168,6 +197,8 @@ def quadrature_points(P: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.
     k = cells.shape[1] - 1
     if k not in RULES:
         raise MeshError(f"the Galerkin pencil needs segments, triangles or tetrahedra; got cells of {k + 1}")
+    if k == 1 and h is not None:
+        return _segment_points(np.asarray(P, dtype=np.float64), cells, float(h))
     a, b = RULES[k]
     B = np.full((k + 1, k + 1), b) + (a - b) * np.eye(k + 1)  # row q: the point near corner q
     X = np.einsum("qa,cad->cqd", B, P[cells]).reshape(-1, P.shape[1])
@@ -233,7 +264,7 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
     >>> bool(abs(S - S.T).max() < 1e-12), bool(np.abs(S @ np.ones(300)).max() < 1e-9)
     (True, True)
     """
-    X, W, Phi = quadrature_points(P, cells)
+    X, W, Phi = quadrature_points(P, cells, h)
     widths = Widths(float(h), None, False)
     Lq = assemble(X, W, widths, Kernel(dim, dog=dog, tol=tol), guard=guard)
     if crease_edges is not None and len(crease_edges):
@@ -325,8 +356,21 @@ def wins(geo: Any) -> bool:
     """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
     :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long,
     whose normals are not noise (roughness below
-    :data:`AUTO_MAX_ROUGHNESS`), where benchmarks/RESULTS.md measures it ahead of the vertex
-    pencil and of linear FEM."""
+    :data:`AUTO_MAX_ROUGHNESS`), or a polyline of at most :data:`AUTO_MAX_CURVE_POINTS`
+    vertices, where benchmarks/RESULTS.md measures it ahead of the vertex pencil and of linear
+    FEM.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> V, E, _ = meshlap.samples.circle(200, kind="random")
+    >>> wins(meshlap.geometry.polyline(V, E))
+    True
+    """
+    if getattr(geo, "source", None) == "polyline":
+        # any sampling: the segments are cut to the width, and on noisy circles it stays at or
+        # below the vertex pencil's error (0.5 mean edges of radial noise: 8.7% against 25%)
+        return simplices(geo) is not None and geo.n_points <= AUTO_MAX_CURVE_POINTS
     tri = simplices(geo)
     if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
         return False
