@@ -164,3 +164,59 @@ def test_cube_surface_across_its_creases():
     e = meshlap.geometry.from_mesh(V, F).spacing
     S, m = galerkin.galerkin_pencil(V, F, 0.5 * e * e, 2)
     assert _err(sla.eigh(-S.toarray(), np.diag(m), eigvals_only=True, subset_by_index=[0, 9]), ref) > 0.1
+
+
+def test_segments_cut_to_the_width():
+    # a segment of length 3 at h = 0.01: pieces of at most 0.5·√h = 0.05, two Gauss points
+    # each (degree 3: ∫₀³ x³ = 81/4), the hat functions interpolating the positions
+    P = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 0.2]])
+    X, W, Phi = galerkin.quadrature_points(P, np.array([[0, 1], [1, 2]]), h=0.01)
+    assert len(X) == 2 * (60 + 4)
+    assert abs(W.sum() - 3.2) < 1e-12 and np.allclose(Phi @ P, X)
+    on = X[:, 1] == 0
+    assert abs(W[on] @ X[on, 0] ** 3 - 81 / 4) < 1e-10
+    assert len(galerkin.quadrature_points(P, np.array([[0, 1]]))[0]) == 2  # without h: the 2-point rule
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_curves_take_the_galerkin_pencil(closed):
+    # 400 random angles on the circle: measured 0.11% against linear FEM's 0.55% (the vertex
+    # pencil 10.9%); the open half circle (Neumann, eigenvalues m², ends mirrored), 200
+    # vertices: 0.28% against 0.69%
+    rng = np.random.default_rng(0)
+    if closed:
+        P, E, _ = meshlap.samples.circle(400, kind="random", seed=0)
+        exact = np.array([0] + [m * m for m in range(1, 6) for _ in range(2)], float)[:10]
+        bound = 0.002
+    else:
+        t = np.sort(np.r_[0.0, math.pi, rng.uniform(0, math.pi, 198)])
+        P, E = np.column_stack([np.cos(t), np.sin(t)]), np.column_stack([np.arange(199), np.arange(1, 200)])
+        exact = np.arange(10.0) ** 2
+        bound = 0.004
+    op = meshlap.laplacian(P, E)
+    assert op.quadrature == "galerkin" and op.psd_margin > -1e-6
+    S = op.S
+    assert abs(S - S.T).max() < 1e-12 and np.abs(S @ np.ones(len(P))).max() < 1e-8
+    err = _err(spectral.eigs(op, 10)[0], exact)
+    fem = meshlap.baselines.cotangent(P, E)
+    lam = np.sort(eigsh(sp.csc_matrix(-fem.S), 10, sp.diags(fem.mass).tocsc(), sigma=-1e-6)[0])
+    assert err < bound and err < 0.6 * _err(lam, exact)
+    assert not op.resolution.too_coarse and op.resolution.alternative is None
+
+
+def test_curves_couple_along_their_arc_only():
+    # two circles side by side: two zero eigenvalues, then 1 four times; a trefoil knot of 60
+    # vertices, whose strands pass within the kernel's reach: measured 0.53% against linear
+    # FEM's 1.98% (with the chord distance 228%)
+    P, E, _ = meshlap.samples.circle(300, kind="random", seed=0)
+    op = meshlap.laplacian(np.vstack([P, P + [2.5, 0]]), np.vstack([E, E + 300]))
+    lam = spectral.eigs(op, 6)[0]
+    assert np.abs(lam[:2]).max() < 1e-8 and np.abs(lam[2:] - 1).max() < 0.003
+    def trefoil(s):
+        return np.column_stack([np.sin(s) + 2 * np.sin(2 * s), np.cos(s) - 2 * np.cos(2 * s), -np.sin(3 * s)])
+
+    K = trefoil(2 * math.pi * np.arange(60) / 60)
+    ring = np.column_stack([np.arange(60), (np.arange(60) + 1) % 60])
+    length = np.linalg.norm(np.diff(trefoil(np.linspace(0, 2 * math.pi, 200_001)), axis=0), axis=1).sum()
+    exact = np.array([(2 * math.pi * ((j + 1) // 2) / length) ** 2 for j in range(10)])
+    assert _err(spectral.eigs(meshlap.laplacian(K, ring), 10)[0], exact) < 0.008
