@@ -37,8 +37,8 @@ from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
-__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "RATIO_LIMIT", "Resolution",
-           "ResolutionWarning", "assess", "default_terms", "fem_error"]
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT",
+           "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms", "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -55,8 +55,13 @@ DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.
                  "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
 #: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
-#: squares and discs; 0.19-0.52), rounded up.
+#: squares and discs; 0.19-0.52), rounded up; on curves 0.02-0.47 (circles, an ellipse, a
+#: trefoil knot and an open arc of 60-1,000 uniform and random vertices).
 GALERKIN_FEM_RATIO = 0.55
+#: The Galerkin pencil's error per unit of area next to a short cut (``shortcuts``), from the one
+#: input of benchmarks/bench_spectra.py that has them: fandisk, 11.4% of its area, 0.143%
+#: measured against the 0.042% of the term above (COT: 0.09%, so it is warned).
+GALERKIN_SHORTCUT = 0.009
 #: The constants of linear FEM's, fitted on the same inputs.
 FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
              # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
@@ -107,6 +112,9 @@ class Resolution:
         The operator to use instead when too coarse.
     reason : str
         The figure behind most of the predicted error.
+    shortcuts : float
+        The Galerkin pencil's area fraction whose pairs through the air (across a groove or a
+        thin wall) were dropped (:mod:`meshlap.corrections.shortcuts`; 0 for the vertex pencil).
 
     Examples
     --------
@@ -131,6 +139,7 @@ class Resolution:
     verdict: str
     alternative: str | None
     reason: str
+    shortcuts: float = 0.0
 
     @property
     def too_coarse(self) -> bool:
@@ -258,7 +267,8 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
 
 
-def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False) -> Resolution | None:
+def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False,
+           shortcuts: float = 0.0) -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
@@ -308,11 +318,13 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
         rel = one / np.sqrt(np.maximum(ell2, 1e-300))
         crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                     crease, 0.0, None, "", None, "")
+                     crease, 0.0, None, "", None, "", shortcuts)
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
     if galerkin_regime and fem is not None:
-        terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem}
+        terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem,
+                 f"{shortcuts:.0%} of the area next to a groove or thin wall (pairs through the air dropped)":
+                     GALERKIN_SHORTCUT * shortcuts}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
                    else "meshlap.baselines.cotangent(V, E)" if geo.source == "polyline"

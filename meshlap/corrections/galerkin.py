@@ -13,7 +13,9 @@ cancel, the rows sum to zero, S is symmetric, and −S is semidefinite wherever 
 Richardson kernel's check decides). Mirror images at the boundary work on L_q as on the
 vertices. On a curve the pairs take the distance along it (its chains and loops; the chord
 where branches meet), so that strands which pass close by do not couple (a trefoil knot of
-60 vertices: 0.53% against 228% with the chord).
+60 vertices: 0.53% against 228% with the chord). On a triangle mesh, pairs whose path along
+the mesh is much longer than their chord (across a groove or a thin wall) are dropped
+(:mod:`meshlap.corrections.shortcuts`).
 
 The form pairs with the consistent mass C = Φᵀ W Φ. The operator's mass is lumped (the
 diagonal m = C·1 that :mod:`meshlap.spectral` expects), so the pencil is moved onto it by the
@@ -39,9 +41,10 @@ from ..geometry import frames as frames_mod
 from ..geometry import simplex_volumes
 from ..widths import Widths
 from .images import neumann_images
+from .shortcuts import drop_shortcuts
 
 __all__ = ["AUTO_MAX_CURVE_POINTS", "AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS",
-           "CREASE_ANGLE", "H_SCALE", "RULES", "SEGMENT_STEP", "creases", "galerkin_pencil",
+           "CREASE_ANGLE", "EDGE_QUANTILE", "H_SCALE", "RULES", "SEGMENT_STEP", "creases", "galerkin_pencil",
            "quadrature_points", "shape_measures", "simplices", "wins"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
@@ -54,12 +57,16 @@ CREASE_ANGLE = 60.0
 #: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
 #: linear FEM on the clean inputs measured).
 AUTO_MAX_POINTS = 10_000
-#: Polylines take it up to this many vertices (about 6 quadrature points per vertex).
-AUTO_MAX_CURVE_POINTS = 100_000
-#: ... whose longest edge is at most this many mean edges: three points on a triangle much
+#: ... whose edges are at most this many mean edges long: three points on a triangle much
 #: larger than the rest do not resolve the kernel there (a random 6,000-vertex plane, longest
 #: edge 63 mean edges: 22% against the vertex pencil's 1.5%)
 AUTO_MAX_EDGE_RATIO = 2.5
+#: ... read at this quantile of the edge lengths, so that a few long edges do not decide it
+#: (fandisk: 2 of 38,838 edges above 2.5 mean edges, its 99.9th percentile 2.02; the random
+#: plane's 99.9th percentile is 19.8)
+EDGE_QUANTILE = 0.999
+#: Polylines take it up to this many vertices (about 6 quadrature points per vertex).
+AUTO_MAX_CURVE_POINTS = 100_000
 #: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
 #: follows the noise, the wide vertex kernel averages it out.
 AUTO_MAX_ROUGHNESS = 3.0
@@ -291,7 +298,7 @@ def _mass_congruence(S: sp.csr_matrix, Phi: sp.csr_matrix, W: np.ndarray) -> tup
 
 def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog: bool = True,
                     crease_edges: np.ndarray | None = None, boundary: tuple | None = None, tol: float = 1e-8,
-                    guard: Any = None) -> tuple[sp.csr_matrix, np.ndarray]:
+                    guard: Any = None, info: dict | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The Galerkin pencil ``(S, m)`` of the kernel of width ``h`` on the simplices ``cells``.
 
     Parameters
@@ -319,6 +326,9 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         Kernel tolerance (its cut-off).
     guard : MemoryGuard, optional
         Called with the quadrature operator's entry count before it is allocated.
+    info : dict, optional
+        Filled with ``"shortcuts"`` on a triangle mesh: the fraction of the area whose
+        quadrature points lost a pair to :func:`~meshlap.corrections.shortcuts.drop_shortcuts`.
 
     Returns
     -------
@@ -347,6 +357,10 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         Lq = _along_curves(Lq, P, cells, owner, t, W, h, dim, dog)
     if crease_edges is not None and len(crease_edges):
         Lq = _unfold(Lq, P, cells, X, W, crease_edges, h, dim, dog, cutoff_radius(h, tol))
+    if cells.shape[1] == 3:
+        Lq, hit = drop_shortcuts(Lq, P, cells, X, cutoff_radius(h, tol))
+        if info is not None:
+            info["shortcuts"] = float(W[hit].sum() / W.sum())
     if boundary is not None:
         samples, nu = boundary
         fr = frames_mod.frames_from_samples(X, samples, nu, cutoff_radius(h, tol))
@@ -432,7 +446,8 @@ def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
 
 def wins(geo: Any) -> bool:
     """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
-    :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long,
+    :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long
+    (at the quantile :data:`EDGE_QUANTILE`),
     whose normals are not noise (roughness below
     :data:`AUTO_MAX_ROUGHNESS`), or a polyline of at most :data:`AUTO_MAX_CURVE_POINTS`
     vertices, where benchmarks/RESULTS.md measures it ahead of the vertex pencil and of linear
@@ -455,6 +470,6 @@ def wins(geo: Any) -> bool:
     P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
     E = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     length = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
-    if length.max() > AUTO_MAX_EDGE_RATIO * length.mean():
+    if np.quantile(length, EDGE_QUANTILE) > AUTO_MAX_EDGE_RATIO * length.mean():
         return False
     return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS
