@@ -77,7 +77,7 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
 
 
 def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, radius: float,
-                   ratio: float = SHORTCUT_RATIO) -> tuple[sp.csr_matrix, int]:
+                   ratio: float | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The kernel operator on the quadrature points of a triangle mesh without its short cuts.
 
     Parameters
@@ -93,7 +93,8 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
         Quadrature points.
     radius : float
         The kernel's cut-off: no pair is farther apart.
-    ratio : float, default :data:`SHORTCUT_RATIO`
+    ratio : float, optional
+        The path over the chord beyond which a pair is dropped; :data:`SHORTCUT_RATIO` by default.
 
     Returns
     -------
@@ -113,6 +114,7 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
     >>> int(drop_shortcuts(Lq, V, F, X, meshlap.assembly.cutoff_radius(0.005, 1e-8))[1].sum())
     0
     """
+    ratio = SHORTCUT_RATIO if ratio is None else float(ratio)
     tri = np.asarray(tri, dtype=np.int64)
     n = len(P)
     sides = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
