@@ -2,6 +2,7 @@
 
     python benchmarks/bench_spectra.py            # the table of benchmarks/RESULTS.md
     python benchmarks/bench_spectra.py --quick    # a few small inputs
+    python benchmarks/bench_spectra.py --rows circle   # only these rows, printed
 
 For each input: the largest relative error of eigenvalues 1-9 against the exact values (sphere
 l(l+1), Neumann square, disc, cube and ball, circle m²) or against linear FEM (libigl's
@@ -274,9 +275,15 @@ def row(name, kind, data, ref):
     return res
 
 
+def _pct(x: float) -> str:
+    # two decimals, or two significant digits below 0.1%
+    return f"{x:.2%}" if x >= 1e-3 else f"{x * 100:.2g}%"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--rows", help="only the inputs whose name contains this (printed, not written)")
     args = ap.parse_args(argv)
     head = ("| input | default | paper's | COT | LaPy | robust-laplacian | best peer | default / best "
             "| warned: predicted error, reason | ≤ 1.5× best or warned |\n"
@@ -284,6 +291,8 @@ def main(argv=None) -> int:
     lines = [head]
     print(head, flush=True)
     for name, kind, data, ref in inputs(args.quick):
+        if args.rows and args.rows not in name:
+            continue
         r = row(name, kind, data, ref)
         peers = {k: v[0] for k, v in r.items() if k not in ("default", "paper", "resolution")
                  and np.isfinite(v[0])}
@@ -296,10 +305,11 @@ def main(argv=None) -> int:
         said = f"⚠ {rep.predicted_error:.2%}, {rep.reason}" if d[2] else "–"
         ok = "yes" if (d[2] or not peers or d[0] <= 1.5 * best) else "**no**"
 
-        cells = [f"{r[key][0]:.2%}" if key in r and np.isfinite(r[key][0]) else "–"
+        cells = [_pct(r[key][0]) if key in r and np.isfinite(r[key][0]) else "–"
                  for key in ("paper", "COT", "LaPy", "robust")]
-        tail = f"{best:.2%} | {d[0] / best:.2f}" if peers else "– | –"
-        line = f"| {name} | {d[0]:.2%}{flag} ({d[1]:.1f} s) | {' | '.join(cells)} | {tail} | {said} | {ok} |"
+        tail = f"{_pct(best)} | {d[0] / best:.2f}" if peers else "– | –"
+        line = (f"| {name} | {_pct(d[0])}{flag} ({d[1]:.1f} s) | {' | '.join(cells)} | {tail} "
+                f"| {said} | {ok} |")
         lines.append(line)
         print(line, flush=True)
     cmd = "python benchmarks/bench_spectra.py" + (" --quick" if args.quick else "")
@@ -309,7 +319,7 @@ def main(argv=None) -> int:
             "linear FEM on the segments (`meshlap.baselines.cotangent(V, E)`); G: the default's "
             "pencil is the Galerkin one (`op.quadrature`); the time is the default's build and eigs "
             "(wall clock).", ""] + lines
-    if not args.quick:
+    if not (args.quick or args.rows):
         write_section("Spectra on every input (issue 18)", body)
     return 0
 
