@@ -66,6 +66,7 @@ GALERKIN_SHORTCUT = 0.009
 FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
              # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
              # an ellipse, a trefoil and an open arc of 60-1,000 uniform and random vertices
+             # (benchmarks/bench_curves.py: 0.86-1.87× the measured error)
              "F_S": 0.1, "F_SQ": 0.7}
 
 
@@ -169,7 +170,8 @@ class Resolution:
                 f"{self.narrowed:.2f} of the default; h·λ₉ = {self.wavelength:.3g}; irregularity "
                 f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
                 f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
-                f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}",
+                f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}; next to a short cut "
+                f"{self.shortcuts:.0%}",
                 f"  most of it: {self.reason}"]
         if self.alternative:
             rows.append(f"  use instead: {self.alternative}")
