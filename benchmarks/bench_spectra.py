@@ -6,7 +6,7 @@
 
 For each input: the largest relative error of eigenvalues 1-9 against the exact values (sphere
 l(l+1), Neumann square, disc, cube and ball, circle m²) or against linear FEM (libigl's
-cotangent Laplacian) on a mesh refined 16× (coarse torus, cube surface, fandisk); for meshlap's
+cotangent Laplacian) on a mesh refined 16× (coarse torus, cube surface, fandisk, spot); for meshlap's
 default, the paper's operator (``correction="none"``), libigl COT (on curves: linear FEM on
 the segments, ``meshlap.baselines.cotangent(V, E)``), LaPy (linear FEM, ``lapy``) and
 robust-laplacian, as far as each applies. A missing peer is skipped with its name. Each
@@ -188,6 +188,9 @@ def inputs(quick: bool):
         Vf, Ff = igl.read_triangle_mesh(str(DATA / "fandisk.obj"))
         Vf = Vf / math.sqrt(igl.doublearea(Vf, Ff).sum() / 2)
         out.append((f"fandisk, {len(Vf):,} vertices (vs COT 16×)", "mesh", (Vf, Ff), cot(*_refined(Vf, Ff))))
+        Vp, Fp = igl.read_triangle_mesh(str(DATA / "spot.obj"))
+        Vp = Vp / math.sqrt(igl.doublearea(Vp, Fp).sum() / 2)
+        out.append((f"spot, {len(Vp):,} vertices (vs COT 16×)", "mesh", (Vp, Fp), cot(*_refined(Vp, Fp))))
     for m in (400, 4000) if not quick else (400,):
         Vq, Fq = shapes.plane(m, seed=0, kind="stratified")
         out.append((f"square [-1, 1]², {m:,} vertices, Neumann", "mesh", (Vq, Fq), _square_exact()))
