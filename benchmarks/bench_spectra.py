@@ -2,12 +2,14 @@
 
     python benchmarks/bench_spectra.py            # the table of benchmarks/RESULTS.md
     python benchmarks/bench_spectra.py --quick    # a few small inputs
+    python benchmarks/bench_spectra.py --rows circle   # only these rows, printed
 
 For each input: the largest relative error of eigenvalues 1-9 against the exact values (sphere
 l(l+1), Neumann square, disc, cube and ball, circle m²) or against linear FEM (libigl's
-cotangent Laplacian) on a mesh refined 16× (coarse torus, cube surface, fandisk); for meshlap's
-default, the paper's operator (``correction="none"``), libigl COT, LaPy (linear FEM, ``lapy``)
-and robust-laplacian, as far as each applies. A missing peer is skipped with its name. Each
+cotangent Laplacian) on a mesh refined 16× (coarse torus, cube surface, fandisk, spot); for meshlap's
+default, the paper's operator (``correction="none"``), libigl COT (on curves: linear FEM on
+the segments, ``meshlap.baselines.cotangent(V, E)``), LaPy (linear FEM, ``lapy``) and
+robust-laplacian, as far as each applies. A missing peer is skipped with its name. Each
 row also says whether the default's build raised the ResolutionWarning, with the figure
 ``op.resolution`` names as the reason and its predicted error, and whether the row meets
 issue 18's rule: the default within 1.5× of the best peer, or warned.
@@ -49,6 +51,14 @@ def _pencil(S: sp.spmatrix, M: sp.spmatrix, k: int = K) -> np.ndarray:
 def cot(V, F):
     L = igl.cotmatrix(V, F)
     return _pencil(-L, igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI))
+
+
+def cot_curve(V, E):
+    # linear FEM on the segments (meshlap.baselines.cotangent of a polyline), lumped mass
+    from meshlap.baselines import cotangent
+
+    op = cotangent(V, E)
+    return _pencil(-op.S, sp.diags(op.mass))
 
 
 def lapy_tria(V, F):
@@ -178,6 +188,9 @@ def inputs(quick: bool):
         Vf, Ff = igl.read_triangle_mesh(str(DATA / "fandisk.obj"))
         Vf = Vf / math.sqrt(igl.doublearea(Vf, Ff).sum() / 2)
         out.append((f"fandisk, {len(Vf):,} vertices (vs COT 16×)", "mesh", (Vf, Ff), cot(*_refined(Vf, Ff))))
+        Vp, Fp = igl.read_triangle_mesh(str(DATA / "spot.obj"))
+        Vp = Vp / math.sqrt(igl.doublearea(Vp, Fp).sum() / 2)
+        out.append((f"spot, {len(Vp):,} vertices (vs COT 16×)", "mesh", (Vp, Fp), cot(*_refined(Vp, Fp))))
     for m in (400, 4000) if not quick else (400,):
         Vq, Fq = shapes.plane(m, seed=0, kind="stratified")
         out.append((f"square [-1, 1]², {m:,} vertices, Neumann", "mesh", (Vq, Fq), _square_exact()))
@@ -199,6 +212,11 @@ def inputs(quick: bool):
     Vl, E, _ = samples.circle(2000 if not quick else 400, kind="random", seed=0)
     out.append((f"circle, {len(Vl):,} random angles", "curve", (Vl, E),
                 np.array([0] + [m * m for m in range(1, 6) for _ in range(2)], float)[:K]))
+    # the open half circle, its ends included: Neumann eigenvalues m², m = 0, 1, ...
+    t = np.sort(np.r_[0.0, math.pi, np.random.default_rng(0).uniform(0, math.pi, 998 if not quick else 198)])
+    chain = np.column_stack([np.arange(len(t) - 1), np.arange(1, len(t))])
+    out.append((f"half circle (open), {len(t):,} random angles, Neumann", "curve",
+                (np.column_stack([np.cos(t), np.sin(t)]), chain), np.arange(K, dtype=float) ** 2))
     return out
 
 
@@ -251,7 +269,7 @@ def row(name, kind, data, ref):
         res["paper"] = (err(lam), None, False, "none")
     peers = {"mesh": (("COT", cot), ("LaPy", lapy_tria), ("robust", robust_mesh)),
              "tets": (("LaPy", lapy_tet),), "cloud": (("robust", robust_cloud),),
-             "cloud-raw": (("robust", robust_cloud),), "curve": ()}[kind]
+             "cloud-raw": (("robust", robust_cloud),), "curve": (("COT", cot_curve),)}[kind]
     for pname, fn in peers:
         try:
             res[pname] = (err(fn(*data) if isinstance(data, tuple) else fn(data)), None, False, "")
@@ -260,9 +278,15 @@ def row(name, kind, data, ref):
     return res
 
 
+def _pct(x: float) -> str:
+    # two decimals, or two significant digits below 0.1%
+    return f"{x:.2%}" if x >= 1e-3 else f"{x * 100:.2g}%"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--rows", help="only the inputs whose name contains this (printed, not written)")
     args = ap.parse_args(argv)
     head = ("| input | default | paper's | COT | LaPy | robust-laplacian | best peer | default / best "
             "| warned: predicted error, reason | ≤ 1.5× best or warned |\n"
@@ -270,29 +294,35 @@ def main(argv=None) -> int:
     lines = [head]
     print(head, flush=True)
     for name, kind, data, ref in inputs(args.quick):
+        if args.rows and args.rows not in name:
+            continue
         r = row(name, kind, data, ref)
         peers = {k: v[0] for k, v in r.items() if k not in ("default", "paper", "resolution")
                  and np.isfinite(v[0])}
         best = min(peers.values()) if peers else math.nan
         d = r["default"]
-        flag = ("" if d[3] == "richardson" else f" ({d[3]})") + (" G" if d[4] == "galerkin" else "")
+        # the vertex pencil's fallback, where that pencil is the one in effect
+        gal = d[4] == "galerkin"
+        flag = ("" if d[3] == "richardson" or gal else f" ({d[3]})") + (" G" if gal else "")
         rep = r["resolution"]
         said = f"⚠ {rep.predicted_error:.2%}, {rep.reason}" if d[2] else "–"
         ok = "yes" if (d[2] or not peers or d[0] <= 1.5 * best) else "**no**"
 
-        cells = [f"{r[key][0]:.2%}" if key in r and np.isfinite(r[key][0]) else "–"
+        cells = [_pct(r[key][0]) if key in r and np.isfinite(r[key][0]) else "–"
                  for key in ("paper", "COT", "LaPy", "robust")]
-        tail = f"{best:.2%} | {d[0] / best:.2f}" if peers else "– | –"
-        line = f"| {name} | {d[0]:.2%}{flag} ({d[1]:.1f} s) | {' | '.join(cells)} | {tail} | {said} | {ok} |"
+        tail = f"{_pct(best)} | {d[0] / best:.2f}" if peers else "– | –"
+        line = (f"| {name} | {_pct(d[0])}{flag} ({d[1]:.1f} s) | {' | '.join(cells)} | {tail} "
+                f"| {said} | {ok} |")
         lines.append(line)
         print(line, flush=True)
     cmd = "python benchmarks/bench_spectra.py" + (" --quick" if args.quick else "")
     body = [f"Command: `{cmd}` (2 cores, shared). Largest relative error of eigenvalues 1-9; ⚠: the "
             "build raised the ResolutionWarning (the predicted error and the figure behind most of it, from "
-            "`op.resolution`); a correction in parentheses: the default fell back to it; G: the default's "
+            "`op.resolution`); a correction in parentheses: the default fell back to it; COT on curves: "
+            "linear FEM on the segments (`meshlap.baselines.cotangent(V, E)`); G: the default's "
             "pencil is the Galerkin one (`op.quadrature`); the time is the default's build and eigs "
             "(wall clock).", ""] + lines
-    if not args.quick:
+    if not (args.quick or args.rows):
         write_section("Spectra on every input (issue 18)", body)
     return 0
 

@@ -19,6 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from .geometry import polyline, simplex_volumes
 from .geometry.mass import _vertex_mass
 from .geometry.validation import MeshError, check_faces, check_h, check_tol, check_vertices
 from .lumped import SparseLaplacian
@@ -33,7 +34,9 @@ def cotangent(V: Any, F: Any) -> SparseLaplacian:
 
     This is the "COT" scheme the paper compares against; ``C`` is libigl's ``cotmatrix``
     (negative semidefinite, like ours) and ``M`` libigl's Voronoi mass matrix. Rows of
-    vertices without mass are left at zero.
+    vertices without mass are left at zero. For a polyline (``F`` of two columns, its edges)
+    it is the same scheme in 1-D: linear finite elements, C_ij = 1/|e_ij|, with the lumped
+    mass (half the adjacent lengths), O(ē²) in the eigenvalues with Neumann ends.
 
     Examples
     --------
@@ -42,7 +45,12 @@ def cotangent(V: Any, F: Any) -> SparseLaplacian:
     >>> cot = cotangent(V, F)
     >>> bool(abs((cot @ V[:, 0]) / V[:, 0] + 2).mean() < 0.2)
     True
+    >>> P, E, _ = meshlap.samples.circle(400)           # the unit circle: -Δ cos t = cos t
+    >>> bool(abs(cotangent(P, E) @ P[:, 0] + P[:, 0]).max() < 1e-4)
+    True
     """
+    if np.ndim(F) == 2 and np.shape(F)[1] == 2:
+        return _segments(V, F)
     V, T = _triangles(V, F, "cotangent Laplacian")
     C = igl.cotmatrix(V, T)
     # libigl sizes both matrices by the largest face index: pad for trailing unreferenced vertices
@@ -53,6 +61,18 @@ def cotangent(V: Any, F: Any) -> SparseLaplacian:
     mass[: len(vor)] = vor
     inv = np.divide(1.0, mass, out=np.zeros_like(mass), where=mass > 0)
     return SparseLaplacian(sp.diags(inv) @ C, mass, name="COT", S=C)
+
+
+def _segments(V: Any, E: Any) -> SparseLaplacian:
+    # 1-D linear finite elements on a polyline: the stiffness of the hat functions, lumped mass
+    g = polyline(V, E)
+    i, j = g.cells[:, 0], g.cells[:, 1]
+    w = 1.0 / np.maximum(simplex_volumes(g.points, g.cells), 1e-300)
+    n = g.n_points
+    off = sp.csr_matrix((np.r_[w, w], (np.r_[i, j], np.r_[j, i])), shape=(n, n))
+    C = (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
+    inv = np.divide(1.0, g.mass, out=np.zeros_like(g.mass), where=g.mass > 0)
+    return SparseLaplacian((sp.diags(inv) @ C).tocsr(), g.mass, name="COT (linear FEM on segments)", S=C)
 
 
 def _triangles(V: Any, F: Any, what: str) -> tuple[np.ndarray, np.ndarray]:

@@ -235,8 +235,10 @@ class MeshLaplacian(LumpedLaplacian):
                           MeshWarning, stacklevel=level)
         #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
         #: the paper's operator): :class:`meshlap.resolution.Resolution`.
-        self.resolution = resolution.assess(self.geometry, self.widths, self._built.correction,
-                                            self._built.galerkin_regime)
+        # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to
+        pencil = self.options.correction if self._built.quadrature == "galerkin" else self._built.correction
+        self.resolution = resolution.assess(self.geometry, self.widths, pencil, self._built.galerkin_regime,
+                                            self._built.shortcuts)
         if self.resolution is not None and self.resolution.too_coarse:
             warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None

@@ -152,6 +152,7 @@ class Built:
     quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
     quadrature_h: float | None = None  # the Galerkin pencil's width
     galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
+    shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -212,8 +213,9 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
     folds = gal.creases(geo.points, tri) if geo.faces is not None and geo.ambient_dim == 3 else None
+    info: dict = {}
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
-                               tol=opts.tol, guard=guard)
+                               tol=opts.tol, guard=guard, info=info)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if dog and opts.check_psd:
@@ -225,6 +227,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
             return  # the vertex pencil stays
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
+    out.shortcuts = info.get("shortcuts", 0.0)
     if not opts.pointwise:
         out.L = L
 

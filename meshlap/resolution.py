@@ -15,7 +15,7 @@ for linear FEM:
   curvature cap narrowed it), β the mass within √(2h) of the boundary, κ_b the boundary's
   curvature times √(2h), c the mass within √(2h) of a crease and ν the noise in mean edges;
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
-  tetrahedra).
+  tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments).
 
 The predictions are fits, not bounds: the constants below were calibrated on the rows of
 ``benchmarks/bench_spectra.py`` and on coarser and finer variants of them (docs/spectral.md
@@ -37,8 +37,8 @@ from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
-__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "RATIO_LIMIT", "Resolution",
-           "ResolutionWarning", "assess", "default_terms", "fem_error"]
+__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT",
+           "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms", "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -55,10 +55,19 @@ DEFAULT_MODEL = {"A_H": 0.023, "A_2": 0.12, "A_Q": 0.0016, "P_Q": 2.5, "R_0": 0.
                  "A_B": 0.082, "A_K": 0.25, "A_C": 0.18, "A_N": 1.86}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
 #: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
-#: squares and discs; 0.19-0.52), rounded up.
+#: squares and discs; 0.19-0.52), rounded up; on curves 0.02-0.47 (circles, an ellipse, a
+#: trefoil knot and an open arc of 60-1,000 uniform and random vertices).
 GALERKIN_FEM_RATIO = 0.55
+#: The Galerkin pencil's error per unit of area next to a short cut (``shortcuts``), from the one
+#: input of benchmarks/bench_spectra.py that has them: fandisk, 11.4% of its area, 0.143%
+#: measured against the 0.042% of the term above (COT: 0.09%, so it is warned).
+GALERKIN_SHORTCUT = 0.009
 #: The constants of linear FEM's, fitted on the same inputs.
-FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5}
+FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
+             # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
+             # an ellipse, a trefoil and an open arc of 60-1,000 uniform and random vertices
+             # (benchmarks/bench_curves.py: 0.86-1.87× the measured error)
+             "F_S": 0.1, "F_SQ": 0.7}
 
 
 class ResolutionWarning(MeshWarning):
@@ -104,6 +113,9 @@ class Resolution:
         The operator to use instead when too coarse.
     reason : str
         The figure behind most of the predicted error.
+    shortcuts : float
+        The Galerkin pencil's area fraction whose pairs through the air (across a groove or a
+        thin wall) were dropped (:mod:`meshlap.corrections.shortcuts`; 0 for the vertex pencil).
 
     Examples
     --------
@@ -128,6 +140,7 @@ class Resolution:
     verdict: str
     alternative: str | None
     reason: str
+    shortcuts: float = 0.0
 
     @property
     def too_coarse(self) -> bool:
@@ -157,7 +170,8 @@ class Resolution:
                 f"{self.narrowed:.2f} of the default; h·λ₉ = {self.wavelength:.3g}; irregularity "
                 f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
                 f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
-                f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}",
+                f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}; next to a short cut "
+                f"{self.shortcuts:.0%}",
                 f"  most of it: {self.reason}"]
         if self.alternative:
             rows.append(f"  use instead: {self.alternative}")
@@ -240,7 +254,7 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
 
 
 def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float] = FEM_MODEL) -> float | None:
-    """Linear FEM's predicted error on the same cells (None without: a point cloud, a curve).
+    """Linear FEM's predicted error on the same cells (None without: a point cloud).
 
     ``source`` is the geometry's (``"tetrahedra"`` for volumes); ``faces``, whether it has
     faces; ē²λ is ``wavelength / width²``.
@@ -248,12 +262,15 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     e2l = fig.wavelength / fig.width**2
     if source == "tetrahedra":
         return model["F_T"] * e2l
+    if source == "polyline":
+        return (model["F_S"] + model["F_SQ"] * fig.irregularity**2) * e2l
     if not faces:
         return None
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
 
 
-def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False) -> Resolution | None:
+def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False,
+           shortcuts: float = 0.0) -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
@@ -303,13 +320,16 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
         rel = one / np.sqrt(np.maximum(ell2, 1e-300))
         crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                     crease, 0.0, None, "", None, "")
+                     crease, 0.0, None, "", None, "", shortcuts)
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
     if galerkin_regime and fem is not None:
-        terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem}
+        terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem,
+                 f"{shortcuts:.0%} of the area next to a groove or thin wall (pairs through the air dropped)":
+                     GALERKIN_SHORTCUT * shortcuts}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
+                   else "meshlap.baselines.cotangent(V, E)" if geo.source == "polyline"
                    else "meshlap.baselines.cotangent(V, F)")
     coarse = fem is not None and predicted > RATIO_LIMIT * fem
     verdict = "too coarse" if coarse else "resolved"

@@ -1,5 +1,6 @@
 """The baseline Laplacians: values against analytic Laplacians, signs and conventions."""
 
+import math
 import sys
 
 import igl
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from meshlap import MeshError, baselines, shapes
+from meshlap import MeshError, baselines, samples, shapes
 
 
 @pytest.fixture(scope="module")
@@ -121,3 +122,20 @@ def test_cotangent_with_trailing_unreferenced_vertices():
     cot, ref = baselines.cotangent(V2, F), baselines.cotangent(V, F)
     assert cot.L.shape == (302, 302) and np.array_equal(cot.mass[-2:], [0.0, 0.0])
     assert np.allclose((cot @ V2[:, 0])[:300], ref @ V[:, 0], rtol=1e-12, atol=1e-12)
+
+
+def test_cotangent_of_a_polyline_is_linear_fem_on_its_segments():
+    # the uniform n-gon: (K, lumped mass) has the eigenvalues 4 sin²(πm/n)/ℓ², ℓ = 2 sin(π/n)
+    n = 50
+    P, E, _ = samples.circle(n)
+    op = baselines.cotangent(P, E)
+    ell = 2 * math.sin(math.pi / n)
+    lam = np.sort(np.linalg.eigvalsh(-op.S.toarray() / ell))
+    exact = np.sort(4 * np.sin(math.pi * np.arange(n) / n) ** 2 / ell**2)
+    assert np.allclose(lam, exact, rtol=1e-10, atol=1e-10)
+    assert np.allclose(op.mass, ell) and abs(op.S - op.S.T).max() == 0
+    # an open chain: Neumann ends, rows sum to zero, and x'' = 0 in the interior rows
+    x = np.sort(np.random.default_rng(0).uniform(0, 1, 30))
+    chain = np.column_stack([np.arange(29), np.arange(1, 30)])
+    op = baselines.cotangent(np.column_stack([x, 0 * x]), chain)
+    assert np.abs(op @ np.ones(30)).max() < 1e-9 and np.abs((op @ x)[1:-1]).max() < 1e-9

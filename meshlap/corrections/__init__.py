@@ -5,7 +5,8 @@
 * :mod:`~meshlap.corrections.moments`: the global second-moment scale (symmetric) and the
   point-wise rows exact for quadratics (what ``op @ f`` applies);
 * :mod:`~meshlap.corrections.galerkin`: the symmetric pencil from the kernel integrated over
-  the cells with the hat functions, for coarse meshes (``quadrature="galerkin"``);
+  the cells with the hat functions, for coarse meshes and curves (``quadrature="galerkin"``),
+  without the pairs :mod:`~meshlap.corrections.shortcuts` finds through the air;
 * :mod:`~meshlap.corrections.psd`: the semidefiniteness check of the Richardson kernel, with
   the plain kernel as its fallback;
 * :mod:`~meshlap.corrections.highorder` and :mod:`~meshlap.corrections.rowchoice`: point-wise
@@ -16,9 +17,9 @@ The Richardson (difference of Gaussians) kernel itself is a kernel choice, made 
 :mod:`meshlap.assembly`.
 """
 
-from . import galerkin, highorder, images, moments, psd, rowchoice
+from . import galerkin, highorder, images, moments, psd, rowchoice, shortcuts
 from .images import neumann_images
 from .moments import moment_correction, second_moment_scale
 
 __all__ = ["galerkin", "highorder", "images", "moment_correction", "moments", "neumann_images", "psd",
-           "rowchoice", "second_moment_scale"]
+           "rowchoice", "second_moment_scale", "shortcuts"]

@@ -1,0 +1,94 @@
+"""Eigenvalues on curves: the default (the Galerkin pencil on the segments) beside linear FEM.
+
+    python benchmarks/bench_curves.py
+
+Closed curves (a circle, an ellipse 2:1, a trefoil knot in R³) and an open arc, sampled at
+60, 200 and 1,000 uniform or random parameters; the exact eigenvalues of a closed curve of
+length ℓ are (2πm/ℓ)², of an open one (Neumann) (πm/ℓ)², ℓ from a fine sampling. Largest
+relative error of eigenvalues 1-9 for the default, for ``quadrature="vertex"`` and for linear
+FEM on the segments (``meshlap.baselines.cotangent(V, E)``, lumped mass), with the resolution
+report's prediction of FEM's error.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_file import write_section  # noqa: E402
+
+import meshlap  # noqa: E402
+from meshlap import baselines, spectral  # noqa: E402
+
+K = 10
+
+
+def _shape(name: str, t: np.ndarray) -> np.ndarray:
+    s = 2 * np.pi * t
+    if name == "circle":
+        return np.column_stack([np.cos(s), np.sin(s)])
+    if name == "ellipse":
+        return np.column_stack([2 * np.cos(s), np.sin(s)])
+    if name == "trefoil":
+        return np.column_stack([np.sin(s) + 2 * np.sin(2 * s), np.cos(s) - 2 * np.cos(2 * s), -np.sin(3 * s)])
+    return np.column_stack([3 * t, 0.3 * np.sin(2 * t)])  # a gently bent open arc
+
+
+def curve(name: str, kind: str, n: int):
+    """(V, E, exact eigenvalues 0..K-1)."""
+    rng = np.random.default_rng(0)
+    closed = name != "open arc"
+    if closed:
+        t = np.sort(rng.uniform(0, 1, n)) if kind == "random" else np.arange(n) / n
+        E = np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
+    else:
+        t = np.sort(np.r_[0, 1, rng.uniform(0, 1, n - 2)]) if kind == "random" else np.linspace(0, 1, n)
+        E = np.column_stack([np.arange(n - 1), np.arange(1, n)])
+    length = np.linalg.norm(np.diff(_shape(name, np.linspace(0, 1, 2_000_001)), axis=0), axis=1).sum()
+    m = np.array([(j + 1) // 2 for j in range(K)]) if closed else np.arange(K)
+    return _shape(name, t), E, ((2 if closed else 1) * np.pi * m / length) ** 2
+
+
+def err(lam: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.abs(lam[1:K] / ref[1:K] - 1).max())
+
+
+def main() -> int:
+    warnings.simplefilter("ignore")
+    head = ("| curve | sampling | n | default | vertex pencil | linear FEM | default / FEM "
+            "| FEM predicted |\n|---|---|---|---|---|---|---|---|")
+    lines = [head]
+    print(head, flush=True)
+    for name in ("circle", "ellipse", "trefoil", "open arc"):
+        for kind in ("uniform", "random"):
+            for n in (60, 200, 1000):
+                V, E, ref = curve(name, kind, n)
+                op = meshlap.laplacian(V, E)
+                ours = err(spectral.eigs(op, K, tol=1e-9)[0], ref)
+                vert = meshlap.laplacian(V, E, quadrature="vertex")
+                v = err(spectral.eigs(vert, K, tol=1e-9)[0], ref)
+                cot = baselines.cotangent(V, E)
+                lam = eigsh(sp.csc_matrix(-cot.S), K, sp.diags(cot.mass).tocsc(), sigma=-1e-6)[0]
+                fem = err(np.sort(lam), ref)
+                fell = "" if vert.correction == "richardson" else f" ({vert.correction})"
+                gal = " G" if op.quadrature == "galerkin" else ""
+                line = (f"| {name} | {kind} | {n:,} | {ours:.4%}{gal} | "
+                        f"{v:.4%}{fell} | {fem:.4%} | {ours / fem:.2f} | {op.resolution.fem_error:.4%} |")
+                lines.append(line)
+                print(line, flush=True)
+    body = ["Command: `python benchmarks/bench_curves.py`. Largest relative error of eigenvalues 1-9 against "
+            "(2πm/ℓ)² (closed) or (πm/ℓ)² (open, Neumann); G: the Galerkin pencil on the segments; a "
+            "correction in parentheses: the vertex pencil fell back to it; linear FEM: "
+            "`meshlap.baselines.cotangent(V, E)`; FEM predicted: `op.resolution.fem_error`.", ""] + lines
+    write_section("Curves: the Galerkin pencil on segments (issue 18)", body)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
