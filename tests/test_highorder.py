@@ -183,7 +183,7 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         rowchoice.choose_rows(X)
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
     assert counts[0] == [1200, 1200]
-    assert max(counts[1]) <= 80  # measured 75, 75 (the sample)
+    assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
 
 
 def test_known_noise_level_is_used():

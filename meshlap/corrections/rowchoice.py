@@ -11,7 +11,7 @@ Wide, low-degree rows average noise out at the price of a bias that grows with t
   fit of too low a degree also leaves the surface's own shape in its residual) and then the
   median over w's nearest neighbours;
 * the **geometric scale** ℓ_w = 1/κ_w, κ_w the curvature of a degree-2 fit on 64 neighbours
-  (where the data are noisy, on about 200 held by 96 of them: the ladder's first rung, whose
+  (where the data are noisy, on 256 held by 96 of them: the ladder's first rung, whose
   degree-2 rows that fit's are), the median over w's nearest neighbours, at most the
   diameter of the data;
 * for each candidate (degree q, K nearest neighbours, Gaussian weights reaching e^{−c} at the
@@ -24,8 +24,8 @@ The predicted relative error of a candidate, for a function that varies on the s
 
 with β = 0.1 and γ = 0.6 measured on spheres (the prediction is within a factor of about
 two of the error of x² and eˣ from 2,000 to 16,000 points, 0 to 1% noise). Each point takes
-the candidate of least E; the ladder of widths grows (about 200 neighbours, then ×5 in K up
-to 1,000) only at the points whose noise term still dominates. The widest rungs hold the
+the candidate of least E; the ladder of widths grows (×4 in K, up to 1,000 neighbours) only
+at the points whose noise term still dominates. The widest rungs hold the
 paper's width and more, so a noisy input gets rows at least as wide as the heat-kernel
 operator's at h = (2ē)².
 
@@ -86,12 +86,11 @@ BETA, GAMMA = 0.1, 0.6
 _C_COMPACT, _C_WIDE = 12.0, 3.0
 # Neighbours of the compact rows, per monomial count, and of the noise and curvature fits
 _K_PER_MONOMIAL = 1.7
-_K_NOISE, _K_CURVATURE = 64, 200
+_K_NOISE = 64
 # noise/spacing above which the scale is taken from the wider curvature fit
 _NOISY = 1e-3
-# The ladder of wide stencils: ~200 neighbours (the curvature fit's), then K grows by this
-# factor up to max_neighbors
-_LADDER = 5.0
+# The ladder of wide stencils: K grows by this factor up to max_neighbors
+_LADDER = 4.0
 #: Most points a row holds; wider stencils take them from a subset of the points
 SAMPLE = 96
 # The compact rows of every 16th point, and of at least 64, measure how small a row's noise
@@ -433,10 +432,10 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     cands = [c for q in degrees for c in compact[q]] + [noise_fit]
     sig, typical = _local_noise(resid, nb, comm, own, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
-    # are clean; where noise would inflate the curvature of a small fit, on ~200, the ladder's
-    # first rung, whose degree-2 rows that fit then is
+    # are clean; where noise would inflate the curvature of a small fit, on the ladder's first
+    # rung (256), whose degree-2 rows that fit then is
     Kmax = min(total, max_neighbors or min(1000, total // 4))
-    curv_fit, Kc = noise_fit[0], min(total, _K_CURVATURE, max(Kn, total // 10))
+    curv_fit, Kc = noise_fit[0], max(Kn, min(Kmax, int(round(Kn * _LADDER))))
     if typical is not None and typical > _NOISY * spacing:
         idx_c, dist_c, _ = spread(Kc, everyone)
         curv_fit = _candidate(P, idx_c, dist_c, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
@@ -472,7 +471,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     pick[~own] = -1  # the halo's rows are not built here
     active = np.flatnonzero(dominated & own)
     while len(active) and K < Kmax:
-        K = min(Kmax, Kc if K < Kc else int(round(K * _LADDER)))
+        K = min(Kmax, int(round(K * _LADDER)))
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
         reuse = K == Kc and curv_fit is not noise_fit[0]
