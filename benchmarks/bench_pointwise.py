@@ -337,6 +337,7 @@ def main() -> None:
     if args.build_ratios:
         build_ratios(args.n)
         return
+    load = os.getloadavg()[0]
     try:
         import pycompadre
 
@@ -397,7 +398,8 @@ def main() -> None:
     conv = convergence([1000, 2000, 4000, 8000, 16000] if args.n >= 16000 else [1000, 2000, 4000])
     print("\n".join(conv))
     lines = [
-        f"`python benchmarks/bench_pointwise.py --n {args.n}` (2 shared cores; {time.strftime('%Y-%m-%d')}). "
+        f"`python benchmarks/bench_pointwise.py --n {args.n}` (2 shared cores, load average {load:.1f} at "
+        f"the start and {os.getloadavg()[0]:.1f} at the end; {time.strftime('%Y-%m-%d')}). "
         "default = `meshlap.laplacian(V, F)` / `point_cloud_laplacian(P)`, its `op @ f` (the fitted "
         "point-wise rows: PCA frames, the same rows for a mesh and its vertices as a cloud); moments = "
         "the same with `pointwise=True` (the degree-2 moment rows, the default before issue 20); paper = "
