@@ -412,8 +412,10 @@ def main() -> None:
         "",
         *NOTES,
         "",
-        "Build time / entries per row of what `op @ f` applies (the default's build against the moment "
-        f"rows' in the same run: at most {max(ratios):.2f}×, median {float(np.median(ratios)):.2f}×):",
+        "Build time (wall clock, one build each: the load of other processes shows in it; the ratio "
+        "of the CPU times, alternated, is the table after this one) / entries per row of what `op @ f` "
+        f"applies (the default's build against the moment rows': at most {max(ratios):.2f}×, median "
+        f"{float(np.median(ratios)):.2f}×):",
         "",
         *cost,
         "",
