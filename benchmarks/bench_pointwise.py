@@ -4,6 +4,7 @@ in the same process, and the convergence order of the new rows on clean spheres 
     python benchmarks/bench_pointwise.py             # 16,000 points; writes RESULTS.md's
                                                      # section "Point-wise accuracy (issue 20)"
     python benchmarks/bench_pointwise.py --n 4000 --no-write    # a quick look
+    python benchmarks/bench_pointwise.py --build-ratios         # the build-time table only
 
 E2 = ‖Lf − Δf‖/‖Δf‖, the larger over two functions: x² and eˣ on the sphere and on spot,
 sin(x + 2y) and cos(2x − z) on the torus (R = 1, r = 0.4). Noise moves every point along the
@@ -201,17 +202,19 @@ def spot_cases() -> list[Case]:
 
 
 # -- methods ----------------------------------------------------------------------------------
-def run_meshlap(case: Case, mesh: bool, kw: dict, summary: list | None = None) -> tuple[float, float, float]:
+def build(case: Case, mesh: bool, kw: dict) -> meshlap.MeshLaplacian:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", meshlap.MeshWarning)
-        if mesh:
-            op, t = timed(lambda: meshlap.laplacian(case.V, case.F, **kw))
-        else:
-            op, t = timed(lambda: meshlap.point_cloud_laplacian(case.V, **kw))
-        _, t2 = timed(lambda: op @ case.funcs[0][0])  # the point-wise rows may be built lazily
+        op = meshlap.laplacian(case.V, case.F, **kw) if mesh else meshlap.point_cloud_laplacian(case.V, **kw)
+        op @ case.funcs[0][0]  # the point-wise rows may be built lazily
+    return op
+
+
+def run_meshlap(case: Case, mesh: bool, kw: dict, summary: list | None = None) -> tuple[float, float, float]:
+    op, t = timed(lambda: build(case, mesh, kw))
     if summary is not None:
         summary.append(op.pointwise_choice.summary() if op.pointwise_choice is not None else "—")
-    return e2(case, lambda f: op @ f), t + t2, op.L.nnz / len(case.V)
+    return e2(case, lambda f: op @ f), t, op.L.nnz / len(case.V)
 
 
 def run_cot(case: Case) -> tuple[float, float, float]:
@@ -271,6 +274,30 @@ def evaluate(case: Case, mesh: bool, have_gmls: bool, have_robust: bool) -> str:
     return summary[0]
 
 
+def build_ratios(n: int, repeat: int = 3) -> list[str]:
+    """CPU seconds of the builds (with one ``op @ f``): the default, ``pointwise=True`` and the
+    paper's, alternated in this process, the best of ``repeat`` each."""
+    cases = {f"{c.shape} {c.condition}": c for c in sphere_cases(n) + torus_cases(n)}
+    inputs = [(f"{name.split()[0]} {'mesh' if mesh else 'cloud'}, {name.split(' ', 1)[1]}", cases[name], mesh)
+              for name, mesh in (("sphere clean", True), ("sphere noise 0.5%", True),
+                                 ("sphere noise 1%", True), ("sphere clean", False), ("torus clean", True),
+                                 ("torus noise 1%", True))]
+    kws = {"default": {}, "pointwise=True": {"pointwise": True}, "paper": {"correction": "none"}}
+    lines = ["| input | default | `pointwise=True` | paper | default / `pointwise=True` | default / paper |",
+             "|---|---|---|---|---|---|"]
+    for label, case, mesh in inputs:
+        best = dict.fromkeys(kws, math.inf)
+        for _ in range(repeat):
+            for name, kw in kws.items():
+                t = time.process_time()
+                build(case, mesh, kw)
+                best[name] = min(best[name], time.process_time() - t)
+        d, m, p = best["default"], best["pointwise=True"], best["paper"]
+        lines.append(f"| {label} | {d:.2f} s | {m:.2f} s | {p:.2f} s | {d / m:.2f} | {d / p:.2f} |")
+        print(lines[-1], flush=True)
+    return lines
+
+
 # -- convergence ------------------------------------------------------------------------------
 def convergence(ns: list[int]) -> list[str]:
     lines = [
@@ -305,7 +332,12 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=16000)
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--shapes", default="sphere,torus,spot")
+    ap.add_argument("--build-ratios", action="store_true", help="only the table of build times (no write)")
     args = ap.parse_args()
+    if args.build_ratios:
+        build_ratios(args.n)
+        return
+    load = os.getloadavg()[0]
     try:
         import pycompadre
 
@@ -362,10 +394,12 @@ def main() -> None:
                 chosen.append(f"| {label} | {summary} |")
                 print(acc[-1], flush=True)
                 case.results = {}
+    ratio_table = build_ratios(args.n)
     conv = convergence([1000, 2000, 4000, 8000, 16000] if args.n >= 16000 else [1000, 2000, 4000])
     print("\n".join(conv))
     lines = [
-        f"`python benchmarks/bench_pointwise.py --n {args.n}` (2 shared cores; {time.strftime('%Y-%m-%d')}). "
+        f"`python benchmarks/bench_pointwise.py --n {args.n}` (2 shared cores, load average {load:.1f} at "
+        f"the start and {os.getloadavg()[0]:.1f} at the end; {time.strftime('%Y-%m-%d')}). "
         "default = `meshlap.laplacian(V, F)` / `point_cloud_laplacian(P)`, its `op @ f` (the fitted "
         "point-wise rows: PCA frames, the same rows for a mesh and its vertices as a cloud); moments = "
         "the same with `pointwise=True` (the degree-2 moment rows, the default before issue 20); paper = "
@@ -378,10 +412,18 @@ def main() -> None:
         "",
         *NOTES,
         "",
-        "Build time / entries per row of what `op @ f` applies (the default's build against the moment "
-        f"rows' in the same run: at most {max(ratios):.2f}×, median {float(np.median(ratios)):.2f}×):",
+        "Build time (wall clock, one build each: the load of other processes shows in it; the ratio "
+        "of the CPU times, alternated, is the table after this one) / entries per row of what `op @ f` "
+        f"applies (the default's build against the moment rows': at most {max(ratios):.2f}×, median "
+        f"{float(np.median(ratios)):.2f}×):",
         "",
         *cost,
+        "",
+        "The build against the moment rows', CPU seconds (`time.process_time`, so other processes' load "
+        "counts less), the best of 3 alternated in this process, one `op @ f` included "
+        f"(`python benchmarks/bench_pointwise.py --n {args.n} --build-ratios` prints it alone):",
+        "",
+        *ratio_table,
         "",
         "What the default's rows chose (`op.pointwise_choice.summary()`):",
         "",

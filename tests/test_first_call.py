@@ -84,7 +84,7 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     # the frames' eigenvectors and the metric's inverse are hand-written (meshlap._dense):
     # numba's np.linalg.eigh and inv compiled 7 more functions, 2 s of CPU on a busy machine
     assert not out["lapack"], out["lapack"]
-    # the mesh compiles the kernel rows and the fitted point-wise rows (highorder._rows, 8-11 s
+    # the mesh compiles the kernel rows and the fitted point-wise rows (_fit_kernel._rows, 8-11 s
     # of it): 11.9 s of CPU on a quiet 2-core machine, 12-18 s with a load of 6-9; numba's
     # parallel=True made it 34-37 s. The cloud reuses the mesh's kernels and compiles its
     # masses (3.6 s quiet, 4-7 s loaded)
@@ -113,7 +113,7 @@ def test_a_built_wheel_s_first_call_compiles_nothing(tmp_path):
     shipped = tmp_path / "site" / "meshlap" / "_kernels"
     assert json.loads((shipped / "manifest.json").read_text())["numba"] == numba.__version__
     names = {p.name.split("-")[0] for p in shipped.rglob("*.nbi")}
-    assert {"variable._var_rows", "highorder._rows", "stars._masses2"} <= names, names
+    assert {"variable._var_rows", "_fit_kernel._rows", "stars._masses2"} <= names, names
     out, err = first_calls(tmp_path / "cache", src=tmp_path / "site")
     imported, mesh, cloud = out["cpu"]
     print(f"shipped kernels, empty cache, CPU time (wall): import {imported:.2f} s ({out['wall'][0]:.2f}), "

@@ -163,6 +163,29 @@ def test_noise_sweep_never_worse_than_the_papers_operator():
         assert sphere_e2(L, V0, V) <= sphere_e2(paper(V, F), V0, V), level
 
 
+def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
+    # the compact rows of degree 4 and 6 are built at every point of a clean sphere, and on a
+    # noisy one only on the sample that bounds their noise factor (1/16 of the points, at
+    # least 64): the noise term alone rules them out elsewhere
+    built = []
+
+    def spy(P, idx, dist, degree, c, *args, **kw):
+        if c == rowchoice._C_COMPACT and degree in (4, 6):
+            built.append((degree, len(idx)))
+        return real(P, idx, dist, degree, c, *args, **kw)
+
+    real = rowchoice._candidate
+    monkeypatch.setattr(rowchoice, "_candidate", spy)
+    V0, V, F = noisy_sphere(1200, 0.01)
+    counts = []
+    for X in (V0, V):
+        built.clear()
+        rowchoice.choose_rows(X)
+        counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
+    assert counts[0] == [1200, 1200]
+    assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
+
+
 def test_known_noise_level_is_used():
     V0, V, F = noisy_sphere(1500, 0.005)
     _, choice = rowchoice.choose_rows(V, noise=0.005)
@@ -197,6 +220,8 @@ def test_bad_input_raises_mesh_error():
         highorder.pointwise_rows(P, indptr, indices, 0.01, normals=P[:10])
     with pytest.raises(MeshError, match="CSR"):
         highorder.pointwise_rows(P, indptr[:-1], indices, 0.01)
+    with pytest.raises(MeshError, match="degrees"):
+        highorder.fit_rows(P, indptr, indices, 0.01, 4)
     with pytest.raises(MeshError, match="K must be"):
         highorder.knn_pattern(P, 500)
     with pytest.raises(MeshError, match="at least"):

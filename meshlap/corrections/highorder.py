@@ -29,7 +29,6 @@ Curves (k = 1), surfaces (k = 2) and volumes (k = d, no height function) share t
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from itertools import combinations_with_replacement
 from typing import Any
@@ -38,18 +37,16 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .._dense import chol_solve, cholesky, sym_eigh
-from .._jit import in_blocks, jit
+from .._jit import in_blocks
 from ..errors import MeshError
 from ..geometry import check_points
+from ._fit_kernel import _rows
 
-__all__ = ["RowFit", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
+__all__ = ["RowFit", "fit_rows", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]
 
 #: Highest polynomial degree of a row (the probes of the error model look two degrees higher).
 MAX_DEGREE = 6
-# A Cholesky pivot below this fraction of its diagonal means the monomial adds nothing new.
-_PIVOT_TOL = 1e-11
 
 
 def monomials(k: int, degree: int) -> tuple[np.ndarray, np.ndarray]:
@@ -94,287 +91,6 @@ def _recursion(exps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         e[i] -= 1
         parent[a], var[a] = where[tuple(e)], i
     return parent, var
-
-
-@jit()
-def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no cover - compiled
-    # B: orthonormal rows, the first k tangent, the rest normal; C, vec (d × d), ev, v (d) scratch
-    d = P.shape[1]
-    if use_normal:
-        # a hypersurface: the given normal, tangents by Gram–Schmidt of the coordinate axes
-        for a in range(d):
-            B[d - 1, a] = normal[a]
-        row = 0
-        for e in range(d):
-            if row == d - 1:
-                break
-            for a in range(d):
-                v[a] = 1.0 if a == e else 0.0
-            for r in range(row):
-                dot = 0.0
-                for a in range(d):
-                    dot += v[a] * B[r, a]
-                for a in range(d):
-                    v[a] -= dot * B[r, a]
-            dot = 0.0
-            for a in range(d):
-                dot += v[a] * normal[a]
-            for a in range(d):
-                v[a] -= dot * normal[a]
-            nv = 0.0
-            for a in range(d):
-                nv += v[a] * v[a]
-            nv = math.sqrt(nv)
-            if nv > 0.3:
-                for a in range(d):
-                    B[row, a] = v[a] / nv
-                row += 1
-        return
-    tot = 0.0
-    for j in range(len(nbr)):
-        tot += th[j]
-    mean = v
-    for a in range(d):
-        s = 0.0
-        for j in range(len(nbr)):
-            s += th[j] * P[nbr[j], a]
-        mean[a] = s / tot
-    for a in range(d):
-        for b in range(d):
-            C[a, b] = 0.0
-    for j in range(len(nbr)):
-        for a in range(d):
-            xa = P[nbr[j], a] - mean[a]
-            for b in range(a + 1):
-                C[a, b] += th[j] * xa * (P[nbr[j], b] - mean[b])
-    for a in range(d):
-        for b in range(a):
-            C[b, a] = C[a, b]
-    sym_eigh(C, ev, vec)
-    for r in range(d):
-        for a in range(d):
-            B[r, a] = vec[a, d - 1 - r]
-
-
-@jit(fastmath=True)
-def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
-    # the lower triangle of G = W Phiᵀ over the first m monomials (W = θ-weighted Phi): sums
-    # over contiguous rows, which the compiler vectorizes
-    for al in range(m):
-        for be in range(al + 1):
-            s = 0.0
-            for j in range(K):
-                s += W[al, j] * Phi[be, j]
-            G[al, be] = s
-
-
-@jit()
-def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
-          degree, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
-    d = P.shape[1]
-    nc = d - k
-    # the frame's and the metric's scratch, once per block
-    B = np.empty((d, d))
-    C = np.empty((d, d))
-    vec = np.empty((d, d))
-    ev = np.empty(d)
-    v = np.empty(d)
-    Gi = np.empty((k, k))
-    Lk = np.empty((k, k))
-    kfloor = np.zeros(k)
-    kcol = np.empty(k)
-    for r in range(start, stop):
-        w = centers[r]
-        a0 = indptr[r]
-        K = indptr[r + 1] - a0
-        nbr = indices[a0:a0 + K]
-        inv4h = 1.0 / (4.0 * hv[r])
-        th = np.empty(K)
-        th_sum = 0.0
-        for j in range(K):
-            s = 0.0
-            for a in range(d):
-                t = P[nbr[j], a] - P[w, a]
-                s += t * t
-            th[j] = math.exp(-s * inv4h)
-            th_sum += th[j]
-        _frame(P, w, nbr, th, normals[w if use_normals else 0], use_normals, B, C, ev, vec, v)
-        U = np.empty((K, k))
-        Z = np.empty((K, nc))
-        rho2 = 0.0
-        for j in range(K):
-            s2 = 0.0
-            for b in range(d):
-                s = 0.0
-                for a in range(d):
-                    s += (P[nbr[j], a] - P[w, a]) * B[b, a]
-                if b < k:
-                    U[j, b] = s
-                    s2 += s * s
-                else:
-                    Z[j, b - k] = s
-            rho2 = max(rho2, s2)
-        rho = math.sqrt(rho2) if rho2 > 0.0 else 1.0
-        for j in range(K):
-            for b in range(k):
-                U[j, b] /= rho
-        # Vandermonde with two more degrees, for the probes of the error model; stored by
-        # monomial (rows contiguous over the neighbours, for the sums over them)
-        top = min(degree + 2, len(count) - 1)
-        mb = count[top]
-        # np.empty and np.zeros of one and two dimensions only: each other allocation
-        # (np.ones, a third dimension) is one more numba overload to compile
-        Phi = np.empty((mb, K))
-        for j in range(K):
-            Phi[0, j] = 1.0
-        for al in range(1, mb):
-            pa, va = parent[al], var[al]
-            for j in range(K):
-                Phi[al, j] = Phi[pa, j] * U[j, va]
-        m = count[degree]
-        G = np.zeros((m, m))
-        W = np.empty((m, K))
-        for al in range(m):
-            for j in range(K):
-                W[al, j] = th[j] * Phi[al, j]
-        _gram(W, Phi, m, K, G)
-        floor = np.empty(m)  # a pivot must stay above this fraction of its diagonal entry
-        for al in range(m):
-            floor[al] = _PIVOT_TOL * G[al, al]
-        good = cholesky(G, m, floor)
-        q = degree
-        while q >= 2 and count[q] > good:
-            q -= 1
-        if q < 2:
-            used[r] = -1
-            for j in range(K):
-                out[a0 + j] = 0.0
-            continue
-        used[r] = q
-        mq = count[q]
-        # the graph z = g(u): its gradient a and Hessian gh at u = 0, in unscaled units
-        ag = np.zeros((nc, k))
-        gh = np.zeros((nc * k, k))  # ∂_ij g_c at row c·k + i
-        res = 0.0
-        coef = np.empty(mq)
-        zr = np.empty(K)
-        for c in range(nc):
-            for al in range(mq):
-                s = 0.0
-                for j in range(K):
-                    s += W[al, j] * Z[j, c]
-                coef[al] = s
-            chol_solve(G, coef, mq)
-            for i in range(k):
-                ag[c, i] = coef[idx1[i]] / rho
-                for jj in range(k):
-                    gh[c * k + i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
-            for j in range(K):
-                zr[j] = Z[j, c]
-            for al in range(mq):
-                ca = coef[al]
-                for j in range(K):
-                    zr[j] -= ca * Phi[al, j]
-            for j in range(K):
-                res += th[j] * zr[j] * zr[j]
-        if not want_noise:
-            resid[r] = math.sqrt(res / (max(nc, 1) * th_sum))
-        # E[Σθr²] = σ² (Σθ − Σ θ_j² Φ_j G⁻¹ Φ_jᵀ): the degrees of freedom the fit leaves
-        dof = 0.0
-        if want_noise:
-            # the leverages Φ_jᵀ G⁻¹ Φ_j by one forward substitution, the K columns innermost
-            # (45% of a degree-6 row's cost one column at a time); per column the same operations
-            X = np.empty((mq, K))
-            lev = np.zeros(K)
-            for i in range(mq):
-                for j in range(K):
-                    X[i, j] = Phi[i, j]
-                for q2 in range(i):
-                    for j in range(K):
-                        X[i, j] -= G[i, q2] * X[q2, j]
-                gi = G[i, i]
-                for j in range(K):
-                    X[i, j] /= gi
-                    lev[j] += X[i, j] * X[i, j]
-            for j in range(K):
-                dof += th[j] - th[j] * th[j] * lev[j]
-        if want_noise:
-            resid[r] = math.sqrt(res / (nc * dof)) if nc > 0 and dof > 1e-3 * th_sum else (
-                0.0 if nc == 0 else np.inf)
-        ks = 0.0
-        for c in range(nc):
-            for i in range(k):
-                for jj in range(k):
-                    ks += gh[c * k + i, jj] * gh[c * k + i, jj]
-        kap[r] = math.sqrt(ks / k)
-        # the metric G = I + Σ_c ∇g_c ∇g_cᵀ, factored in place; Gi = G⁻¹ column by column
-        # (G ≥ I is positive definite)
-        for i in range(k):
-            for jj in range(k):
-                Lk[i, jj] = 1.0 if i == jj else 0.0
-        for c in range(nc):
-            for i in range(k):
-                for jj in range(k):
-                    Lk[i, jj] += ag[c, i] * ag[c, jj]
-        cholesky(Lk, k, kfloor)
-        for jj in range(k):
-            for i in range(k):
-                kcol[i] = 1.0 if i == jj else 0.0
-            chol_solve(Lk, kcol, k)
-            for i in range(k):
-                Gi[i, jj] = kcol[i]
-        # Γ contracted with G^{ij}: v_l = G^{lm} Σ_c ∂_m g_c (G^{ij} ∂_ij g_c)
-        t = np.zeros(k)
-        for c in range(nc):
-            tr = 0.0
-            for i in range(k):
-                for jj in range(k):
-                    tr += Gi[i, jj] * gh[c * k + i, jj]
-            for i in range(k):
-                t[i] += ag[c, i] * tr
-        lam = np.zeros(mq)
-        for i in range(k):
-            for jj in range(k):
-                lam[idx2[i, jj]] += Gi[i, jj] * (2.0 if i == jj else 1.0) / rho2
-            vl = 0.0
-            for mm in range(k):
-                vl += Gi[i, mm] * t[mm]
-            lam[idx1[i]] -= vl / rho
-        chol_solve(G, lam, mq)
-        s2 = 0.0
-        acc = np.zeros(K)
-        for al in range(mq):
-            la = lam[al]
-            for j in range(K):
-                acc[j] += Phi[al, j] * la
-        for j in range(K):
-            s = acc[j] * th[j]
-            out[a0 + j] = s
-            s2 += s * s
-        # the basis holds the constants, so the row sums to zero up to rounding: make it exact
-        # on the centre's own entry (it is among the neighbours)
-        tot_row = 0.0
-        self_q = -1
-        for j in range(K):
-            tot_row += out[a0 + j]
-            if nbr[j] == w:
-                self_q = a0 + j
-        if self_q >= 0:
-            out[self_q] -= tot_row
-        amp[r] = math.sqrt(s2)
-        # probes: the row applied to the monomials of degree q + 1 and q + 2 (unscaled)
-        for e in range(2):
-            qq = q + 1 + e
-            if qq > top:
-                bias[r, e] = np.nan
-                continue
-            pacc = 0.0
-            for al in range(count[qq - 1], count[qq]):
-                s = 0.0
-                for j in range(K):
-                    s += out[a0 + j] * Phi[al, j]
-                pacc += s * s
-            bias[r, e] = math.sqrt(pacc) * rho ** qq
 
 
 @dataclass
@@ -506,7 +222,30 @@ def pointwise_rows(P: Any, indptr: Any, indices: Any, h: Any, degree: int = 4, *
     >>> bool(np.allclose(L @ f, 12 * P[:, 0] ** 2 + 2 * P[:, 0]))
     True
     """
-    P, N, use_normals = _check_inputs(P, k, degree, normals)
+    fit = fit_rows(P, indptr, indices, h, (degree,), k=k, normals=normals, centers=centers,
+                   noise_dof=noise_dof)[0]
+    return fit if return_fit else fit.matrix
+
+
+def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...], *, k: int = 2,
+             normals: Any = None, centers: Any = None, noise_dof: bool = True) -> list[RowFit]:
+    """:func:`pointwise_rows` of several degrees on the same stencils, one :class:`RowFit` each,
+    for little more than the highest alone: the frames, weights and Gram matrices are shared.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> P = meshlap.shapes.fibonacci_sphere(1000)
+    >>> indptr, indices, _ = knn_pattern(P, 30)
+    >>> four, two = fit_rows(P, indptr, indices, 0.002, (4, 2))
+    >>> alone = pointwise_rows(P, indptr, indices, 0.002, 2)
+    >>> bool(np.array_equal(two.matrix.data, alone.data)), int(four.degree.min())
+    (True, 4)
+    """
+    if isinstance(degrees, (int, np.integer)) or not len(degrees):
+        raise MeshError(f"degrees must be a sequence of degrees; got {degrees!r}")
+    for degree in degrees:
+        P, N, use_normals = _check_inputs(P, k, degree, normals)
     n, d = P.shape
     indptr = np.ascontiguousarray(indptr, dtype=np.int64)
     indices = np.ascontiguousarray(indices, dtype=np.int64)
@@ -523,18 +262,18 @@ def pointwise_rows(P: Any, indptr: Any, indices: Any, h: Any, degree: int = 4, *
         raise MeshError("pointwise_rows: h must be finite and positive")
     exps, count = monomials(k, MAX_DEGREE + 2)
     idx1, idx2 = _derivative_slots(exps, k)
-    out = np.zeros(len(indices))
-    used = np.zeros(rows, dtype=np.int64)
-    resid, amp, kap = np.zeros(rows), np.zeros(rows), np.zeros(rows)
-    probes = np.full((rows, 2), np.nan)
+    T = len(degrees)
+    out = np.zeros((T, len(indices)))
+    used = np.zeros((T, rows), dtype=np.int64)
+    resid, amp, kap = np.zeros((T, rows)), np.zeros((T, rows)), np.zeros((T, rows))
+    probes = np.full((rows, 2 * T), np.nan)
     if rows:
         parent, var = _recursion(exps)
-        in_blocks(_rows, rows, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count, degree,
-                  idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
-    L = _rows_matrix(n, centers, indptr, indices, out)
-    if not return_fit:
-        return L
-    return RowFit(L, centers, used, resid, amp, probes, kap, hv)
+        targets = np.asarray(degrees, dtype=np.int64)
+        in_blocks(_rows, rows, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count,
+                  targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
+    return [RowFit(_rows_matrix(n, centers, indptr, indices, out[t]), centers, used[t], resid[t], amp[t],
+                   probes[:, 2 * t:2 * t + 2], kap[t], hv) for t in range(T)]
 
 
 def _rows_matrix(n: int, centers: np.ndarray, indptr: np.ndarray, indices: np.ndarray,

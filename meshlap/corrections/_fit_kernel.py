@@ -1,0 +1,311 @@
+"""The compiled kernels of :mod:`meshlap.corrections.highorder`: a frame per centre and the
+weighted least-squares rows, of one or several degrees on the same stencil."""
+
+import math
+
+import numpy as np
+
+from .._dense import chol_solve, cholesky, sym_eigh
+from .._jit import jit
+
+# A Cholesky pivot below this fraction of its diagonal means the monomial adds nothing new.
+PIVOT_TOL = 1e-11
+
+
+@jit()
+def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no cover - compiled
+    # B: orthonormal rows, the first k tangent, the rest normal; C, vec (d × d), ev, v (d) scratch
+    d = P.shape[1]
+    if use_normal:
+        # a hypersurface: the given normal, tangents by Gram–Schmidt of the coordinate axes
+        for a in range(d):
+            B[d - 1, a] = normal[a]
+        row = 0
+        for e in range(d):
+            if row == d - 1:
+                break
+            for a in range(d):
+                v[a] = 1.0 if a == e else 0.0
+            for r in range(row):
+                dot = 0.0
+                for a in range(d):
+                    dot += v[a] * B[r, a]
+                for a in range(d):
+                    v[a] -= dot * B[r, a]
+            dot = 0.0
+            for a in range(d):
+                dot += v[a] * normal[a]
+            for a in range(d):
+                v[a] -= dot * normal[a]
+            nv = 0.0
+            for a in range(d):
+                nv += v[a] * v[a]
+            nv = math.sqrt(nv)
+            if nv > 0.3:
+                for a in range(d):
+                    B[row, a] = v[a] / nv
+                row += 1
+        return
+    tot = 0.0
+    for j in range(len(nbr)):
+        tot += th[j]
+    mean = v
+    for a in range(d):
+        s = 0.0
+        for j in range(len(nbr)):
+            s += th[j] * P[nbr[j], a]
+        mean[a] = s / tot
+    for a in range(d):
+        for b in range(d):
+            C[a, b] = 0.0
+    for j in range(len(nbr)):
+        for a in range(d):
+            xa = P[nbr[j], a] - mean[a]
+            for b in range(a + 1):
+                C[a, b] += th[j] * xa * (P[nbr[j], b] - mean[b])
+    for a in range(d):
+        for b in range(a):
+            C[b, a] = C[a, b]
+    sym_eigh(C, ev, vec)
+    for r in range(d):
+        for a in range(d):
+            B[r, a] = vec[a, d - 1 - r]
+
+
+@jit(fastmath=True)
+def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
+    # the lower triangle of G = W Phiᵀ over the first m monomials (W = θ-weighted Phi): sums
+    # over contiguous rows, which the compiler vectorizes
+    for al in range(m):
+        for be in range(al + 1):
+            s = 0.0
+            for j in range(K):
+                s += W[al, j] * Phi[be, j]
+            G[al, be] = s
+
+
+@jit()
+def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
+          targets, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
+    # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
+    # Cholesky factor of a leading block is the leading block of the factor); outputs by target
+    d = P.shape[1]
+    nc = d - k
+    # the frame's and the metric's scratch, once per block
+    B = np.empty((d, d))
+    C = np.empty((d, d))
+    vec = np.empty((d, d))
+    ev = np.empty(d)
+    v = np.empty(d)
+    Gi = np.empty((k, k))
+    Lk = np.empty((k, k))
+    kfloor = np.zeros(k)
+    kcol = np.empty(k)
+    # the rows' scratch, once per block for its longest row (np.empty and np.zeros of one and
+    # two dimensions only: each other allocation, np.ones or a third dimension, is one more
+    # numba overload to compile)
+    Kb = 0
+    for r in range(start, stop):
+        Kb = max(Kb, indptr[r + 1] - indptr[r])
+    # Vandermonde with two more degrees, for the probes of the error model; stored by
+    # monomial (rows contiguous over the neighbours, for the sums over them)
+    degree = 0
+    for ti in range(len(targets)):
+        degree = max(degree, targets[ti])
+    top = min(degree + 2, len(count) - 1)
+    mb = count[top]
+    m = count[degree]
+    X = np.empty((Kb, d))
+    th = np.empty(Kb)
+    U = np.empty((Kb, k))
+    Z = np.empty((Kb, nc))
+    Phi = np.empty((mb, Kb))
+    W = np.empty((m, Kb))
+    Y = np.empty((m, Kb))
+    G = np.empty((m, m))  # its lower triangle only is written and read
+    floor = np.empty(m)
+    ag = np.empty((nc, k))
+    gh = np.empty((nc * k, k))
+    coef = np.empty(m)
+    zr = np.empty(Kb)
+    lev = np.empty(Kb)
+    t = np.empty(k)
+    lam = np.empty(m)
+    acc = np.empty(Kb)
+    for r in range(start, stop):
+        w = centers[r]
+        a0 = indptr[r]
+        K = indptr[r + 1] - a0
+        nbr = indices[a0:a0 + K]
+        inv4h = 1.0 / (4.0 * hv[r])
+        th_sum = 0.0
+        for j in range(K):
+            s = 0.0
+            for a in range(d):
+                X[j, a] = P[nbr[j], a] - P[w, a]
+                s += X[j, a] * X[j, a]
+            th[j] = math.exp(-s * inv4h)
+            th_sum += th[j]
+        _frame(P, w, nbr, th, normals[w if use_normals else 0], use_normals, B, C, ev, vec, v)
+        rho2 = 0.0
+        for j in range(K):
+            s2 = 0.0
+            for b in range(d):
+                s = 0.0
+                for a in range(d):
+                    s += X[j, a] * B[b, a]
+                if b < k:
+                    U[j, b] = s
+                    s2 += s * s
+                else:
+                    Z[j, b - k] = s
+            rho2 = max(rho2, s2)
+        rho = math.sqrt(rho2) if rho2 > 0.0 else 1.0
+        for j in range(K):
+            for b in range(k):
+                U[j, b] /= rho
+        for j in range(K):
+            Phi[0, j] = 1.0
+        for al in range(1, mb):
+            pa, va = parent[al], var[al]
+            for j in range(K):
+                Phi[al, j] = Phi[pa, j] * U[j, va]
+        for al in range(m):
+            for j in range(K):
+                W[al, j] = th[j] * Phi[al, j]
+        _gram(W, Phi, m, K, G)
+        for al in range(m):  # a pivot must stay above this fraction of its diagonal entry
+            floor[al] = PIVOT_TOL * G[al, al]
+        good = cholesky(G, m, floor)
+        for ti in range(len(targets)):
+            q = targets[ti]
+            while q >= 2 and count[q] > good:
+                q -= 1
+            if q < 2:
+                used[ti, r] = -1
+                for j in range(K):
+                    out[ti, a0 + j] = 0.0
+                continue
+            used[ti, r] = q
+            mq = count[q]
+            # the graph z = g(u): its gradient a and Hessian gh at u = 0, in unscaled units
+            ag[:, :] = 0.0
+            gh[:, :] = 0.0  # ∂_ij g_c at row c·k + i
+            res = 0.0
+            for c in range(nc):
+                for al in range(mq):
+                    s = 0.0
+                    for j in range(K):
+                        s += W[al, j] * Z[j, c]
+                    coef[al] = s
+                chol_solve(G, coef, mq)
+                for i in range(k):
+                    ag[c, i] = coef[idx1[i]] / rho
+                    for jj in range(k):
+                        gh[c * k + i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
+                for j in range(K):
+                    zr[j] = Z[j, c]
+                for al in range(mq):
+                    ca = coef[al]
+                    for j in range(K):
+                        zr[j] -= ca * Phi[al, j]
+                for j in range(K):
+                    res += th[j] * zr[j] * zr[j]
+            if not want_noise:
+                resid[ti, r] = math.sqrt(res / (max(nc, 1) * th_sum))
+            # E[Σθr²] = σ² (Σθ − Σ θ_j² Φ_j G⁻¹ Φ_jᵀ): the degrees of freedom the fit leaves
+            # (Y: G's factor solved against Φ, by forward substitution for all neighbours at
+            # once, over contiguous rows)
+            dof = 0.0
+            if want_noise:
+                for j in range(K):
+                    lev[j] = 0.0
+                for i in range(mq):
+                    for j in range(K):
+                        Y[i, j] = Phi[i, j]
+                    for q2 in range(i):
+                        g = G[i, q2]
+                        for j in range(K):
+                            Y[i, j] -= g * Y[q2, j]
+                    g = G[i, i]
+                    for j in range(K):
+                        Y[i, j] = Y[i, j] / g
+                        lev[j] += Y[i, j] * Y[i, j]
+                for j in range(K):
+                    dof += th[j] - th[j] * th[j] * lev[j]
+                resid[ti, r] = math.sqrt(res / (nc * dof)) if nc > 0 and dof > 1e-3 * th_sum else (
+                    0.0 if nc == 0 else np.inf)
+            ks = 0.0
+            for c in range(nc):
+                for i in range(k):
+                    for jj in range(k):
+                        ks += gh[c * k + i, jj] * gh[c * k + i, jj]
+            kap[ti, r] = math.sqrt(ks / k)
+            # the metric G = I + Σ_c ∇g_c ∇g_cᵀ, factored in place; Gi = G⁻¹ column by column
+            # (G ≥ I is positive definite)
+            for i in range(k):
+                for jj in range(k):
+                    Lk[i, jj] = 1.0 if i == jj else 0.0
+            for c in range(nc):
+                for i in range(k):
+                    for jj in range(k):
+                        Lk[i, jj] += ag[c, i] * ag[c, jj]
+            cholesky(Lk, k, kfloor)
+            for jj in range(k):
+                for i in range(k):
+                    kcol[i] = 1.0 if i == jj else 0.0
+                chol_solve(Lk, kcol, k)
+                for i in range(k):
+                    Gi[i, jj] = kcol[i]
+            # Γ contracted with G^{ij}: v_l = G^{lm} Σ_c ∂_m g_c (G^{ij} ∂_ij g_c)
+            t[:] = 0.0
+            for c in range(nc):
+                tr = 0.0
+                for i in range(k):
+                    for jj in range(k):
+                        tr += Gi[i, jj] * gh[c * k + i, jj]
+                for i in range(k):
+                    t[i] += ag[c, i] * tr
+            lam[:] = 0.0
+            for i in range(k):
+                for jj in range(k):
+                    lam[idx2[i, jj]] += Gi[i, jj] * (2.0 if i == jj else 1.0) / rho2
+                vl = 0.0
+                for mm in range(k):
+                    vl += Gi[i, mm] * t[mm]
+                lam[idx1[i]] -= vl / rho
+            chol_solve(G, lam, mq)
+            s2 = 0.0
+            acc[:K] = 0.0
+            for al in range(mq):
+                la = lam[al]
+                for j in range(K):
+                    acc[j] += Phi[al, j] * la
+            for j in range(K):
+                s = acc[j] * th[j]
+                out[ti, a0 + j] = s
+                s2 += s * s
+            # the basis holds the constants, so the row sums to zero up to rounding: make it exact
+            # on the centre's own entry (it is among the neighbours)
+            tot_row = 0.0
+            self_q = -1
+            for j in range(K):
+                tot_row += out[ti, a0 + j]
+                if nbr[j] == w:
+                    self_q = a0 + j
+            if self_q >= 0:
+                out[ti, self_q] -= tot_row
+            amp[ti, r] = math.sqrt(s2)
+            # probes: the row applied to the monomials of degree q + 1 and q + 2 (unscaled)
+            for e in range(2):
+                qq = q + 1 + e
+                if qq > top:
+                    bias[r, 2 * ti + e] = np.nan
+                    continue
+                pacc = 0.0
+                for al in range(count[qq - 1], count[qq]):
+                    s = 0.0
+                    for j in range(K):
+                        s += out[ti, a0 + j] * Phi[al, j]
+                    pacc += s * s
+                bias[r, 2 * ti + e] = math.sqrt(pacc) * rho ** qq
