@@ -167,14 +167,16 @@ def _psd_faces(geo: Geometry) -> Any:
     return None
 
 
-def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options) -> tuple:
+def _pointwise(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray, opts: Options,
+               report: Callable[[float, str], None] | None) -> tuple:
     # the rows op @ f applies: width and degree chosen per point ("fit", the default), fitted
     # rows of a fixed degree on the kernel's stencil, or degree-2 moments of the kernel's rows
     if opts.pointwise == "fit":
         # the positions f was sampled at: a denoised cloud's input points, whose noise the rows
         # must average out (the projected points would hide it)
         P = geo._cache.get("input_points", geo.points)
-        L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim)
+        tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
+        L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim, progress=tick)
         if L.dtype != opts.dtype:
             L.data = L.data.astype(opts.dtype)
         return L, None, choice
@@ -294,7 +296,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     if opts.pointwise:
         if report is not None:
             report(0.9, "point-wise rows")
-        out.L, out.pointwise_unchanged, out.pointwise_choice = _pointwise(geo, free, hv, opts)
+        out.L, out.pointwise_unchanged, out.pointwise_choice = _pointwise(geo, free, hv, opts, report)
     if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
     if report is not None:

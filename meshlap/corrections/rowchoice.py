@@ -65,9 +65,8 @@ s instead of 0.67 (the same rows).
 from __future__ import annotations
 
 import math
-import os
-import sys
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -327,8 +326,8 @@ def _assemble(n: int, pick: np.ndarray, local: list) -> sp.csr_matrix:
 
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                 max_neighbors: int | None = None, noise: float | None = None,
-                sample: int = SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None
-                ) -> tuple[sp.csr_matrix, RowChoice]:
+                sample: int = SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None,
+                progress: Callable[[str], None] | None = None) -> tuple[sp.csr_matrix, RowChoice]:
     """Point-wise Laplacian rows whose width and degree follow the data at every point.
 
     Parameters
@@ -357,6 +356,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         ``comm`` the communicator over which the global figures (spacing, noise median,
         extent, number of points) are reduced, each point counted by the rank that owns it.
         The rows are then those of the single machine.
+    progress : callable, optional
+        ``progress(stage)`` as each stage ends ("queries", "compact 4", "rung 1000", ...).
 
     Returns
     -------
@@ -395,7 +396,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     if total < least:
         raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {total}")
     notes: list[str] = []
-    _tick("start")
+    tick = progress or (lambda stage: None)
     tree = cKDTree(P)
     spread = _Spread(P, tree, int(sample), ids, total)
     everyone = np.arange(n)
@@ -411,7 +412,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
     diameter = float(np.linalg.norm(hi - lo))
-    _tick("queries")
+    tick("queries")
     # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
     # higher degree, lowest first, only where they can win (_compact)
     fit = _candidate(P, idx_all[:, :Kn], dist_all[:, :Kn], 2, _C_WIDE, k, normals, everyone)
@@ -419,7 +420,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     low = _candidate(P, idx_all[:, :K2], dist_all[:, :K2], 2, _C_COMPACT, k, normals, everyone)
     compact = {2: [(low, K2)]}
     resid = np.minimum(fit.residual, low.residual)
-    _tick("noise fit")
+    tick("noise fit")
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
     sample = spread.rank < max(_CALIBRATE[0], total // _CALIBRATE[1])
     for q, K in zip(degrees[-2::-1], Ks[-2::-1], strict=True):
@@ -429,7 +430,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                               (sample, own), comm)
         for c, _ in compact[q]:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
-        _tick(f"compact {q}")
+        tick(f"compact {q}")
     cands = [c for q in degrees for c in compact[q]] + [noise_fit]
     sig, typical = _local_noise(resid, nb, comm, own, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
@@ -440,7 +441,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     if typical is not None and typical > _NOISY * spacing:
         idx_c, dist_c, _ = spread(Kc, everyone)
         curv_fit = _candidate(P, idx_c, dist_c, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
-        _tick("curvature fit")
+        tick("curvature fit")
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     scale = _scale(curv_fit, nb, k, d, diameter, spacing)
@@ -467,7 +468,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
 
     for fit, K in cands:
         consider(fit, K)
-    _tick("compare")
+    tick("compare")
     K = Kn
     pick[~own] = -1  # the halo's rows are not built here
     active = np.flatnonzero(dominated & own)
@@ -482,7 +483,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         for fit in ([_restrict(curv_fit, active)] if reuse else []) + fits[::-1]:  # degree 2 first
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
-        _tick(f"rung {K}")
+        tick(f"rung {K}")
     # robust to clean f on a noisy surface: among the candidates within ROBUST of the least
     # predicted error, the one of least bias (the noise term assumes f sampled at the noisy
     # points; a smooth f there is served by the lower bias)
@@ -516,7 +517,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
             degree[rows] = fit.degree[pos]
             hv[rows] = fit.h[pos]
     L = _assemble(n, pick, local)
-    _tick("assemble")
+    tick("assemble")
     return L, RowChoice(degree, widths, hv, sig, scale, best, spacing, notes)
 
 
@@ -581,19 +582,3 @@ def _bounds(comm: Any, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         comm.Allreduce(np.ascontiguousarray(hi, dtype=np.float64), ghi, op=MPI.MAX)
         lo, hi = glo, ghi
     return lo, hi
-
-
-_T0 = [0.0]
-
-
-def _tick(what: str) -> None:
-    # stage timer for profiling (MESHLAP_ROWCHOICE_TIMES=1 prints CPU and wall seconds)
-    if not os.environ.get("MESHLAP_ROWCHOICE_TIMES"):
-        return
-    import time
-
-    now = (time.perf_counter(), time.process_time())
-    if what != "start":
-        print(f"  rowchoice {what:14s} wall {now[0] - _T0[0]:6.2f}  cpu {now[1] - _T0[1]:6.2f}",
-              file=sys.stderr)
-    _T0[:] = [now[0], now[1]]
