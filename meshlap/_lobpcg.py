@@ -4,8 +4,10 @@ LOBPCG (Knyazev 2001) for ``A x = λ M x`` with ``M = diag(m) > 0``, in the basi
 Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and
 M-orthogonal to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the
 identity and is never formed; of the operator's Gram matrix only the rows of W and P are
-products over the long dimension (X's own block is diag(θ)), and P's update is found and
-orthonormalized in the small coefficient space. What stays proportional to n per iteration is
+products over the long dimension (X's own block is diag(θ), and P.T A W is W.T A P
+transposed), and P's update is found and orthonormalized in the small coefficient space; X and
+P are kept side by side in one array, so that each of these products is one BLAS call.
+What stays proportional to n per iteration is
 one product with A, one preconditioner application, the orthogonalization of W and the
 combinations that form the new X and P.
 
@@ -200,16 +202,6 @@ class Ritz(NamedTuple):
     ratio: np.ndarray
 
 
-def _combine(blocks: list[np.ndarray], C: np.ndarray) -> np.ndarray:
-    # [B_0 B_1 ...] @ C without stacking the blocks side by side
-    out, s = None, 0
-    for B in blocks:
-        part = B @ C[s:s + B.shape[1]]
-        out = part if out is None else out + part
-        s += B.shape[1]
-    return out
-
-
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
            tol: float, maxiter: int, allsum=_local, *, on_values: bool = True,
            report: Callable[[int, float], None] | None = None, floor: float | None = None,
@@ -241,10 +233,12 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     AX = apply_A(X)
     G = allsum(X.T @ AX)
     lam, Q = np.linalg.eigh(0.5 * (G + G.T))
-    X, AX = X @ Q, AX @ Q
-    nb = X.shape[1]
-    P = AP = None
+    # XP = [X P] and AXP = [AX AP] side by side in one array each: every product over the long
+    # dimension below is then one BLAS call that reads each array once
+    XP, AXP = X @ Q, AX @ Q
+    nb = XP.shape[1]
     for it in range(maxiter + 1):
+        X, AX = XP[:, :nb], AXP[:, :nb]
         R = AX - (mc * X) * lam
         if on_values:
             gram = allsum(R.T @ (R / mc))
@@ -260,26 +254,20 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         if not active[:k].any() or it == maxiter or (floor is not None and lam[0] < floor):
             break
         W = precond(R[:, active])
-        basis = [X] if P is None else [X, P]
         for _ in range(1 if cheap else 2):  # classical Gram–Schmidt against X and P, twice is enough
-            mW = mc * W
-            coef = allsum(np.vstack([B.T @ mW for B in basis]))
-            W -= _combine(basis, coef)
+            W -= XP @ allsum(XP.T @ (mc * W))
         W, _ = svqb(W, m, allsum=allsum)
         AW = apply_A(W)
-        blocks, ablocks = [X, W] + ([] if P is None else [P]), [AX, AW] + ([] if P is None else [AP])
-        # the operator's Gram matrix of [X, W, P]; its mass Gram matrix is I by construction.
-        # Its rows of W and P, less P.T AW, which is (W.T AP).T
-        rows = [np.hstack([W.T @ AB for AB in ablocks])]
-        if P is not None:
-            rows.append(np.hstack([P.T @ AX, rows[0][:, -P.shape[1]:].T, P.T @ AP]))
-        low = allsum(np.vstack(rows))
-        s = low.shape[1]
+        # the operator's Gram matrix of the basis [X, P, W], lower triangle (all eigh reads);
+        # its mass Gram matrix is I by construction, and its block of X is diag(θ)
+        q, s = XP.shape[1], XP.shape[1] + W.shape[1]
         G = np.zeros((s, s))
-        G[:nb, :nb] = np.diag(lam)
-        G[nb:] = low
-        G[:nb, nb:] = low[:, :nb].T
-        lam_all, C = np.linalg.eigh(0.5 * (G + G.T))
+        G[nb:q, :q] = XP[:, nb:].T @ AXP
+        G[q:, :q] = W.T @ AXP
+        G[q:, q:] = W.T @ AW
+        G = allsum(G)
+        G[np.arange(nb), np.arange(nb)] = lam
+        lam_all, C = np.linalg.eigh(G)
         C, lam = C[:, :nb], lam_all[:nb]
         # the new directions: the update's part outside the old X, orthogonal to the new X,
         # orthonormalized in the coefficient space (where the basis is orthonormal)
@@ -288,10 +276,14 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         for _ in range(2):
             E -= C @ (C.T @ E)
         E, _ = svqb(E, np.ones(s))
-        X = _combine(blocks, C)
-        P = _combine(blocks, E) if E.shape[1] else None
+        CE = np.hstack([C, E])
+        XP_new = XP @ CE[:q]
+        XP_new += W @ CE[q:]
         if cheap:
-            AX, AP = apply_A(X), (None if P is None else apply_A(P))
+            AXP = apply_A(XP_new)
         else:
-            AX, AP = _combine(ablocks, C), (_combine(ablocks, E) if P is not None else None)
-    return Ritz(lam, X, it, res, ratio)
+            AXP_new = AXP @ CE[:q]
+            AXP_new += AW @ CE[q:]
+            AXP = AXP_new
+        XP = XP_new
+    return Ritz(lam, np.ascontiguousarray(X), it, res, ratio)
