@@ -4,16 +4,22 @@ LOBPCG (Knyazev 2001) for ``A x = λ M x`` with ``M = diag(m) > 0``, in the basi
 Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and
 M-orthogonal to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the
 identity and is never formed; of the operator's Gram matrix only the rows of W and P are
-products over the long dimension (X's own block is diag(θ)), and P's update is found and
-orthonormalized in the small coefficient space. What stays proportional to n per iteration is
+products over the long dimension (X's own block is diag(θ), and P.T A W is W.T A P
+transposed), and P's update is found and orthonormalized in the small coefficient space; X and
+P are kept side by side in one array, so that each of these products is one BLAS call.
+What stays proportional to n per iteration is
 one product with A, one preconditioner application, the orthogonalization of W and the
 combinations that form the new X and P.
 
 The convergence test is on the eigenvalues, not the residuals: a Ritz value θ_i whose
 residual is r_i = A x_i - θ_i M x_i lies within ``‖r_i‖`` of an eigenvalue (Bauer–Fike in
 the M⁻¹ norm) and, when the Ritz values within ``_WINDOW`` of it are the whole cluster that
-holds it, within ``‖R_c‖² / δ`` (Kato–Temple for the cluster: R_c their residuals, δ the
-distance to the nearest Ritz value outside). A relative eigenvalue accuracy ε so needs a
+holds it, within ``‖R_c‖₂² / δ`` (Kato–Temple for the cluster: R_c the block of their
+residuals, ‖·‖₂ its spectral norm in the M⁻¹ inner product, δ the distance to the nearest Ritz
+value outside; Mathias 1998, Li and Li 2013). The spectral norm is the largest eigenvalue of the
+cluster's share of the residuals' Gram matrix: for a cluster of c near-orthogonal residuals of
+like size it is about 1/c of the sum of their squares, which ends the iteration on a sphere's
+(2l+1)-fold eigenvalues one iteration sooner. A relative eigenvalue accuracy ε so needs a
 residual of only about √(ε·θ·δ), not ε·θ: half the iterations for ε = 1e-8.
 
 The preconditioner factor is a sparse LU in symmetric mode, applied to wide blocks with
@@ -139,21 +145,31 @@ def svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10, allsum=_local) -> tu
     return U @ T, T
 
 
-def eig_error(theta: np.ndarray, res: np.ndarray) -> np.ndarray:
+def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None) -> np.ndarray:
     """Bound on the distance from each Ritz value to the spectrum (module notes).
+
+    ``res`` holds the residual norms; ``gram``, the residuals' Gram matrix ``R.T M⁻¹ R``
+    (its diagonal ``res²``), gives each cluster's spectral norm. Without it the sum of the
+    cluster's squared residuals stands in for the squared spectral norm (an upper bound on it).
 
     Examples
     --------
-    >>> err = eig_error(np.array([1.0, 1.001, 2.0]), np.array([1e-4, 1e-4, 1e-3]))
-    >>> (err * 1e8).round(1)     # the pair's residuals squared over its gap to 2, in 1e-8
+    >>> theta, res = np.array([1.0, 1.001, 2.0]), np.array([1e-4, 1e-4, 1e-3])
+    >>> (eig_error(theta, res) * 1e8).round(1)     # the pair's residuals squared over its gap
     array([  2. ,   2. , 100.1])
+    >>> (eig_error(theta, res, np.diag(res ** 2)) * 1e8).round(1)  # orthogonal residuals: half
+    array([  1. ,   1. , 100.1])
     """
     err = res.astype(np.float64)
     for i, t in enumerate(theta):
         near = np.abs(theta - t) <= _WINDOW * max(abs(t), 1e-300)
         if not near.all():
             gap = float(np.abs(theta[~near] - t).min())
-            err[i] = min(err[i], float(np.sum(res[near] ** 2)) / gap)
+            if gram is None:
+                square = float(np.sum(res[near] ** 2))
+            else:
+                square = float(np.linalg.eigvalsh(gram[np.ix_(near, near)])[-1])
+            err[i] = min(err[i], square / gap)
     return err
 
 
@@ -184,16 +200,6 @@ class Ritz(NamedTuple):
     iterations: int
     residuals: np.ndarray
     ratio: np.ndarray
-
-
-def _combine(blocks: list[np.ndarray], C: np.ndarray) -> np.ndarray:
-    # [B_0 B_1 ...] @ C without stacking the blocks side by side
-    out, s = None, 0
-    for B in blocks:
-        part = B @ C[s:s + B.shape[1]]
-        out = part if out is None else out + part
-        s += B.shape[1]
-    return out
 
 
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
@@ -227,14 +233,20 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     AX = apply_A(X)
     G = allsum(X.T @ AX)
     lam, Q = np.linalg.eigh(0.5 * (G + G.T))
-    X, AX = X @ Q, AX @ Q
-    nb = X.shape[1]
-    P = AP = None
+    # XP = [X P] and AXP = [AX AP] side by side in one array each: every product over the long
+    # dimension below is then one BLAS call that reads each array once
+    XP, AXP = X @ Q, AX @ Q
+    nb = XP.shape[1]
     for it in range(maxiter + 1):
+        X, AX = XP[:, :nb], AXP[:, :nb]
         R = AX - (mc * X) * lam
-        res = np.sqrt(allsum(np.sum(R * R / mc, axis=0)))
+        if on_values:
+            gram = allsum(R.T @ (R / mc))
+            res = np.sqrt(np.maximum(np.diag(gram), 0.0))
+            err = eig_error(lam, res, gram)
+        else:
+            err = res = np.sqrt(allsum(np.sum(R * R / mc, axis=0)))
         scale = np.maximum(np.abs(lam), 0.01 * max(abs(float(lam[k - 1])), 1e-300))
-        err = eig_error(lam, res) if on_values else res
         ratio = err / np.maximum(tol * scale, 1e-300)
         if report is not None:
             report(it, float(ratio[:k].max()))
@@ -242,22 +254,20 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         if not active[:k].any() or it == maxiter or (floor is not None and lam[0] < floor):
             break
         W = precond(R[:, active])
-        basis = [X] if P is None else [X, P]
         for _ in range(1 if cheap else 2):  # classical Gram–Schmidt against X and P, twice is enough
-            mW = mc * W
-            coef = allsum(np.vstack([B.T @ mW for B in basis]))
-            W -= _combine(basis, coef)
+            W -= XP @ allsum(XP.T @ (mc * W))
         W, _ = svqb(W, m, allsum=allsum)
         AW = apply_A(W)
-        blocks, ablocks = [X, W] + ([] if P is None else [P]), [AX, AW] + ([] if P is None else [AP])
-        # the operator's Gram matrix of [X, W, P]; its mass Gram matrix is I by construction
-        low = allsum(np.vstack([np.hstack([B.T @ AB for AB in ablocks]) for B in blocks[1:]]))
-        s = low.shape[1]
+        # the operator's Gram matrix of the basis [X, P, W], lower triangle (all eigh reads);
+        # its mass Gram matrix is I by construction, and its block of X is diag(θ)
+        q, s = XP.shape[1], XP.shape[1] + W.shape[1]
         G = np.zeros((s, s))
-        G[:nb, :nb] = np.diag(lam)
-        G[nb:] = low
-        G[:nb, nb:] = low[:, :nb].T
-        lam_all, C = np.linalg.eigh(0.5 * (G + G.T))
+        G[nb:q, :q] = XP[:, nb:].T @ AXP
+        G[q:, :q] = W.T @ AXP
+        G[q:, q:] = W.T @ AW
+        G = allsum(G)
+        G[np.arange(nb), np.arange(nb)] = lam
+        lam_all, C = np.linalg.eigh(G)
         C, lam = C[:, :nb], lam_all[:nb]
         # the new directions: the update's part outside the old X, orthogonal to the new X,
         # orthonormalized in the coefficient space (where the basis is orthonormal)
@@ -266,10 +276,14 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         for _ in range(2):
             E -= C @ (C.T @ E)
         E, _ = svqb(E, np.ones(s))
-        X = _combine(blocks, C)
-        P = _combine(blocks, E) if E.shape[1] else None
+        CE = np.hstack([C, E])
+        XP_new = XP @ CE[:q]
+        XP_new += W @ CE[q:]
         if cheap:
-            AX, AP = apply_A(X), (None if P is None else apply_A(P))
+            AXP = apply_A(XP_new)
         else:
-            AX, AP = _combine(ablocks, C), (_combine(ablocks, E) if P is not None else None)
-    return Ritz(lam, X, it, res, ratio)
+            AXP_new = AXP @ CE[:q]
+            AXP_new += AW @ CE[q:]
+            AXP = AXP_new
+        XP = XP_new
+    return Ritz(lam, np.ascontiguousarray(X), it, res, ratio)

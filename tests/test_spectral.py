@@ -254,6 +254,11 @@ def test_lobpcg_error_bound_on_clustered_spectrum():
     assert out.residuals[:21].max() > 1e-9 * lam_ref[-1]  # stopped on the values, not the residuals
     bound = _lobpcg.eig_error(out.lam, out.residuals)
     assert (np.abs(out.lam[:21] - lam_ref) <= bound[:21] + 1e-15).all()
+    # the clusters' spectral norms (what the iteration stops on): still a bound, and tighter
+    R = A @ out.X - m[:, None] * out.X * out.lam
+    sharp = _lobpcg.eig_error(out.lam, out.residuals, R.T @ (R / m[:, None]))
+    assert (np.abs(out.lam[:21] - lam_ref) <= sharp[:21] + 1e-15).all()
+    assert (sharp <= bound * (1 + 1e-6)).all() and (sharp[:21] < 0.7 * bound[:21]).any()
 
 
 def test_block_factor_solves_like_splu():
