@@ -231,7 +231,8 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     out.shortcuts = info.get("shortcuts", 0.0)
     normals = geo.normals() if geo.faces is not None and geo.ambient_dim == 3 else None
     if normals is not None:
-        out.thin = corrections.shortcuts.thin_fraction(geo.points, normals, geo.mass, float(np.sqrt(2 * h)))
+        out.thin = corrections.shortcuts.thin_fraction(geo.points, normals, geo.mass, float(np.sqrt(2 * h)),
+                                                         info.get("shortcut_vertices"))
     if not opts.pointwise:
         out.L = L
 

@@ -39,7 +39,8 @@ from .geometry import Geometry
 from .widths import h_scale
 
 __all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT",
-           "GALERKIN_THIN", "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms", "fem_error"]
+           "GALERKIN_THIN", "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms",
+           "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -63,11 +64,12 @@ GALERKIN_FEM_RATIO = 0.55
 #: input of benchmarks/bench_spectra.py that has them: fandisk, 11.4% of its area, 0.143%
 #: measured against the 0.042% of the term above (COT: 0.09%, so it is warned).
 GALERKIN_SHORTCUT = 0.009
-#: The Galerkin pencil's error per unit of area on parts thinner than its kernel
-#: (:func:`meshlap.corrections.shortcuts.thin_fraction`): spot, 4.4% of its area, 2.67%
-#: measured (eigenvalue 5, which lives on its teats) against the 0.43% of the terms above; 0.25
-#: predicts 1.5% there (COT 0.37%, so it is warned). Fandisk's 3.1% adds 0.8% to an input
-#: already warned (0.14% measured); the other Galerkin inputs of the bench have none.
+#: The Galerkin pencil's error per unit of area on parts thinner than its kernel whose two
+#: sides the short cuts do not separate (:func:`meshlap.corrections.shortcuts.thin_fraction`):
+#: spot, 4.4% of its area, 2.67% measured (its eigenvalue 5 lives on the teats, 2.4 kernel
+#: widths across at their base) against the 0.43% of the terms above; 0.25 predicts 1.5% there
+#: (COT 0.37%: warned). Fandisk's 1.4% adds 0.35% to an input already warned (0.14% measured);
+#: the other Galerkin inputs of the bench have none.
 GALERKIN_THIN = 0.25
 #: The constants of linear FEM's, fitted on the same inputs.
 FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
@@ -125,7 +127,8 @@ class Resolution:
         thin wall) were dropped (:mod:`meshlap.corrections.shortcuts`; 0 for the vertex pencil).
     thin : float
         The Galerkin pencil's area fraction on parts thinner than :data:`~meshlap.corrections.
-        shortcuts.THIN_WIDTHS` of its kernel widths (0 for the vertex pencil).
+        shortcuts.THIN_WIDTHS` of its kernel widths, not next to a short cut (0 for the vertex
+        pencil).
 
     Examples
     --------
