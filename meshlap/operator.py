@@ -238,7 +238,7 @@ class MeshLaplacian(LumpedLaplacian):
         # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to
         pencil = self.options.correction if self._built.quadrature == "galerkin" else self._built.correction
         self.resolution = resolution.assess(self.geometry, self.widths, pencil, self._built.galerkin_regime,
-                                            self._built.shortcuts)
+                                            self._built.shortcuts, self._built.thin)
         if self.resolution is not None and self.resolution.too_coarse:
             warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None

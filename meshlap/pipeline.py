@@ -153,6 +153,7 @@ class Built:
     quadrature_h: float | None = None  # the Galerkin pencil's width
     galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
     shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
+    thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -230,6 +231,10 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
     out.shortcuts = info.get("shortcuts", 0.0)
+    normals = geo.normals() if geo.faces is not None and geo.ambient_dim == 3 else None
+    if normals is not None:
+        out.thin = corrections.shortcuts.thin_fraction(geo.points, normals, geo.mass, float(np.sqrt(2 * h)),
+                                                         info.get("shortcut_vertices"))
     if not opts.pointwise:
         out.L = L
 

@@ -33,12 +33,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from .corrections.shortcuts import THIN_WIDTHS
 from .errors import MeshWarning
 from .geometry import Geometry
 from .widths import h_scale
 
 __all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT",
-           "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms", "fem_error"]
+           "GALERKIN_THIN", "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms",
+           "fem_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -62,6 +64,13 @@ GALERKIN_FEM_RATIO = 0.55
 #: input of benchmarks/bench_spectra.py that has them: fandisk, 11.4% of its area, 0.143%
 #: measured against the 0.042% of the term above (COT: 0.09%, so it is warned).
 GALERKIN_SHORTCUT = 0.009
+#: The Galerkin pencil's error per unit of area on parts thinner than its kernel whose two
+#: sides the short cuts do not separate (:func:`meshlap.corrections.shortcuts.thin_fraction`):
+#: spot, 4.4% of its area, 2.67% measured (its eigenvalue 5 lives on the teats, 2.4 kernel
+#: widths across at their base) against the 0.43% of the terms above; 0.25 predicts 1.5% there
+#: (COT 0.37%: warned). Fandisk's 1.4% adds 0.35% to an input already warned (0.14% measured);
+#: the other Galerkin inputs of the bench have none.
+GALERKIN_THIN = 0.25
 #: The constants of linear FEM's, fitted on the same inputs.
 FEM_MODEL = {"F_E": 0.0163, "F_Q": 0.364, "F_T": 0.0385, "F_N": 5.5,
              # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
@@ -116,6 +125,10 @@ class Resolution:
     shortcuts : float
         The Galerkin pencil's area fraction whose pairs through the air (across a groove or a
         thin wall) were dropped (:mod:`meshlap.corrections.shortcuts`; 0 for the vertex pencil).
+    thin : float
+        The Galerkin pencil's area fraction on parts thinner than :data:`~meshlap.corrections.
+        shortcuts.THIN_WIDTHS` of its kernel widths, not next to a short cut (0 for the vertex
+        pencil).
 
     Examples
     --------
@@ -141,6 +154,7 @@ class Resolution:
     alternative: str | None
     reason: str
     shortcuts: float = 0.0
+    thin: float = 0.0
 
     @property
     def too_coarse(self) -> bool:
@@ -171,7 +185,7 @@ class Resolution:
                 f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
                 f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
                 f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}; next to a short cut "
-                f"{self.shortcuts:.0%}",
+                f"{self.shortcuts:.0%}; on thin parts {self.thin:.0%}",
                 f"  most of it: {self.reason}"]
         if self.alternative:
             rows.append(f"  use instead: {self.alternative}")
@@ -270,13 +284,14 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
 
 
 def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False,
-           shortcuts: float = 0.0) -> Resolution | None:
+           shortcuts: float = 0.0, thin: float = 0.0) -> Resolution | None:
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
     ``galerkin_regime``: the Galerkin pencil is in effect on an input inside the regime where it
     was measured (:func:`meshlap.corrections.galerkin.wins`); the prediction is then
-    :data:`GALERKIN_FEM_RATIO` times linear FEM's, else the vertex pencil's model.
+    :data:`GALERKIN_FEM_RATIO` times linear FEM's, plus the terms of ``shortcuts`` and ``thin``
+    (its area next to a short cut, and on thin parts), else the vertex pencil's model.
 
     Examples
     --------
@@ -320,13 +335,15 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
         rel = one / np.sqrt(np.maximum(ell2, 1e-300))
         crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                     crease, 0.0, None, "", None, "", shortcuts)
+                     crease, 0.0, None, "", None, "", shortcuts, thin)
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
     if galerkin_regime and fem is not None:
         terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem,
                  f"{shortcuts:.0%} of the area next to a groove or thin wall (pairs through the air dropped)":
-                     GALERKIN_SHORTCUT * shortcuts}
+                     GALERKIN_SHORTCUT * shortcuts,
+                 f"{thin:.0%} of the area on parts thinner than {THIN_WIDTHS:g} kernel widths √(2h)":
+                     GALERKIN_THIN * thin}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
                    else "meshlap.baselines.cotangent(V, E)" if geo.source == "polyline"

@@ -328,7 +328,8 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         Called with the quadrature operator's entry count before it is allocated.
     info : dict, optional
         Filled with ``"shortcuts"`` on a triangle mesh: the fraction of the area whose
-        quadrature points lost a pair to :func:`~meshlap.corrections.shortcuts.drop_shortcuts`.
+        quadrature points lost a pair to :func:`~meshlap.corrections.shortcuts.drop_shortcuts`,
+        and ``"shortcut_vertices"``: the vertices one of whose quadrature points did.
 
     Returns
     -------
@@ -361,6 +362,8 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         Lq, hit = drop_shortcuts(Lq, P, cells, X, cutoff_radius(h, tol))
         if info is not None:
             info["shortcuts"] = float(W[hit].sum() / W.sum())
+            info["shortcut_vertices"] = np.zeros(len(P), dtype=bool)
+            info["shortcut_vertices"][cells.ravel()[hit]] = True
     if boundary is not None:
         samples, nu = boundary
         fr = frames_mod.frames_from_samples(X, samples, nu, cutoff_radius(h, tol))
