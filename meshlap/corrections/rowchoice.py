@@ -357,7 +357,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         extent, number of points) are reduced, each point counted by the rank that owns it.
         The rows are then those of the single machine.
     progress : callable, optional
-        ``progress(stage)`` as each stage ends ("queries", "compact 4", "rung 1000", ...).
+        ``progress(stage)`` as each stage starts ("queries", "noise fit", "compact 4", "rung 1000", ...).
 
     Returns
     -------
@@ -397,6 +397,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {total}")
     notes: list[str] = []
     tick = progress or (lambda stage: None)
+    tick("queries")
     tree = cKDTree(P)
     spread = _Spread(P, tree, int(sample), ids, total)
     everyone = np.arange(n)
@@ -412,7 +413,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
     diameter = float(np.linalg.norm(hi - lo))
-    tick("queries")
+    tick("noise fit")
     # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
     # higher degree, lowest first, only where they can win (_compact)
     fit = _candidate(P, idx_all[:, :Kn], dist_all[:, :Kn], 2, _C_WIDE, k, normals, everyone)
@@ -420,17 +421,16 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     low = _candidate(P, idx_all[:, :K2], dist_all[:, :K2], 2, _C_COMPACT, k, normals, everyone)
     compact = {2: [(low, K2)]}
     resid = np.minimum(fit.residual, low.residual)
-    tick("noise fit")
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
     sample = spread.rank < max(_CALIBRATE[0], total // _CALIBRATE[1])
     for q, K in zip(degrees[-2::-1], Ks[-2::-1], strict=True):
+        tick(f"compact {q}")
         level = _local_noise(resid, nb, comm, own, noise)[0]
         done = [noise_fit] + [c for fits in compact.values() for c in fits]
         compact[q] = _compact(P, idx_all[:, :K], dist_all[:, :K], q, k, normals, done, level, first_scale,
                               (sample, own), comm)
         for c, _ in compact[q]:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
-        tick(f"compact {q}")
     cands = [c for q in degrees for c in compact[q]] + [noise_fit]
     sig, typical = _local_noise(resid, nb, comm, own, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
@@ -439,9 +439,9 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     Kmax = min(total, max_neighbors or min(1000, total // 4))
     curv_fit, Kc = noise_fit[0], max(Kn, min(Kmax, int(round(Kn * _LADDER))))
     if typical is not None and typical > _NOISY * spacing:
+        tick("curvature fit")
         idx_c, dist_c, _ = spread(Kc, everyone)
         curv_fit = _candidate(P, idx_c, dist_c, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
-        tick("curvature fit")
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     scale = _scale(curv_fit, nb, k, d, diameter, spacing)
@@ -466,14 +466,15 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         dominated[rows[better]] = noisy[better]
         return rows[better & noisy]
 
+    tick("compare")
     for fit, K in cands:
         consider(fit, K)
-    tick("compare")
     K = Kn
     pick[~own] = -1  # the halo's rows are not built here
     active = np.flatnonzero(dominated & own)
     while len(active) and K < Kmax:
         K = min(Kmax, int(round(K * _LADDER)))
+        tick(f"rung {K}")
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
         reuse = K == Kc and curv_fit is not noise_fit[0]
@@ -483,7 +484,6 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         for fit in ([_restrict(curv_fit, active)] if reuse else []) + fits[::-1]:  # degree 2 first
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
-        tick(f"rung {K}")
     # robust to clean f on a noisy surface: among the candidates within ROBUST of the least
     # predicted error, the one of least bias (the noise term assumes f sampled at the noisy
     # points; a smooth f there is served by the lower bias)
@@ -508,6 +508,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         if not note.startswith(f"{len(active)} points would take"):
             warnings.warn(f"choose_rows: {note}", MeshWarning, stacklevel=2)
 
+    tick("assemble")
     degree = np.full(n, -1)
     hv = np.zeros(n)
     for i, (fit, _) in enumerate(local):
@@ -517,7 +518,6 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
             degree[rows] = fit.degree[pos]
             hv[rows] = fit.h[pos]
     L = _assemble(n, pick, local)
-    tick("assemble")
     return L, RowChoice(degree, widths, hv, sig, scale, best, spacing, notes)
 
 
