@@ -235,10 +235,12 @@ class MeshLaplacian(LumpedLaplacian):
                           MeshWarning, stacklevel=level)
         #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
         #: the paper's operator): :class:`meshlap.resolution.Resolution`.
-        # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to
-        pencil = self.options.correction if self._built.quadrature == "galerkin" else self._built.correction
-        self.resolution = resolution.assess(self.geometry, self.widths, pencil, self._built.galerkin_regime,
-                                            self._built.shortcuts, self._built.thin)
+        # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to;
+        # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
+        fell_back = self._built.quadrature != "galerkin" and self._built.correction != self.options.correction
+        built = self._built
+        self.resolution = resolution.assess(self.geometry, self.widths, self.options.correction,
+                                            built.galerkin_regime, built.shortcuts, built.thin, fell_back)
         if self.resolution is not None and self.resolution.too_coarse:
             warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None

@@ -48,6 +48,38 @@ def test_fine_and_noisy_spheres_are_resolved(random_sphere):
     assert not warned and 0.08 < op.resolution.noise < 0.2
 
 
+def test_explicit_narrow_widths_are_warned(random_sphere):
+    # a width the user chose below the default's 4ē²: on random samplings the quadrature error takes
+    # over (benchmarks/calibrate_resolution.py: 20,000 random vertices at h = ē² 6.7% and at 2ē² 0.96%,
+    # against the cotangent's 0.10%; predicted 0.22% and 0.11% before this term, the second not warned)
+    V, F = random_sphere
+    e2 = meshlap.geometry.from_mesh(V, F).spacing ** 2
+    with pytest.warns(ResolutionWarning, match=r"use meshlap\.baselines\.cotangent\(V, F\)"):
+        op = meshlap.laplacian(V, F, h=e2)
+    r = op.resolution
+    assert r.too_coarse and r.alternative == "meshlap.baselines.cotangent(V, F)"
+    assert 0.9 < r.width < 1.1 and "against the sampling" in r.reason
+    err, cot = error(op, SPHERE), error(baselines.cotangent(V, F), SPHERE)
+    assert err > 10 * RATIO_LIMIT * cot  # measured 6.3% against 0.12%
+    assert 0.5 < r.predicted_error / err < 2 and 0.5 < r.fem_error / cot < 2
+    _, warned = build(meshlap.laplacian, V, F, h=2 * e2)
+    assert warned
+    op, warned = build(meshlap.laplacian, V, F)  # the default's own width on the same mesh
+    assert not warned and op.resolution.predicted_error < RATIO_LIMIT * op.resolution.fem_error
+
+
+def test_fallback_to_the_plain_kernel_is_reported():
+    # below its sampling the Richardson kernel's -S is not semidefinite and the build takes the plain
+    # kernel: the report covers it (13³ cube of tetrahedra at h = ē²/16: 24% against LaPy's 2.8%)
+    V, T = samples.cube_tetrahedra(12)
+    e2 = meshlap.geometry.from_mesh(V, T, 3).spacing ** 2
+    with pytest.warns(ResolutionWarning, match="fell back to the plain kernel"):
+        op = meshlap.laplacian(V, T, h=e2 / 16, k=3)
+    r = op.resolution
+    assert op.correction == "none" and r.fallback and r.too_coarse and "lapy" in r.alternative
+    assert 0.12 < r.predicted_error < 0.48
+
+
 def test_coarse_torus_galerkin_default_and_vertex_warning():
     # measured (against the cotangent Laplacian 16× refined): the default, which takes the Galerkin
     # pencil here, 0.95%; the vertex pencil 6.6%; libigl's cotangent 2.3%
