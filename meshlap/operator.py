@@ -237,8 +237,8 @@ class MeshLaplacian(LumpedLaplacian):
         #: the paper's operator): :class:`meshlap.resolution.Resolution`.
         # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to;
         # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
-        fell_back = self._built.quadrature != "galerkin" and self._built.correction != self.options.correction
         built = self._built
+        fell_back = built.quadrature != "galerkin" and built.correction != self.options.correction
         self.resolution = resolution.assess(self.geometry, self.widths, self.options.correction,
                                             built.galerkin_regime, built.shortcuts, built.thin, fell_back)
         if self.resolution is not None and self.resolution.too_coarse:

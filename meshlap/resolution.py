@@ -272,15 +272,17 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
     """
     c, hl = model, fig.wavelength
     narrowed = min(fig.narrowed / c["R_0"], 1.0) ** -c["P_Q"]
+    if fig.fallback:  # the plain kernel at these widths, its -S semidefinite where the corrected was not
+        # fitted on two rows (20,000 random vertices at ē²/2, a 13³ cube of tetrahedra at ē²/16);
+        # 400,000 random vertices at ē² (benchmarks/RESULTS.md, at scale): 3.9% against 5.4% measured
+        return {f"the correction fell back to the plain kernel: its quadrature at {fig.width:.2f} mean edges":
+                    c["A_F"] * max(fig.width, 1e-3) ** -c["P_F"],
+                "the correction fell back to the plain kernel: its O(h) bias": c["A_P"] * hl * fig.bend}
     # below about R_W of the default width in squared edges the sampling's quadrature error takes
     # over, and refining at a fixed width in edges does not shrink it (at h = ē² on random spheres:
     # 12.9% at 2,000 vertices, 6.7% at 20,000; the plain kernel 0.9% at 400,000 and at 1,000,000)
     below = max(1.0 / max(fig.narrowed, 1e-6) - 1.0 / c["R_W"], 0.0)
     sampled = c["A_W"] * (fig.irregularity / 0.3) ** c["Q_W"] * below ** c["P_W"]
-    if fig.fallback:  # the plain kernel at these widths, its -S semidefinite where the corrected was not
-        return {f"the correction fell back to the plain kernel: its quadrature at {fig.width:.2f} mean edges":
-                    c["A_F"] * max(fig.width, 1e-3) ** -c["P_F"],
-                "the correction fell back to the plain kernel: its O(h) bias": c["A_P"] * hl * fig.bend}
     return {"the width against the eigenfunctions' wavelength": (c["A_H"] + c["A_2"] * hl) * hl * fig.bend,
             f"the kernel narrowed to {fig.narrowed:.2f} of its width on an irregular sampling":
                 c["A_Q"] * hl * (fig.irregularity / 0.3) ** 2 * narrowed,
