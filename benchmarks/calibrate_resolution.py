@@ -77,7 +77,7 @@ def inputs():
 
 
 #: The widths a user may pass instead of the default's own, as fractions of it: ē²/2, ē² and 2ē²
-#: on surfaces and clouds (whose default is 4ē²).
+#: on surfaces and clouds (whose default is 4ē²), ē²/16 to ē²/4 on tetrahedra (ē²/2).
 FRACTIONS = (0.125, 0.25, 0.5)
 
 
