@@ -70,17 +70,19 @@ DEFAULT_MODEL = {"A_H": 0.0131, "A_2": 0.142, "A_Q": 0.00366, "P_Q": 0.571, "R_0
 #: squares and discs; 0.19-0.52), rounded up; on curves 0.02-0.47 (circles, an ellipse, a
 #: trefoil knot and an open arc of 60-1,000 uniform and random vertices).
 GALERKIN_FEM_RATIO = 0.55
-#: The Galerkin pencil's error per unit of area next to a short cut (``shortcuts``), from the one
-#: input of benchmarks/bench_spectra.py that has them: fandisk, 11.4% of its area, 0.143%
-#: measured against the 0.042% of the term above (COT: 0.09%, so it is warned).
-GALERKIN_SHORTCUT = 0.009
+#: The Galerkin pencil's error per unit of area next to a short cut (``shortcuts``). Pairs are
+#: dropped at a path of 1.25 chords (:data:`meshlap.corrections.shortcuts.SHORTCUT_RATIO`):
+#: fandisk, 16.2% of its area next to a short cut, 0.142% measured against the 0.042% of the
+#: term above, would give at most 0.0062; the cube surface, 23% (pairs across its creases),
+#: 0.043% measured, would be warned from 0.0072 on. 0.004 keeps it clear of that.
+GALERKIN_SHORTCUT = 0.004
 #: The Galerkin pencil's error per unit of area on parts thinner than its kernel whose two
-#: sides the short cuts do not separate (:func:`meshlap.corrections.shortcuts.thin_fraction`):
-#: spot, 4.4% of its area, 2.67% measured (its eigenvalue 5 lives on the teats, 2.4 kernel
-#: widths across at their base) against the 0.43% of the terms above; 0.25 predicts 1.5% there
-#: (COT 0.37%: warned). Fandisk's 1.4% adds 0.35% to an input already warned (0.14% measured);
-#: the other Galerkin inputs of the bench have none.
-GALERKIN_THIN = 0.25
+#: sides the short cuts do not separate (:func:`meshlap.corrections.shortcuts.thin_fraction`),
+#: fitted on spot: 2.68% of its area (its eigenvalue 5 lives on the teats, 2.4 kernel widths
+#: across at their base), 1.32% measured against the 0.44% of the terms above (COT 0.41%,
+#: robust-laplacian 0.37%: warned). Fandisk's 0.49% adds 0.16% to an input warned already
+#: (0.27% predicted, 0.142% measured); the other Galerkin inputs of the bench have none.
+GALERKIN_THIN = 0.33
 #: The constants of linear FEM's, fitted on the same inputs.
 FEM_MODEL = {"F_E": 0.0193, "F_Q": 0.418, "F_T": 0.0384, "F_N": 5.68,
              # on segments (1-D linear FEM, lumped: ē²λ/12 on a uniform circle), fitted on circles,
@@ -369,9 +371,9 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
     fem = fem_error(fig, geo.source, geo.faces is not None)
     if galerkin_regime and fem is not None:
         terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem,
-                 f"{shortcuts:.0%} of the area next to a groove or thin wall (pairs through the air dropped)":
+                 f"{shortcuts:.1%} of the area next to a groove or thin wall (pairs through the air dropped)":
                      GALERKIN_SHORTCUT * shortcuts,
-                 f"{thin:.0%} of the area on parts thinner than {THIN_WIDTHS:g} kernel widths √(2h)":
+                 f"{thin:.1%} of the area on parts thinner than {THIN_WIDTHS:g} kernel widths √(2h)":
                      GALERKIN_THIN * thin}
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"

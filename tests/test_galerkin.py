@@ -245,8 +245,8 @@ def _hairpin(gap, step=0.05):
 def test_pairs_through_the_air_are_dropped():
     # the hairpin's legs 0.1 apart, h = 0.5·0.05²: the kernel reaches 0.3 across; the pairs
     # between the legs away from the bend lose all but 1e-5 of their weight (what is left are
-    # pairs 0.25-0.3 apart, whose path along the surface is under twice that), pairs along a
-    # leg keep all of theirs
+    # pairs near the bend, whose path along the surface is under SHORTCUT_RATIO times their
+    # chord plus the slack), pairs along a leg keep all of theirs
     V, F = _hairpin(0.1)
     h = 0.5 * 0.05**2
     X, W, _ = galerkin.quadrature_points(V, F)
