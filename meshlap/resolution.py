@@ -424,8 +424,10 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
     surface_cloud = geo.source == "point cloud" and geo.dim == 2 and P.shape[1] == 3
     cloud_noise = 0.0
     if surface_cloud:  # robust-laplacian sees the points as given, not the default's projection
-        raw = geo._cache.get("input_points")
-        cloud_noise = noise_ratio(P, 2, geo._cache.get("pca")) if raw is None else noise_ratio(raw, 2)
+        cloud_noise = geo._cache.get("noise_ratio")
+        if cloud_noise is None:  # denoise given explicitly: not measured at the build
+            raw = geo._cache.get("input_points")
+            cloud_noise = noise_ratio(P, 2, geo._cache.get("pca")) if raw is None else noise_ratio(raw, 2)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
                      crease, 0.0, None, "", None, "", shortcuts, thin, fallback, surface_cloud, cloud_noise)
     terms = default_terms(fig)
