@@ -232,7 +232,8 @@ class Resolution:
                 f"{name} {'–' if peer is None else f'{peer:.2%}'})",
                 f"  width {self.width:.2f} mean edges (ē = {self.spacing:.4g}); narrowed to "
                 f"{self.narrowed:.2f} of the default; h·λ₉ = {self.wavelength:.3g}; irregularity "
-                f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
+                f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise "
+                + (f"σ̂²/a² {self.cloud_noise:.3g}" if self.cloud else f"{self.noise:.2f} edges"),
                 f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
                 f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}; next to a short cut "
                 f"{self.shortcuts:.0%}; on thin parts {self.thin:.0%}",

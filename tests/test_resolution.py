@@ -145,6 +145,7 @@ def test_narrow_cloud_warns_and_names_robust_laplacian():
     r = op.resolution
     assert r.too_coarse and r.alternative == CLOUD_PEER and r.fem_error is None and r.cloud
     assert 0.036 < r.peer_error < 0.12 and r.cloud_noise < 0.01  # a clean cloud
+    assert "robust-laplacian's point_cloud_laplacian 7." in repr(r) and "σ̂²/a²" in repr(r)
     err = error(op, SPHERE)
     assert err > 5 * RATIO_LIMIT * 0.061 and 0.5 < r.predicted_error / err < 2
     try:  # the peer itself where installed (the report needs only its model)
