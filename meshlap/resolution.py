@@ -1,11 +1,11 @@
-"""Can the kernel resolve this input? A report at build time, and a warning when FEM will win.
+"""Can the kernel resolve this input? A report at build time, and a warning when its peer will win.
 
 The heat kernel of width h averages over a disc of radius about √(2h). Where the input is
 coarse against that width, the default operator's eigenvalues are less accurate than those of
 linear finite elements (the cotangent Laplacian of a surface mesh, LaPy's on tetrahedra).
 :func:`assess` reads the geometry and the chosen widths, measures what decides it, and
 predicts the largest relative error of eigenvalues 1..:data:`EIGENVALUES` for the default and
-for linear FEM:
+for its peer (linear FEM; on a surface's point cloud, robust-laplacian):
 
 * the default: ``A_H·b·hλ + A_2·b·(hλ)² + A_Q·hλ·(q/0.3)²·min(ρ/R_0, 1)^-P_Q +
   A_W·(q/0.3)^Q_W·max(1/ρ − 1/R_W, 0)^P_W + A_B·β·(hλ)^1.5 + A_K·hλ·κ_b + A_C·c·√(hλ) +
@@ -31,8 +31,8 @@ for linear FEM:
 
 The predictions are fits, not bounds: the constants below were calibrated on the rows of
 ``benchmarks/bench_spectra.py``, on coarser and finer variants of them, on explicit widths of
-ē²/2 to 2ē² and on the vertex pencil where the default takes the Galerkin one
-(docs/spectral.md has the table, measured and predicted); re-calibrate them here when the
+ē²/2 to 2ē², on the vertex pencil where the default takes the Galerkin one and on point
+clouds (docs/spectral.md has the tables, measured and predicted); re-calibrate them here when the
 numerics change.
 """
 
