@@ -1,19 +1,21 @@
-"""Fit the constants of meshlap.resolution's two error models on 71 rows, and check the verdicts.
+"""Fit the constants of meshlap.resolution's three error models, and check the verdicts.
 
     python benchmarks/calibrate_resolution.py                  # measure, fit, print
     python benchmarks/calibrate_resolution.py --cache m.json   # keep the measurements for a re-fit
+    python benchmarks/calibrate_resolution.py --clouds         # the point clouds' rows, their peer's fit
 
 For each input (random spheres of 500 to 16,000 vertices and a noisy one, tori of 300 to 5,000,
 cube surfaces, fandisk, spot, squares and discs of 319 to 8,000 vertices, cubes of tetrahedra of
-9³ to 17³, sphere clouds), the same at explicit widths of ē²/2, ē² and 2ē² (random and uniform
-spheres of 2,000 and 20,000 vertices, a torus, a square, a cube of tetrahedra, a cloud) and
-with the vertex pencil where the default takes the Galerkin one (``explicit_inputs``): the
-default's ``op.resolution`` figures, the measured largest
-relative error of eigenvalues 1-9 of the default and of linear FEM (libigl's cotangent
-Laplacian, LaPy on tetrahedra; robust-laplacian for clouds, not fitted), against the exact
-values or the cotangent Laplacian 16× refined. The fit minimises the squared log-ratios of
-predicted to measured errors, plus a penalty on every verdict that disagrees with the
-measurement (warn above 1.6× FEM, stay silent below 1.45× and on the noisy and fine spheres);
+9³ to 17³), the same at explicit widths of ē²/2, ē² and 2ē² (random and uniform spheres of 2,000
+and 20,000 vertices, a torus, a square, a cube of tetrahedra) and with the vertex pencil where
+the default takes the Galerkin one (``explicit_inputs``), and point clouds at the default and
+the explicit widths (spheres, tori and squares of 1,000 to 16,000 points, ``cloud_inputs``): the
+default's ``op.resolution`` figures, the measured largest relative error of eigenvalues 1-9 of
+the default and of its peer (linear FEM: libigl's cotangent Laplacian, LaPy on tetrahedra;
+robust-laplacian's ``point_cloud_laplacian`` on clouds), against the exact values or the
+cotangent Laplacian 16× refined. The fit minimises the squared log-ratios of predicted to
+measured errors, plus a penalty on every verdict that disagrees with the measurement (warn
+above 1.6× the peer, stay silent below 1.45× and on the noisy and fine spheres);
 the Galerkin pencil's prediction (a measured ratio to FEM's) is not fitted here.
 Paste the printed constants into ``meshlap/resolution.py`` after a change of the numerics.
 """
@@ -21,6 +23,7 @@ Paste the printed constants into ``meshlap/resolution.py`` after a change of the
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import sys
@@ -41,6 +44,8 @@ MUST_STAY_SILENT = ("sphere, 16,000 random vertices", "same, 0.5% radial noise")
 #: Constants that no input fitted here constrains: the creased and curved-boundary inputs
 #: (cube surfaces, fandisk, discs) take the Galerkin pencil, whose error is not this model's.
 FROZEN = ("A_K", "A_C")
+#: The default's constants that only point clouds' rows constrain.
+CLOUD_KEYS = ("C_W", "Q_C", "P_C", "C_E")
 #: FEM's model is simpler and better known than the default's: its residuals weigh more.
 FEM_WEIGHT = 3.0
 
@@ -70,9 +75,74 @@ def inputs():
     for side in (8, 12, 16):
         out.append((f"cube of tetrahedra, {side + 1}³", "tets", samples.cube_tetrahedra(side),
                     B._cube_exact()))
-    for n in (2000, 4000, 16000):
-        out.append((f"sphere cloud, {n:,}", "cloud", samples.sphere_points(n, "random", seed=0),
-                    B._sphere_exact()))
+    return out
+
+
+@functools.cache
+def _torus_exact(R=1.0, r=0.4, n=800):
+    """The torus's first eigenvalues, separated: e^{imφ}·g(θ) with -(ρg')'/(r²ρ) + m²g/ρ² = λg,
+    ρ = R + r·cos θ, in second-order finite volumes on n cells (within 5e-6 of 2,000 cells', 5e-4
+    of the cotangent Laplacian's on a 20,000-vertex torus)."""
+    t = np.arange(n) * 2 * math.pi / n
+    dt = 2 * math.pi / n
+    rho, half = R + r * np.cos(t), R + r * np.cos(t + dt / 2)
+    c = half / (r * r * dt)
+    K = np.diag(c + np.roll(c, 1)) - np.diag(c[:-1], 1) - np.diag(c[:-1], -1)
+    K[0, -1] = K[-1, 0] = -c[-1]
+    lam = []
+    for m in range(6):
+        vals = np.linalg.eigvalsh((K + np.diag(m * m * dt / rho)) / np.sqrt(np.outer(rho * dt, rho * dt)))[:6]
+        lam += [v for v in vals for _ in range(1 if m == 0 else 2)]
+    return np.sort(lam)[:B.K]
+
+
+def _torus_points(n, kind, seed=0, R=1.0, r=0.4, noise=0.0):
+    """n points on the torus of radii (R, r): i.i.d. by area ("random") or the vertices of
+    ``shapes.torus``, a grid each moved by up to a quarter cell ("jittered"; on the exact grid, a
+    lattice of rings, both operators are 15-25% off and the point masses sum to 6% over the
+    area); ``noise``: moved along the normal by a Gaussian of that standard deviation."""
+    rng = np.random.default_rng(seed)
+    if kind == "jittered":
+        P = shapes.torus(n, R, r, seed=seed)[0]
+        th, ph = shapes.torus_angles(P, R)
+    else:  # θ by rejection, its density ∝ R + r·cos θ
+        th = rng.uniform(0, 2 * math.pi, 4 * n)
+        th = th[rng.uniform(0, R + r, 4 * n) < R + r * np.cos(th)][:n]
+        ph = rng.uniform(0, 2 * math.pi, n)
+    normal = np.column_stack([np.cos(th) * np.cos(ph), np.cos(th) * np.sin(ph), np.sin(th)])
+    centre = R * np.column_stack([np.cos(ph), np.sin(ph), np.zeros_like(ph)])
+    return centre + normal * (r + noise * rng.standard_normal((len(th), 1)))
+
+
+def _square_points(n, kind, seed=0):
+    """n points of [-1, 1]² in R³: uniform i.i.d. ("random") or ``shapes.plane``'s stratified vertices."""
+    if kind == "stratified":
+        return shapes.plane(n, seed=seed, kind="stratified")[0]
+    return np.column_stack([np.random.default_rng(seed).uniform(-1, 1, (n, 2)), np.zeros(n)])
+
+
+def cloud_inputs():
+    """(name, kind, data, exact, widths): point clouds of surfaces, against robust-laplacian's
+    ``point_cloud_laplacian`` (the peer of :data:`meshlap.resolution.CLOUD_PEER_MODEL`): spheres
+    and tori, random and uniform, of 1,000 to 16,000 points, clean and with 1% normal noise, and
+    squares (Neumann), each at the default width and at ``FRACTIONS`` of it."""
+    widths, out = (None, *FRACTIONS), []
+    for n in (1000, 4000, 16000):
+        for kind in ("random", "uniform"):
+            out.append((f"sphere cloud, {n:,} {kind}", "cloud", samples.sphere_points(n, kind, seed=0),
+                        B._sphere_exact(), widths))
+        for kind in ("random", "jittered"):
+            out.append((f"torus cloud, {n:,} {kind}", "cloud", _torus_points(n, kind), _torus_exact(),
+                        widths))
+    for n in (4000, 16000):
+        out.append((f"sphere cloud, {n:,} random, 1% noise", "cloud",
+                    samples.sphere_points(n, "noisy", seed=0), B._sphere_exact(), widths))
+        out.append((f"torus cloud, {n:,} random, 1% noise", "cloud", _torus_points(n, "random", noise=0.01),
+                    _torus_exact(), widths))
+    for n in (1000, 4000):
+        for kind in ("random", "stratified"):
+            out.append((f"square cloud, {n:,} {kind}", "cloud", _square_points(n, kind), B._square_exact(),
+                        widths))
     return out
 
 
@@ -109,8 +179,6 @@ def explicit_inputs():
         Vd, Fd = B._disc(n)
         out.append((f"disc, {len(Vd):,}", "mesh", (Vd, Fd), B._disc_exact(), ("vertex",)))
     out.append(("cube of tetrahedra, 13³", "tets", samples.cube_tetrahedra(12), B._cube_exact(), FRACTIONS))
-    cloud = samples.sphere_points(4000, "random", seed=0)
-    out.append(("sphere cloud, 4,000", "cloud", cloud, B._sphere_exact(), FRACTIONS))
     return out
 
 
@@ -127,7 +195,7 @@ def measure(which=None):
     """Per input and width: name, kind, the width as a fraction of the default's (None: the default's),
     the resolution report (JSON), the measured errors of the default operator and of FEM."""
     rows = []
-    todo = [(*i, (None,)) for i in inputs()] + explicit_inputs() if which is None else which
+    todo = [(*i, (None,)) for i in inputs()] + explicit_inputs() + cloud_inputs() if which is None else which
     for name, kind, data, ref, fractions in todo:
         peer = {"mesh": B.cot, "tets": B.lapy_tet, "cloud": B.robust_cloud}[kind]
         fem = _error(peer(data) if kind == "cloud" else peer(*data), ref)
@@ -150,10 +218,12 @@ def measure(which=None):
     return rows
 
 
-def _predicted(r, fig, md, mf):
-    """The (default, FEM) errors the models predict for row ``r``; the Galerkin pencil's (not
-    fitted here) is its measured ratio to FEM's plus its own terms, as in the report."""
-    pf = resolution.fem_error(fig, r["source"], r["faces"], mf)
+def _predicted(r, fig, md, mf, mc):
+    """The (default, peer) errors the models predict for row ``r`` (the peer: linear FEM, or
+    robust-laplacian on a cloud); the Galerkin pencil's (not fitted here) is its measured ratio
+    to FEM's plus its own terms, as in the report."""
+    pf = (resolution.peer_error(fig, mc) if r["kind"] == "cloud"
+          else resolution.fem_error(fig, r["source"], r["faces"], mf))
     if r["quadrature"] == "galerkin":
         ratio = resolution.GALERKIN_FEM_RATIO
         return fig.predicted_error - ratio * fig.fem_error + ratio * pf, pf
@@ -161,34 +231,55 @@ def _predicted(r, fig, md, mf):
 
 
 def _verdict_ok(r, pd, pf):
-    # warn where the default is measured more than 1.5× FEM, not where less than 1.45×
-    if pf is None or r["kind"] == "cloud":
+    # warn where the default is measured more than 1.5× the peer, not where less than 1.45×
+    if pf is None:
         return True
     warn, ratio = pd > resolution.RATIO_LIMIT * pf, r["default"] / r["fem"]
     return warn if ratio > resolution.RATIO_LIMIT else not warn or ratio > 1.45
 
 
-def fit(rows):
-    """The fitted (default model, FEM model)."""
-    keys_d = [k for k in resolution.DEFAULT_MODEL if k not in FROZEN]
-    keys_f = list(resolution.FEM_MODEL)
+def fit_peer(rows):
+    """The cloud peer's model, fitted on its measured errors alone (once per input): it predicts
+    robust-laplacian, whatever the verdicts."""
+    keys = list(resolution.CLOUD_PEER_MODEL)
+    once = [(resolution.Resolution.from_json(r["report"]), r["fem"]) for r in rows
+            if r["kind"] == "cloud" and r.get("fraction") is None]
+    if not once:
+        return dict(resolution.CLOUD_PEER_MODEL)
+
+    def residuals(p):
+        mc = dict(zip(keys, p, strict=True))
+        return [math.log(resolution.peer_error(fig, mc) / measured) for fig, measured in once]
+
+    low, high = {"P_R": 0.5}, {"Q_0": 0.35}  # Q_0 below a random cloud's spread (0.39)
+    fitted = least_squares(residuals, list(resolution.CLOUD_PEER_MODEL.values()),
+                           bounds=([low.get(k, 0.0) for k in keys], [high.get(k, 50.0) for k in keys]))
+    return dict(zip(keys, fitted.x, strict=True))
+
+
+def fit(rows, clouds_only=False):
+    """The fitted (default model, FEM model, cloud peer's model); ``clouds_only``: the default's
+    constants for clouds (``CLOUD_KEYS``) and the peer's, the others kept."""
+    mc = fit_peer(rows)
+    keys_d = [k for k in resolution.DEFAULT_MODEL if k not in FROZEN and (k in CLOUD_KEYS or not clouds_only)]
+    keys_f = [] if clouds_only else list(resolution.FEM_MODEL)
     figs = [resolution.Resolution.from_json(r["report"]) for r in rows]
 
     def split(p):
         n = len(keys_d)
-        md = {**resolution.DEFAULT_MODEL, **dict(zip(keys_d, p[:n], strict=True))}
-        return md, dict(zip(keys_f, p[n:], strict=True))
+        return ({**resolution.DEFAULT_MODEL, **dict(zip(keys_d, p[:n], strict=True))},
+                {**resolution.FEM_MODEL, **dict(zip(keys_f, p[n:], strict=True))})
 
     def residuals(p):
         md, mf = split(p)
         out = []
         for r, fig in zip(rows, figs, strict=True):
-            pd, pf = _predicted(r, fig, md, mf)
+            pd, pf = _predicted(r, fig, md, mf, mc)
             if r["quadrature"] != "galerkin":
                 out.append(math.log(pd / r["default"]))
-            if pf is None or r["kind"] == "cloud":
+            if pf is None:
                 continue
-            if r.get("fraction") is None:  # FEM's error once per input
+            if r.get("fraction") is None and r["kind"] != "cloud":  # FEM's error once per input
                 out.append(FEM_WEIGHT * math.log(pf / r["fem"]))
             measured, predicted = r["default"] / r["fem"], pd / pf
             if measured > 1.6:
@@ -197,25 +288,29 @@ def fit(rows):
                 out.append(5 * max(0.0, math.log(predicted / 1.3)))
         return out
 
-    p0 = [*(resolution.DEFAULT_MODEL[k] for k in keys_d), *resolution.FEM_MODEL.values()]
-    lower = [0.3 if k in ("R_0", "R_W") else 0.0 for k in keys_d] + [0.0] * len(keys_f)
-    upper = [1.0 if k in ("R_0", "R_W") else 50.0 for k in keys_d] + [50.0] * len(keys_f)
-    return split(least_squares(residuals, p0, bounds=(lower, upper)).x)
+    # R_0 and R_W fractions of the default's width; Q_C below a random cloud's spread (0.39)
+    low, high = {"R_0": 0.3, "R_W": 0.3}, {"R_0": 1.0, "R_W": 1.0, "Q_C": 0.35}
+    keys = [*keys_d, *keys_f]
+    p0 = [*(resolution.DEFAULT_MODEL[k] for k in keys_d), *(resolution.FEM_MODEL[k] for k in keys_f)]
+    bounds = ([low.get(k, 0.0) for k in keys], [high.get(k, 50.0) for k in keys])
+    fitted = least_squares(residuals, p0, bounds=bounds)
+    return (*split(fitted.x), mc)
 
 
-def report(rows, md, mf):
+def report(rows, md, mf, mc):
     agree = within = fitted = 0
-    print("| input | default measured / predicted | FEM measured / predicted | verdict | agrees |")
+    print("| input | default measured / predicted | peer (FEM; robust-laplacian on clouds) measured / "
+          "predicted | verdict | agrees |")
     print("|---|---|---|---|---|")
     for r in rows:
         fig = resolution.Resolution.from_json(r["report"])
-        pd, pf = _predicted(r, fig, md, mf)
+        pd, pf = _predicted(r, fig, md, mf, mc)
         ok = _verdict_ok(r, pd, pf)
         agree += ok
         if r["quadrature"] != "galerkin":  # the Galerkin pencil's prediction is a bound, not a fit
             fitted += 1
             within += 0.5 <= pd / r["default"] <= 2
-        warn = pf is not None and r["kind"] != "cloud" and pd > resolution.RATIO_LIMIT * pf
+        warn = pf is not None and pd > resolution.RATIO_LIMIT * pf
         fem = "–" if pf is None else f"{pf:.2%}"
         print(f"| {r['name']}{' (plain kernel)' if fig.fallback else ''} | {r['default']:.2%} / {pd:.2%} | "
               f"{r['fem']:.2%} / {fem} | {'too coarse' if warn else 'resolved'} | {'yes' if ok else 'NO'} |")
@@ -226,17 +321,20 @@ def report(rows, md, mf):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", type=Path, help="JSON file of measurements: read if it exists, else written")
+    ap.add_argument("--clouds", action="store_true",
+                    help="the point clouds' rows only (cloud_inputs); fit their constants alone")
     args = ap.parse_args(argv)
     if args.cache is not None and args.cache.exists():
         rows = json.loads(args.cache.read_text())
     else:
-        rows = measure()
+        rows = measure(cloud_inputs() if args.clouds else None)
         if args.cache is not None:
             args.cache.write_text(json.dumps(rows))
-    md, mf = fit(rows)
+    md, mf, mc = fit(rows, clouds_only=args.clouds)
     print("DEFAULT_MODEL =", {k: float(f"{v:.3g}") for k, v in md.items()})
     print("FEM_MODEL =", {k: float(f"{v:.3g}") for k, v in mf.items()})
-    report(rows, md, mf)
+    print("CLOUD_PEER_MODEL =", {k: float(f"{v:.3g}") for k, v in mc.items()})
+    report(rows, md, mf, mc)
     return 0
 
 

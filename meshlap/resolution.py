@@ -1,11 +1,11 @@
-"""Can the kernel resolve this input? A report at build time, and a warning when FEM will win.
+"""Can the kernel resolve this input? A report at build time, and a warning when its peer will win.
 
 The heat kernel of width h averages over a disc of radius about √(2h). Where the input is
 coarse against that width, the default operator's eigenvalues are less accurate than those of
 linear finite elements (the cotangent Laplacian of a surface mesh, LaPy's on tetrahedra).
 :func:`assess` reads the geometry and the chosen widths, measures what decides it, and
 predicts the largest relative error of eigenvalues 1..:data:`EIGENVALUES` for the default and
-for linear FEM:
+for its peer (linear FEM; on a surface's point cloud, robust-laplacian):
 
 * the default: ``A_H·b·hλ + A_2·b·(hλ)² + A_Q·hλ·(q/0.3)²·min(ρ/R_0, 1)^-P_Q +
   A_W·(q/0.3)^Q_W·max(1/ρ − 1/R_W, 0)^P_W + A_B·β·(hλ)^1.5 + A_K·hλ·κ_b + A_C·c·√(hλ) +
@@ -13,18 +13,26 @@ for linear FEM:
   wavelength), b how much the surface bends (1 − |mean normal|: 0 on a flat domain), q the
   irregularity of the sampling (spread of the edge lengths), ρ the width in squared edges over
   its default ratio (below 1 where the curvature cap narrowed it or an explicit h is narrower:
-  the A_W term, the sampling's quadrature error, does not shrink with hλ), β the mass within
+  the A_W term, the sampling's quadrature error, does not shrink with hλ; on a point cloud,
+  whose nearest-neighbour edges spread more than a mesh's, it is ``C_W·(max(q − Q_C, 0)/0.1)^P_C
+  ·max(1/ρ − 1/R_W, 0)^P_W·(1 + C_E·ē²λ)``), β the mass within
   √(2h) of the boundary, κ_b the boundary's curvature times √(2h), c the mass within √(2h) of
   a crease and ν the noise in mean edges; where the corrected kernel's -S was not semidefinite
   and the build fell back to the plain kernel, ``A_F·w^-P_F + A_P·b·hλ``, w the width in mean
   edges;
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
-  tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments).
+  tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments);
+* a surface's point cloud has no cells and no FEM: its peer is robust-laplacian's
+  ``point_cloud_laplacian`` (the best of the point-cloud Laplacians measured), ``R_E·ē²λ +
+  (R_Q·b + R_F·(1 − b))·max(q − Q_0, 0)^P_R + R_N·σ̂²/a²`` with σ̂²/a² the cloud's normal
+  noise over its squared spacing (:func:`meshlap.geometry.pointcloud.noise_ratio`, of the
+  points as given): its error on random samplings (q ≈ 0.39) stays near 6-8% on curved
+  surfaces however fine, and grows with noise that the default projects away.
 
 The predictions are fits, not bounds: the constants below were calibrated on the rows of
 ``benchmarks/bench_spectra.py``, on coarser and finer variants of them, on explicit widths of
-ē²/2 to 2ē² and on the vertex pencil where the default takes the Galerkin one
-(docs/spectral.md has the table, measured and predicted); re-calibrate them here when the
+ē²/2 to 2ē², on the vertex pencil where the default takes the Galerkin one and on point
+clouds (docs/spectral.md has the tables, measured and predicted); re-calibrate them here when the
 numerics change.
 """
 
@@ -42,11 +50,12 @@ from scipy.spatial import cKDTree
 from .corrections.shortcuts import THIN_WIDTHS
 from .errors import MeshWarning
 from .geometry import Geometry
+from .geometry.pointcloud import noise_ratio
 from .widths import h_scale
 
-__all__ = ["DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL", "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT",
-           "GALERKIN_THIN", "RATIO_LIMIT", "Resolution", "ResolutionWarning", "assess", "default_terms",
-           "fem_error"]
+__all__ = ["CLOUD_PEER", "CLOUD_PEER_MODEL", "DEFAULT_MODEL", "EIGENVALUES", "FEM_MODEL",
+           "GALERKIN_FEM_RATIO", "GALERKIN_SHORTCUT", "GALERKIN_THIN", "RATIO_LIMIT", "Resolution",
+           "ResolutionWarning", "assess", "default_terms", "fem_error", "peer_error"]
 
 #: The report predicts the largest relative error of eigenvalues 1..EIGENVALUES.
 EIGENVALUES = 9
@@ -64,7 +73,9 @@ CREASE_HEIGHT = 0.1
 DEFAULT_MODEL = {"A_H": 0.0131, "A_2": 0.142, "A_Q": 0.00366, "P_Q": 0.571, "R_0": 0.992,
                  "A_B": 0.0789, "A_K": 0.25, "A_C": 0.18, "A_N": 1.24,
                  "A_W": 0.000641, "Q_W": 3.76, "P_W": 2.19, "R_W": 1.0,
-                 "A_F": 0.0374, "P_F": 0.548, "A_P": 3.54}
+                 "A_F": 0.0374, "P_F": 0.548, "A_P": 3.54,
+                 # point clouds' sampling term, fitted on their rows alone (``--clouds``)
+                 "C_W": 0.000943, "Q_C": 0.214, "P_C": 1.39, "C_E": 9.38}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
 #: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
 #: squares and discs; 0.19-0.52), rounded up; on curves 0.02-0.47 (circles, an ellipse, a
@@ -90,9 +101,16 @@ FEM_MODEL = {"F_E": 0.0193, "F_Q": 0.418, "F_T": 0.0384, "F_N": 5.68,
              # (benchmarks/bench_curves.py: 0.86-1.87× the measured error)
              "F_S": 0.1, "F_SQ": 0.7}
 
+#: The constants of robust-laplacian's ``point_cloud_laplacian`` on a surface's cloud, fitted by
+#: ``benchmarks/calibrate_resolution.py`` on its cloud rows (module docstring).
+CLOUD_PEER_MODEL = {"R_E": 0.0607, "R_Q": 0.207, "R_F": 0.116, "Q_0": 0.278, "P_R": 0.5, "R_N": 1.08}
+#: What a surface's point cloud is compared against, and what the warning names.
+CLOUD_PEER = "robust_laplacian.point_cloud_laplacian(P)"
+
 
 class ResolutionWarning(MeshWarning):
-    """The input is too coarse for the kernel: linear FEM is expected to be more accurate."""
+    """The input is too coarse for the kernel: linear FEM (on a point cloud, robust-laplacian's
+    point-cloud Laplacian) is expected to be more accurate."""
 
 
 @dataclass(frozen=True)
@@ -129,7 +147,8 @@ class Resolution:
         Predicted largest relative error of eigenvalues 1-9: the operator's, and linear
         FEM's on the same mesh (None without cells: a point cloud).
     verdict : str
-        "resolved", or "too coarse" when ``predicted_error > RATIO_LIMIT · fem_error``.
+        "resolved", or "too coarse" when ``predicted_error > RATIO_LIMIT · fem_error`` (on a
+        surface's point cloud, ``RATIO_LIMIT · peer_error``).
     alternative : str or None
         The operator to use instead when too coarse.
     reason : str
@@ -144,6 +163,13 @@ class Resolution:
     fallback : bool
         Whether the corrected kernel's -S was not semidefinite at these widths and the build
         fell back to the plain kernel (which the prediction then models).
+    cloud : bool
+        Whether the input is a surface's point cloud (its sampling term and its peer differ).
+    cloud_noise : float
+        A point cloud's σ̂²/a², its normal noise over its squared spacing as given (before the
+        default's projection; :func:`meshlap.geometry.pointcloud.noise_ratio`), 0 for meshes.
+    peer_error : float or None
+        The predicted error of :data:`CLOUD_PEER` on a surface's point cloud (None otherwise).
 
     Examples
     --------
@@ -171,16 +197,26 @@ class Resolution:
     shortcuts: float = 0.0
     thin: float = 0.0
     fallback: bool = False
+    cloud: bool = False
+    cloud_noise: float = 0.0
+    peer_error: float | None = None
 
     @property
     def too_coarse(self) -> bool:
         """Whether FEM is expected to be more accurate by more than :data:`RATIO_LIMIT`."""
         return self.verdict == "too coarse"
 
+    def _peer(self) -> tuple[str, float | None]:
+        # what the default is compared against: linear FEM, or on a cloud robust-laplacian's
+        if self.fem_error is None and self.peer_error is not None:
+            return "robust-laplacian's point_cloud_laplacian", self.peer_error
+        return "linear FEM", self.fem_error
+
     def message(self) -> str:
         """The warning's text."""
+        name, peer = self._peer()
         return (f"the input is too coarse for the heat kernel ({self.reason}): predicted eigenvalue "
-                f"error {self.predicted_error:.2%} against {self.fem_error:.2%} for linear FEM; use "
+                f"error {self.predicted_error:.2%} against {peer:.2%} for {name}; use "
                 f"{self.alternative} (op.resolution has the figures)")
 
     def to_json(self) -> str:
@@ -193,12 +229,13 @@ class Resolution:
         return cls(**json.loads(text))
 
     def __repr__(self) -> str:
-        fem = "–" if self.fem_error is None else f"{self.fem_error:.2%}"
+        name, peer = self._peer()
         rows = [f"Resolution: {self.verdict} (predicted eigenvalue error {self.predicted_error:.2%}, "
-                f"linear FEM {fem})",
+                f"{name} {'–' if peer is None else f'{peer:.2%}'})",
                 f"  width {self.width:.2f} mean edges (ē = {self.spacing:.4g}); narrowed to "
                 f"{self.narrowed:.2f} of the default; h·λ₉ = {self.wavelength:.3g}; irregularity "
-                f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise {self.noise:.2f} edges",
+                f"{self.irregularity:.2f}; bend {self.bend:.2f}; noise "
+                + (f"σ̂²/a² {self.cloud_noise:.3g}" if self.cloud else f"{self.noise:.2f} edges"),
                 f"  near the boundary {self.boundary:.0%} of the mass (curvature × width "
                 f"{self.boundary_curvature:.2f}); near creases {self.creases:.0%}; next to a short cut "
                 f"{self.shortcuts:.0%}; on thin parts {self.thin:.0%}",
@@ -284,7 +321,11 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
     # over, and refining at a fixed width in edges does not shrink it (at h = ē² on random spheres:
     # 12.9% at 2,000 vertices, 6.7% at 20,000; the plain kernel 0.9% at 400,000 and at 1,000,000)
     below = max(1.0 / max(fig.narrowed, 1e-6) - 1.0 / c["R_W"], 0.0)
-    sampled = c["A_W"] * (fig.irregularity / 0.3) ** c["Q_W"] * below ** c["P_W"]
+    if fig.cloud:  # nearest-neighbour edges: uniform clouds spread 0.2, random ones 0.39
+        sampled = (c["C_W"] * (max(fig.irregularity - c["Q_C"], 0.0) / 0.1) ** c["P_C"] * below ** c["P_W"]
+                   * (1 + c["C_E"] * hl / fig.width**2))
+    else:
+        sampled = c["A_W"] * (fig.irregularity / 0.3) ** c["Q_W"] * below ** c["P_W"]
     return {"the width against the eigenfunctions' wavelength": (c["A_H"] + c["A_2"] * hl) * hl * fig.bend,
             f"the kernel narrowed to {fig.narrowed:.2f} of its width on an irregular sampling":
                 c["A_Q"] * hl * (fig.irregularity / 0.3) ** 2 * narrowed,
@@ -310,6 +351,24 @@ def fem_error(fig: Resolution, source: str, faces: bool, model: dict[str, float]
     if not faces:
         return None
     return (model["F_E"] + model["F_Q"] * fig.irregularity**2) * e2l * (1 + e2l) + model["F_N"] * fig.noise**2
+
+
+def peer_error(fig: Resolution, model: dict[str, float] = CLOUD_PEER_MODEL) -> float:
+    """:data:`CLOUD_PEER`'s predicted error on a surface's point cloud of the figures ``fig``
+    (ē²λ is ``wavelength / width²``; the cloud's noise is ``fig.cloud_noise``).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> P = meshlap.samples.sphere_points(4000, "random", seed=0)
+    >>> r = meshlap.point_cloud_laplacian(P).resolution
+    >>> bool(peer_error(r) == r.peer_error)
+    True
+    """
+    c = model
+    spread = max(fig.irregularity - c["Q_0"], 0.0) ** c["P_R"]
+    sampling = (c["R_Q"] * fig.bend + c["R_F"] * (1 - fig.bend)) * spread
+    return c["R_E"] * fig.wavelength / fig.width**2 + sampling + c["R_N"] * fig.cloud_noise
 
 
 def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = False,
@@ -365,10 +424,18 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
         # a crease lifts its own line only, far above the median vertex
         rel = one / np.sqrt(np.maximum(ell2, 1e-300))
         crease = _near(P, (rel > CREASE_RATIO * np.median(rel)) & (rel > CREASE_HEIGHT), w, sigma)
+    surface_cloud = geo.source == "point cloud" and geo.dim == 2 and P.shape[1] == 3
+    cloud_noise = 0.0
+    if surface_cloud:  # robust-laplacian sees the points as given, not the default's projection
+        cloud_noise = geo._cache.get("noise_ratio")
+        if cloud_noise is None:  # denoise given explicitly: not measured at the build
+            raw = geo._cache.get("input_points")
+            cloud_noise = noise_ratio(P, 2, geo._cache.get("pca")) if raw is None else noise_ratio(raw, 2)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                     crease, 0.0, None, "", None, "", shortcuts, thin, fallback)
+                     crease, 0.0, None, "", None, "", shortcuts, thin, fallback, surface_cloud, cloud_noise)
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
+    peer = peer_error(fig) if surface_cloud else None
     if galerkin_regime and fem is not None:
         terms = {"the Galerkin pencil, measured below linear FEM's error": GALERKIN_FEM_RATIO * fem,
                  f"{shortcuts:.1%} of the area next to a groove or thin wall (pairs through the air dropped)":
@@ -378,8 +445,9 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
     predicted = float(sum(terms.values()))
     alternative = ("linear FEM (lapy.Solver(lapy.TetMesh(V, T)))" if geo.source == "tetrahedra"
                    else "meshlap.baselines.cotangent(V, E)" if geo.source == "polyline"
-                   else "meshlap.baselines.cotangent(V, F)")
-    coarse = fem is not None and predicted > RATIO_LIMIT * fem
+                   else CLOUD_PEER if surface_cloud else "meshlap.baselines.cotangent(V, F)")
+    against = fem if fem is not None else peer
+    coarse = against is not None and predicted > RATIO_LIMIT * against
     verdict = "too coarse" if coarse else "resolved"
-    return replace(fig, predicted_error=predicted, fem_error=fem, verdict=verdict,
+    return replace(fig, predicted_error=predicted, fem_error=fem, verdict=verdict, peer_error=peer,
                    alternative=alternative if coarse else None, reason=max(terms, key=terms.get))

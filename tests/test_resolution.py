@@ -2,15 +2,17 @@
 linear FEM wins (benchmarks/bench_spectra.py has the whole matrix)."""
 
 import math
+import sys
 import warnings
 
 import igl
 import numpy as np
 import pytest
+import scipy.sparse.linalg as sla
 
 import meshlap
 from meshlap import baselines, samples, shapes, spectral
-from meshlap.resolution import RATIO_LIMIT, Resolution, ResolutionWarning
+from meshlap.resolution import CLOUD_PEER, RATIO_LIMIT, Resolution, ResolutionWarning
 from meshlap.store import load_operator, save_operator
 
 SPHERE = np.array([deg * (deg + 1) for deg in range(4) for _ in range(2 * deg + 1)], float)  # 16 values
@@ -131,6 +133,35 @@ def test_sphere_cloud_16_eigenvalues_within_1_percent():
     op, warned = build(meshlap.point_cloud_laplacian, P)
     assert not warned and op.resolution.fem_error is None  # no mesh, no FEM to name
     assert error(op, SPHERE, 16) < 0.01  # measured 0.50% (robust-laplacian on 16,000 points: 7.8%)
+
+
+def test_narrow_cloud_warns_and_names_robust_laplacian():
+    # 4,000 random sphere points (benchmarks/calibrate_resolution.py --clouds): at h = ē²/2 the default
+    # is 76% off against robust-laplacian's 6.1% (predicted 53% and 7.2%), warned; at its own 4ē²,
+    # 0.85% (predicted 0.58%), silent
+    P = samples.sphere_points(4000, "random", seed=0)
+    e2 = meshlap.geometry.point_cloud_geometry(P).spacing ** 2
+    with pytest.MonkeyPatch.context() as mp:  # the report is a formula: it needs no robust-laplacian
+        mp.setitem(sys.modules, "robust_laplacian", None)
+        with pytest.warns(ResolutionWarning, match=r"use robust_laplacian\.point_cloud_laplacian\(P\)"):
+            op = meshlap.point_cloud_laplacian(P, h=e2 / 2)
+    r = op.resolution
+    assert r.too_coarse and r.alternative == CLOUD_PEER and r.fem_error is None and r.cloud
+    assert 0.036 < r.peer_error < 0.12 and r.cloud_noise < 0.01  # a clean cloud
+    assert "robust-laplacian's point_cloud_laplacian 7." in repr(r) and "σ̂²/a²" in repr(r)
+    err = error(op, SPHERE)
+    assert err > 5 * RATIO_LIMIT * 0.061 and 0.5 < r.predicted_error / err < 2
+    try:  # the peer itself where installed (the report needs only its model)
+        import robust_laplacian
+    except ImportError:
+        robust_laplacian = None
+    if robust_laplacian is not None:
+        L, M = robust_laplacian.point_cloud_laplacian(P)
+        lam = np.sort(sla.eigsh(L.tocsc(), 10, M.tocsc(), sigma=-1e-8)[0])
+        assert 0.5 < r.peer_error / np.abs(lam[1:10] / SPHERE[1:10] - 1).max() < 2
+    op, warned = build(meshlap.point_cloud_laplacian, P)
+    assert not warned and op.resolution.predicted_error < RATIO_LIMIT * op.resolution.peer_error
+    assert error(op, SPHERE) < 0.015
 
 
 def test_creases_are_found_and_warned():

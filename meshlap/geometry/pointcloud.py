@@ -354,6 +354,7 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     P = check_points(P)
     notes = ""
     pca = None
+    ratio = None
     valid_k = isinstance(k, (int, np.integer)) and not isinstance(k, bool) and 1 <= k < P.shape[1]
     if denoise is None and valid_k and len(P) > 8:  # bad k: point_masses names the problem
         pca = frames.pca_frames(P, k)
@@ -373,4 +374,6 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
         geo._cache["input_points"] = raw
+    if ratio is not None:  # of the points as given: the resolution report reads it
+        geo._cache["noise_ratio"] = ratio
     return geo
