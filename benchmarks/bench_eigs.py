@@ -91,6 +91,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     n, k = (4000, args.k) if args.quick else (args.n, args.k)
 
+    load_before = os.getloadavg()[0]  # other jobs on the machine inflate the wall times
     V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
     built = {}
     for name, kw in (("default", {}), ("paper's", {"correction": "none"})):
@@ -129,7 +130,8 @@ def main(argv=None) -> None:
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     lines = [
         f"Command: `python benchmarks/bench_eigs.py` ({numba.get_num_threads()} threads, "
-        f"{os.cpu_count()} CPUs, numba {numba.__version__}; written {stamp}).",
+        f"{os.cpu_count()} CPUs, numba {numba.__version__}; written {stamp}; load average "
+        f"{load_before:.1f} at the start, {os.getloadavg()[0]:.1f} at the end).",
         "",
         f"Mesh: `meshlap.shapes.sphere({n}, kind='random', seed=0)`. Operators: the default "
         f"`meshlap.laplacian(V, F)` (h = {op.h:.4g}, {op.L_sym.nnz / n:.0f} entries per row of L_sym, built "

@@ -22,6 +22,16 @@ like size it is about 1/c of the sum of their squares, which ends the iteration 
 (2l+1)-fold eigenvalues one iteration sooner. A relative eigenvalue accuracy ε so needs a
 residual of only about √(ε·θ·δ), not ε·θ: half the iterations for ε = 1e-8.
 
+The product with a stored operator (:func:`csr_times`) splits the rows over numba's threads
+and adds 16 entries of a row per pass over the row's accumulator, in the entries' order: the
+accumulator's load and store per entry, not the reading of the matrix, bounded the plain loop.
+
+The products over the long dimension (``A @ B`` with a small B, ``A.T @ B``) share their rows
+among numba's threads (:func:`matmul`, :func:`inner`), BLAS staying on one thread each: a
+threaded BLAS here competes with numba's still-spinning workers (3-10× slower, measured),
+where a share of the rows per thread does not. ``A.T @ B`` adds the products of fixed blocks of
+rows in a fixed order, so that the results do not depend on the number of threads.
+
 The preconditioner factor is a sparse LU in symmetric mode, applied to wide blocks with
 blocked triangular solves compiled here: one pass over each factor serves every column of the
 block, where SuperLU's own solve treats the columns one after the other.
@@ -35,13 +45,17 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
+from numba import prange
 
-from ._jit import jit
+from ._jit import _threads, jit
 
-__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "eig_error", "lobpcg", "lobpcg_progress", "svqb"]
+__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "csr_times", "eig_error", "inner", "lobpcg",
+           "lobpcg_progress", "matmul", "svqb"]
 
 # the relative half-width of the window of Ritz values counted as one cluster by the bound
 _WINDOW = 0.05
+# rows per block of the products over the long dimension (module notes)
+_ROWS = 4096
 # blocks up to this many columns go to SuperLU's own solve (no compiled kernel needed: the
 # semidefiniteness check of a build uses 6)
 _NARROW = 8
@@ -72,6 +86,107 @@ def _backward(indptr, indices, data, diag, X):  # pragma: no cover - compiled
         d = 1.0 / diag[i]
         for q in range(c):
             X[i, q] *= d
+
+
+# entries summed per pass over a row's accumulator (module notes): 37% less time for 40 columns
+# of the 16k default than one a pass, the same sums to the bit
+_UNROLL = 16
+
+
+@jit(parallel=True)
+def _spmm(indptr, indices, data, X, Y):  # pragma: no cover - compiled
+    n = len(indptr) - 1
+    k = X.shape[1]
+    for i in prange(n):
+        acc = np.zeros(k)
+        p, end = indptr[i], indptr[i + 1]
+        while p < end:
+            step = min(_UNROLL, end - p)
+            if step == _UNROLL:
+                for c in range(k):
+                    s = acc[c]
+                    for q in range(_UNROLL):
+                        s += data[p + q] * X[indices[p + q], c]
+                    acc[c] = s
+            else:
+                for q in range(step):
+                    j = indices[p + q]
+                    a = data[p + q]
+                    for c in range(k):
+                        acc[c] += a * X[j, c]
+            p += step
+        Y[i] = acc
+
+
+def csr_times(A: sp.csr_matrix, X: np.ndarray) -> np.ndarray:
+    """``A @ X`` for a CSR matrix (rows in any column order) and a block, on numba's threads.
+
+    Examples
+    --------
+    >>> A = sp.csr_matrix(np.array([[2.0, 1.0], [0.0, 3.0]]))
+    >>> csr_times(A, np.ones((2, 2))).tolist()
+    [[3.0, 3.0], [3.0, 3.0]]
+    """
+    Y = np.empty((A.shape[0], X.shape[1]))
+    _spmm(A.indptr, A.indices, A.data, np.ascontiguousarray(X, dtype=np.float64), Y)
+    return Y
+
+
+def _in_threads(fn: Callable[[int, int], None], n: int, least: int) -> None:
+    """``fn(start, stop)`` over contiguous shares of ``range(n)``, one per numba thread (the
+    calling thread takes the first); serially for ``n < least``."""
+    threads, pool = _threads()
+    if pool is None or n < least:
+        fn(0, n)
+        return
+    edges = np.linspace(0, n, min(threads, n) + 1).astype(np.int64).tolist()
+    shares = [pool.submit(fn, a, b) for a, b in zip(edges[1:-1], edges[2:], strict=True)]
+    fn(edges[0], edges[1])
+    for share in shares:
+        share.result()
+
+
+def matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A @ B`` for a tall A (n × p) and a small B, A's rows shared among the threads.
+
+    Examples
+    --------
+    >>> A, B = np.ones((10000, 3)), np.ones((3, 2))
+    >>> matmul(A, B)[-1].tolist()
+    [3.0, 3.0]
+    """
+    out = np.empty((A.shape[0], B.shape[1]))
+
+    def share(a: int, b: int) -> None:
+        np.matmul(A[a:b], B, out=out[a:b])
+
+    _in_threads(share, A.shape[0], 2 * _ROWS)
+    return out
+
+
+def inner(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A.T @ B`` for tall A and B: the sum of the products of blocks of ``_ROWS`` rows, in
+    block order, so that the result does not depend on the number of threads.
+
+    Examples
+    --------
+    >>> A = np.arange(20000.0).reshape(10000, 2) / 1e4
+    >>> bool(np.allclose(inner(A, A), A.T @ A, rtol=1e-14))
+    True
+    """
+    n = A.shape[0]
+    if n <= _ROWS:
+        return A.T @ B
+    starts = list(range(0, n, _ROWS))
+    parts = np.empty((len(starts), A.shape[1], B.shape[1]))
+
+    def share(a: int, b: int) -> None:
+        for i in range(a, b):
+            lo = starts[i]
+            np.matmul(A[lo:lo + _ROWS].T, B[lo:lo + _ROWS], out=parts[i])
+
+    _in_threads(share, len(starts), 2)
+    return parts.sum(axis=0)
 
 
 class BlockFactor:
@@ -136,13 +251,13 @@ def _local(a: np.ndarray) -> np.ndarray:
 
 def svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10, allsum=_local) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormalize the columns of U (dropping near-dependent directions): U @ T."""
-    G = allsum(U.T @ (m[:, None] * U))
+    G = allsum(inner(U, m[:, None] * U))
     d = np.sqrt(np.abs(np.diag(G)))
     d[d == 0] = 1.0
     w, Q = np.linalg.eigh(G / d[:, None] / d[None, :])
     keep = w > drop * max(float(w.max()), 1e-300)
     T = (Q[:, keep] / np.sqrt(w[keep])) / d[:, None]
-    return U @ T, T
+    return matmul(U, T), T
 
 
 def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None) -> np.ndarray:
@@ -231,17 +346,17 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     mc = m[:, None]
     X, _ = svqb(X0, m, allsum=allsum)
     AX = apply_A(X)
-    G = allsum(X.T @ AX)
+    G = allsum(inner(X, AX))
     lam, Q = np.linalg.eigh(0.5 * (G + G.T))
     # XP = [X P] and AXP = [AX AP] side by side in one array each: every product over the long
     # dimension below is then one BLAS call that reads each array once
-    XP, AXP = X @ Q, AX @ Q
+    XP, AXP = matmul(X, Q), matmul(AX, Q)
     nb = XP.shape[1]
     for it in range(maxiter + 1):
         X, AX = XP[:, :nb], AXP[:, :nb]
         R = AX - (mc * X) * lam
         if on_values:
-            gram = allsum(R.T @ (R / mc))
+            gram = allsum(inner(R, R / mc))
             res = np.sqrt(np.maximum(np.diag(gram), 0.0))
             err = eig_error(lam, res, gram)
         else:
@@ -255,16 +370,16 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
             break
         W = precond(R[:, active])
         for _ in range(1 if cheap else 2):  # classical Gram–Schmidt against X and P, twice is enough
-            W -= XP @ allsum(XP.T @ (mc * W))
+            W -= matmul(XP, allsum(inner(XP, mc * W)))
         W, _ = svqb(W, m, allsum=allsum)
         AW = apply_A(W)
         # the operator's Gram matrix of the basis [X, P, W], lower triangle (all eigh reads);
         # its mass Gram matrix is I by construction, and its block of X is diag(θ)
         q, s = XP.shape[1], XP.shape[1] + W.shape[1]
         G = np.zeros((s, s))
-        G[nb:q, :q] = XP[:, nb:].T @ AXP
-        G[q:, :q] = W.T @ AXP
-        G[q:, q:] = W.T @ AW
+        G[nb:q, :q] = inner(XP[:, nb:], AXP)
+        G[q:, :q] = inner(W, AXP)
+        G[q:, q:] = inner(W, AW)
         G = allsum(G)
         G[np.arange(nb), np.arange(nb)] = lam
         lam_all, C = np.linalg.eigh(G)
@@ -277,13 +392,13 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
             E -= C @ (C.T @ E)
         E, _ = svqb(E, np.ones(s))
         CE = np.hstack([C, E])
-        XP_new = XP @ CE[:q]
-        XP_new += W @ CE[q:]
+        XP_new = matmul(XP, CE[:q])
+        XP_new += matmul(W, CE[q:])
         if cheap:
             AXP = apply_A(XP_new)
         else:
-            AXP_new = AXP @ CE[:q]
-            AXP_new += AW @ CE[q:]
+            AXP_new = matmul(AXP, CE[:q])
+            AXP_new += matmul(AW, CE[q:])
             AXP = AXP_new
         XP = XP_new
     return Ritz(lam, np.ascontiguousarray(X), it, res, ratio)

@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from numba import prange
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
@@ -73,21 +72,6 @@ def _one_blas_thread() -> contextlib.AbstractContextManager:
 
 
 # -- products with the operator ----------------------------------------------------------------
-@jit(parallel=True)
-def _spmm(indptr, indices, data, X, Y):  # pragma: no cover - compiled
-    n = len(indptr) - 1
-    k = X.shape[1]
-    for i in prange(n):
-        acc = np.zeros(k)
-        for p in range(indptr[i], indptr[i + 1]):
-            j = indices[p]
-            a = data[p]
-            for c in range(k):
-                acc[c] += a * X[j, c]
-        for c in range(k):
-            Y[i, c] = acc[c]
-
-
 def symmetric_L(op: Any) -> Any:
     """The L of the operator's symmetric pencil (``op.L_sym``; ``op.L`` for operators that
     keep one matrix): what spectra and heat flow iterate with."""
@@ -114,12 +98,9 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
     vector = X.ndim == 1
     X2 = np.ascontiguousarray(X.reshape(len(X), -1))
     L = None if getattr(op, "matrix_free", False) else symmetric_L(op)
-    if not sp.issparse(L) or L.format != "csr":
-        Y = np.asarray(op @ X2)
-    else:
-        Y = np.empty((L.shape[0], X2.shape[1]))
-        _spmm(L.indptr, L.indices, L.data, X2, Y)
+    Y = np.asarray(op @ X2) if not sp.issparse(L) or L.format != "csr" else _lobpcg.csr_times(L, X2)
     return Y.ravel() if vector else Y
+
 
 
 # -- the problem on the vertices with mass ------------------------------------------------------
@@ -453,9 +434,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=Non
 
     def apply_A(Xp: np.ndarray) -> np.ndarray:
         if ordered is not None:
-            Y = np.empty(Xp.shape)
-            _spmm(ordered[0].indptr, ordered[0].indices, ordered[0].data, np.ascontiguousarray(Xp), Y)
-            return -m[:, None] * Y
+            return -m[:, None] * _lobpcg.csr_times(ordered[0], Xp)
         if full:
             return -m[:, None] * apply_block(op, Xp)
         X = np.zeros((n, Xp.shape[1]))
@@ -481,7 +460,8 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=Non
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
             # (the same factorization, without ½ D⁻¹), to a residual of _START_TOL
             cb = _lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2)
-            start = _lobpcg.lobpcg(lambda Y: np.asarray(K @ Y), m, T.lu.solve, X0, k, _START_TOL, 10,
+            Kr = sp.csr_matrix(K)
+            start = _lobpcg.lobpcg(lambda Y: _lobpcg.csr_times(Kr, Y), m, T.lu.solve, X0, k, _START_TOL, 10,
                                    on_values=False, report=cb, cheap=True)
             X0 = start.X[:, :_block_size(start.lam, k, nb) if adapt else nb]
         out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter,

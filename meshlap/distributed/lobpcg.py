@@ -52,8 +52,10 @@ __all__ = ["eigs", "finish"]
 
 # nearest neighbours of the point-cloud preconditioner's graph
 _NEIGHBOURS = 10
-# iterations of the start on the cotangent problem
-_START_ITERATIONS = 20
+# iterations of the start on the cotangent problem, whose block-Jacobi preconditioner makes it
+# slower than the single machine's: 2 ranks, random spheres, the operator's own iterations after
+# a start of 5, 7, 10 or 20: 8, 7, 6, 6 (8k, k = 20); 6 after 10 or 20 (16k, k = 36)
+_START_ITERATIONS = 10
 
 
 def _allsum(comm):
@@ -294,7 +296,8 @@ def eigs(
                     return R / (sigma * m[:, None])
                 return T.lu.solve(R)
 
-            start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, 1e-2, _START_ITERATIONS,
+            start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, spectral._START_TOL,
+                                   _START_ITERATIONS,
                                    allsum, on_values=False,
                                    report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2))
             nb = spectral._block_size(start.lam, k, nb) if adapt else nb
