@@ -202,18 +202,23 @@ def _eigs_mesh(n: int):
     return meshlap.shapes.sphere(n, kind="random", seed=0)
 
 
-def eigs_job(n: int, k: int, serial: bool, matrix_free: bool) -> None:
-    """One eigensolver run on a random n-vertex sphere at the paper's default h, JSON on stdout:
-    ``spectral.eigs`` on the single-machine operator (``serial``), or the distributed LOBPCG
-    on all ranks of COMM_WORLD; stored or ``matrix_free``."""
+def eigs_job(n: int, k: int, serial: bool, matrix_free: bool, h_edges: float | None) -> None:
+    """One eigensolver run on a random n-vertex sphere, JSON on stdout: ``spectral.eigs`` on the
+    single-machine operator (``serial``), or the distributed LOBPCG on all ranks of COMM_WORLD;
+    stored or ``matrix_free``; at the paper's default h, or h = h_edges · ē² (ē the mean edge)."""
+    import igl
+
     import meshlap
 
     V, F = _eigs_mesh(n)
+    kw = {"correction": "none", "matrix_free": matrix_free}
+    if h_edges is not None:
+        kw["h"] = h_edges * float(igl.edge_lengths(V, F).mean()) ** 2
     t0 = time.perf_counter()
     if serial:
         from meshlap import spectral
 
-        op = meshlap.laplacian(V, F, correction="none", matrix_free=matrix_free)
+        op = meshlap.laplacian(V, F, **kw)
         nnz, rank, size = op.nnz, 0, 0  # 0 when matrix-free
     else:
         from mpi4py import MPI
@@ -222,7 +227,7 @@ def eigs_job(n: int, k: int, serial: bool, matrix_free: bool) -> None:
         from meshlap.distributed import lobpcg as distributed_eigs
 
         comm = MPI.COMM_WORLD
-        op = distributed.laplacian(V, F, correction="none", comm=comm, matrix_free=matrix_free)
+        op = distributed.laplacian(V, F, comm=comm, **kw)
         nnz = comm.allreduce(int(op._counts.sum()), op=MPI.SUM)
         rank, size = comm.Get_rank(), comm.Get_size()
         comm.Barrier()
@@ -243,12 +248,13 @@ def eigs_job(n: int, k: int, serial: bool, matrix_free: bool) -> None:
         print(json.dumps(rows))
 
 
-def run_eigs(n: int, k: int, ranks: int, matrix_free: bool = False) -> list[dict]:
+def run_eigs(n: int, k: int, ranks: int, matrix_free: bool = False, h_edges: float | None = None) -> list[dict]:
     """``eigs_job`` in a subprocess: ranks = 0 for the single machine (numba on every core),
     else mpiexec with one numba thread per rank."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     job = [sys.executable, __file__, "--eigs-job", str(n), str(k)]
     job += ["--matrix-free"] if matrix_free else []
+    job += ["--h-edges", str(h_edges)] if h_edges is not None else []
     if ranks == 0:
         cmd = [*job, "--serial"]
     else:
@@ -258,17 +264,19 @@ def run_eigs(n: int, k: int, ranks: int, matrix_free: bool = False) -> list[dict
     return json.loads(out.strip().splitlines()[-1])
 
 
-def eigs_section(n: int, k: int, matrix_free: bool = False) -> list[str]:
+def eigs_section(n: int, k: int, matrix_free: bool = False, h_edges: float | None = None) -> list[str]:
     """Single machine, 1 and 2 ranks on the same operator: the table and the cost per iteration."""
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
-    runs = {r: run_eigs(n, k, r, matrix_free) for r in (0, 1, 2)}
+    runs = {r: run_eigs(n, k, r, matrix_free, h_edges) for r in (0, 1, 2)}
     uptime_after = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     lam0 = np.array(runs[0][0]["lam"])
     scale = np.maximum(np.abs(lam0), lam0[1])
     one, nnz = runs[0][0], runs[2][0]["nnz"]
     flag, kind = (" --matrix-free", "matrix-free ") if matrix_free else ("", "")
+    flag += f" --h-edges {h_edges:g}" if h_edges is not None else ""
+    width = "default h" if h_edges is None else f"h = {h_edges:g} ē²"
     lines = [f"`python benchmarks/bench_distributed.py --eigs {n} --k {k}{flag}`: {k} eigenpairs of the "
-             f"paper's {kind}operator (`correction=\"none\"`, default h = {one['h']:.3g}) on a random "
+             f"paper's {kind}operator (`correction=\"none\"`, {width} = {one['h']:.3g}) on a random "
              f"{n:,}-vertex unit sphere, {nnz / n:.0f} entries per row ({nnz / 1e6:.0f} M). Single machine: "
              "`spectral.eigs` with numba on both cores; distributed: `distributed.lobpcg.eigs(op, k, "
              "mesh=(V, F))`, one numba thread per rank.", "",
@@ -304,21 +312,23 @@ def main() -> None:
     ap.add_argument("--eigs-job", type=int, nargs=2)
     ap.add_argument("--serial", action="store_true")
     ap.add_argument("--matrix-free", action="store_true")
+    ap.add_argument("--h-edges", type=float, help="h = this times the squared mean edge (default: the paper's h)")
     args = ap.parse_args()
     if args.rank_job:
         rank_job(args.rank_job)
         return
     if args.eigs_job:
-        eigs_job(*args.eigs_job, serial=args.serial, matrix_free=args.matrix_free)
+        eigs_job(*args.eigs_job, serial=args.serial, matrix_free=args.matrix_free, h_edges=args.h_edges)
         return
     if args.eigs:
-        lines = eigs_section(args.eigs, args.k, args.matrix_free)
+        lines = eigs_section(args.eigs, args.k, args.matrix_free, args.h_edges)
         print("\n".join(lines))
         if not args.quick:
             sys.path.insert(0, str(HERE))
             from results_file import write_section
 
-            write_section("Distributed eigensolver (issue 19)", lines)
+            title = "Distributed eigensolver (issue 19)"
+            write_section(title + (f", {args.eigs:,} points" if args.eigs >= 1_000_000 else ""), lines)
         return
     per_rank = 5_000 if args.quick else args.per_rank
     run(1, 2000)  # warm numba's cache before timing anything
