@@ -96,27 +96,11 @@ def _count_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols):
 
 @jit(inline="always")
 def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols, sj, sd, sh):
-    # like _gather, with the per-pair cut-off; sh receives h_wp. With normals, as in
-    # _count_var: d² times the series' arc factor and h_wp of every candidate first, in a loop
-    # without a branch (it vectorizes), then the accepted ones moved forward in place; a row
-    # with a pair beyond the series' range takes _gather_arc
-    if not use_normals:
-        pos = 0
-        for i in range(ncols):
-            for j in range(cols[i, 0], cols[i, 1]):
-                dx = xs[j] - x
-                dy = ys[j] - y
-                dz = zs[j] - z
-                d2 = dx * dx + dy * dy + dz * dz
-                hp = 0.5 * (hw + hs[j])
-                sj[pos] = j
-                sd[pos] = d2
-                sh[pos] = hp
-                pos += np.int64((d2 <= lnt4 * hp) & (j != sw))
-        return pos
-    nw0, nw1, nw2 = nw[0], nw[1], nw[2]
-    n0, n1, n2 = ns[0], ns[1], ns[2]
-    far = 0
+    # like _gather, with the per-pair cut-off; sh receives h_wp. With normals: the pairs within
+    # the chord's cut-off first (the factor is at least 1), then their arc factor's series in
+    # a loop of its own, which vectorizes, then those the factor moves beyond the cut-off
+    # dropped; a row with a pair beyond the series' range (t > 0.1) takes _gather_arc. The
+    # same operations per pair as the exact loop, so the same values
     pos = 0
     for i in range(ncols):
         for j in range(cols[i, 0], cols[i, 1]):
@@ -125,19 +109,34 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
             dz = zs[j] - z
             d2 = dx * dx + dy * dy + dz * dz
             hp = 0.5 * (hw + hs[j])
-            c = nw0 * n0[j] + nw1 * n1[j] + nw2 * n2[j]
-            t = min(max(0.5 * (1.0 - c), 0.0), 1.0)
-            q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
-                                                                             + t * 63.0 / 2816.0))))
-            far += np.int64((t > 0.1) & (d2 <= lnt4 * hp))
-            d2 = d2 * (q * q)
             sj[pos] = j
             sd[pos] = d2
             sh[pos] = hp
             pos += np.int64((d2 <= lnt4 * hp) & (j != sw))
+    if not use_normals:
+        return pos
+    nw0, nw1, nw2 = nw[0], nw[1], nw[2]
+    n0, n1, n2 = ns[0], ns[1], ns[2]
+    far = 0
+    for i in range(pos):
+        j = sj[i]
+        c = nw0 * n0[j] + nw1 * n1[j] + nw2 * n2[j]
+        t = min(max(0.5 * (1.0 - c), 0.0), 1.0)
+        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
+                                                                         + t * 63.0 / 2816.0))))
+        far += np.int64(t > 0.1)
+        sd[i] = sd[i] * (q * q)
     if far:
         return _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, sd, sh)
-    return pos
+    kept = 0
+    for i in range(pos):
+        d2 = sd[i]
+        hp = sh[i]
+        sj[kept] = sj[i]
+        sd[kept] = d2
+        sh[kept] = hp
+        kept += np.int64(d2 <= lnt4 * hp)
+    return kept
 
 
 @jit()
