@@ -25,16 +25,27 @@ __all__ = ["count_entries", "dog_factor", "revalue", "sort_rows", "variable_csr"
 def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
     # (α/2)/sin(α/2) squared, α the angle between the unit normals: the squared ratio of arc
     # to chord for a circle through both points with those normals (1 for parallel normals)
-    c = nw0 * np0 + nw1 * np1 + nw2 * np2
-    t = min(max(0.5 * (1.0 - c), 0.0), 1.0)  # sin²(α/2)
+    t = _sin2_half(nw0, nw1, nw2, np0, np1, np2)
     if t <= 0.1:
-        # asin(s)/s as a series in t = s² (truncation below 2e-8): no libm call for the
-        # nearly parallel normals of most pairs
-        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
-                                                                         + t * 63.0 / 2816.0))))
-    else:
-        sn = math.sqrt(t)
-        q = math.asin(sn) / sn
+        return _arc_series(t)
+    sn = math.sqrt(t)
+    q = math.asin(sn) / sn
+    return q * q
+
+
+@jit(inline="always")
+def _sin2_half(nw0, nw1, nw2, np0, np1, np2):
+    # t = sin²(α/2) of the angle α between two unit normals
+    c = nw0 * np0 + nw1 * np1 + nw2 * np2
+    return min(max(0.5 * (1.0 - c), 0.0), 1.0)
+
+
+@jit(inline="always")
+def _arc_series(t):
+    # _arc_factor for t <= 0.1: asin(s)/s as a series in t = s² (truncation below 2e-8), squared;
+    # no libm call and no branch, for the nearly parallel normals of most pairs
+    q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
+                                                                     + t * 63.0 / 2816.0))))
     return q * q
 
 
@@ -66,12 +77,9 @@ def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols,
             dz = zs[j] - z
             d2 = dx * dx + dy * dy + dz * dz
             lim = lnt4 * 0.5 * (hw + hs[j])
-            c = nw0 * n0[j] + nw1 * n1[j] + nw2 * n2[j]
-            t = min(max(0.5 * (1.0 - c), 0.0), 1.0)
-            q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
-                                                                             + t * 63.0 / 2816.0))))
+            t = _sin2_half(nw0, nw1, nw2, n0[j], n1[j], n2[j])
             far += np.int64((t > 0.1) & (d2 <= lim))
-            cnt += np.int64((d2 * (q * q) <= lim) & (j != sw))
+            cnt += np.int64((d2 * _arc_series(t) <= lim) & (j != sw))
     if far:
         return _count_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols)
     return cnt
@@ -120,12 +128,9 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
     far = 0
     for i in range(pos):
         j = sj[i]
-        c = nw0 * n0[j] + nw1 * n1[j] + nw2 * n2[j]
-        t = min(max(0.5 * (1.0 - c), 0.0), 1.0)
-        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
-                                                                         + t * 63.0 / 2816.0))))
+        t = _sin2_half(nw0, nw1, nw2, n0[j], n1[j], n2[j])
         far += np.int64(t > 0.1)
-        sd[i] = sd[i] * (q * q)
+        sd[i] = sd[i] * _arc_series(t)
     if far:
         return _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, sd, sh)
     kept = 0
