@@ -55,18 +55,10 @@ def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols,
     # with the pair's d² in a shared inline helper numba compiled both passes 2.5x slower
     # (measured). With normals, the arc factor's series is taken for every candidate, without
     # a branch, so that the loop vectorizes (the count pass 2x faster); a row with a pair
-    # beyond the series' range (t > 0.1, rare) is counted again by _count_arc
-    cnt = 0
+    # beyond the series' range (t > 0.1, rare) is counted again by _count_exact
     if not use_normals:
-        for i in range(ncols):
-            for j in range(cols[i, 0], cols[i, 1]):
-                dx = xs[j] - x
-                dy = ys[j] - y
-                dz = zs[j] - z
-                d2 = dx * dx + dy * dy + dz * dz
-                lim = lnt4 * 0.5 * (hw + hs[j])  # = lnt4 * h_wp to the bit (halving is exact)
-                cnt += np.int64((d2 <= lim) & (j != sw))
-        return cnt
+        return _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, False, cols, ncols)
+    cnt = 0
     nw0, nw1, nw2 = nw[0], nw[1], nw[2]
     n0, n1, n2 = ns[0], ns[1], ns[2]
     far = 0
@@ -81,13 +73,14 @@ def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols,
             far += np.int64((t > 0.1) & (d2 <= lim))
             cnt += np.int64((d2 * _arc_series(t) <= lim) & (j != sw))
     if far:
-        return _count_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols)
+        return _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, True, cols, ncols)
     return cnt
 
 
 @jit()
-def _count_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols):
-    # _count_var's count with the exact arc factor at every pair within the cut-off
+def _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols):
+    # _count_var's count without normals, or with the exact arc factor at every pair within
+    # the cut-off
     cnt = 0
     for i in range(ncols):
         for j in range(cols[i, 0], cols[i, 1]):
@@ -95,8 +88,8 @@ def _count_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols):
             dy = ys[j] - y
             dz = zs[j] - z
             d2 = dx * dx + dy * dy + dz * dz
-            lim = lnt4 * 0.5 * (hw + hs[j])
-            if d2 <= lim:
+            lim = lnt4 * 0.5 * (hw + hs[j])  # = lnt4 * h_wp to the bit (halving is exact)
+            if use_normals and d2 <= lim:
                 d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[0, j], ns[1, j], ns[2, j])
             cnt += np.int64((d2 <= lim) & (j != sw))
     return cnt
