@@ -194,17 +194,26 @@ def table(rows: list[dict], mem: dict) -> list[str]:
     return out
 
 
-def default_vs_paper(n: int = 16000, repeat: int = 3) -> dict:
+def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = None) -> dict:
     """The default build against the paper's operator at the same h on a random n-vertex
     sphere, best of ``repeat`` each by CPU time (wall beside it), with the default's stages
-    (wall and CPU seconds) timed through its progress callback."""
+    (wall and CPU seconds) timed through its progress callback. ``h_edges``: h = h_edges · ē²
+    for both (ē the mean edge) instead of the default's own h; the warm-up is then a
+    2,000-vertex sphere, so that a large n is built only ``repeat`` times each."""
     import meshlap
 
     V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
-    h = meshlap.laplacian(V, F).h  # also the warm-up
-    meshlap.laplacian(V, F, h=h, correction="none")
-    out = {"n": n, "h": h}
-    for name, kw in (("paper", {"h": h, "correction": "none"}), ("default", {})):
+    if h_edges is None:
+        h = meshlap.laplacian(V, F).h  # also the warm-up
+        meshlap.laplacian(V, F, h=h, correction="none")
+    else:
+        h = h_edges * float(igl.edge_lengths(V, F).mean()) ** 2
+        small = meshlap.shapes.sphere(2000, kind="random", seed=0)
+        meshlap.laplacian(*small, h=h * n / 2000)  # compiles what the builds below run
+        meshlap.laplacian(*small, h=h * n / 2000, correction="none")
+    out = {"n": n, "h": h, "h_edges": h_edges, "repeat": repeat}
+    default_kw = {} if h_edges is None else {"h": h}
+    for name, kw in (("paper", {"h": h, "correction": "none"}), ("default", default_kw)):
         best = None
         for _ in range(repeat):
             marks = []
@@ -233,13 +242,18 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true", help="print only")
     ap.add_argument("--default-vs-paper", action="store_true",
                     help="only the default build against the paper's (random 16k sphere)")
+    ap.add_argument("--n", type=int, default=16000, help="--default-vs-paper: vertices")
+    ap.add_argument("--h-edges", type=float, default=None,
+                    help="--default-vs-paper: h = this times the squared mean edge (default: the default's)")
+    ap.add_argument("--repeat", type=int, default=3, help="--default-vs-paper: builds of each")
     ap.add_argument("--child", nargs=2, metavar=("MESH", "WHICH"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child(*args.child)
         return
     if args.default_vs_paper:
-        write_default_vs_paper(default_vs_paper(), args.no_write)
+        write_default_vs_paper(default_vs_paper(args.n, args.repeat, args.h_edges),
+                               args.no_write or args.n != 16000 or args.h_edges is not None)
         return
     import numba
 
@@ -336,7 +350,9 @@ def _kept_notes(title: str) -> list[str]:
 def write_default_vs_paper(r: dict, no_write: bool) -> None:
     (pw, pc, _, pnnz), (dw, dc, stages, dnnz) = r["paper"], r["default"]
     parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in stages.items() if k != "done")
-    print(f"random sphere {r['n']:,}, h = {r['h']:.4g}: paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
+    at = "" if r["h_edges"] is None else f" ({r['h_edges']:g} ē²)"
+    print(f"random sphere {r['n']:,}, h = {r['h']:.4g}{at}, best of {r['repeat']}: "
+          f"paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
           f"default {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}); default / paper {dw / pw:.2f}x wall, "
           f"{dc / pc:.2f}x CPU; stages: {parts}", flush=True)
     if no_write:

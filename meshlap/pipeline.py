@@ -268,11 +268,17 @@ def build(geo: Geometry, widths: Widths, opts: Options,
                                   own_pattern=opts.pointwise_degree is not None)
     hv = widths.per_point(geo.n_points)
 
-    def stage(k: Kernel, what: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    def stage(k: Kernel, what: str, held: list | None = None) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        # held: [the rows of another kernel], given the weights of k in place where
+        # assembly.reweigh can (the same pairs: no neighbour search, no new arrays), else
+        # let go before the new ones are built
         if report is not None:
             report(0.0, what)
-        free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
-                                 progress=None if report is None else (lambda f, s: report(0.6 * f, s)))
+        free = held.pop() if held else None
+        if free is None or not assembly.reweigh(free, geo.points, geo.mass, widths, k):
+            free = None
+            free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
+                                     progress=None if report is None else (lambda f, s: report(0.6 * f, s)))
         if report is not None and opts.neumann:
             report(0.6, "boundary images")
         L = (corrections.neumann_images(free, geo.points, frames, geo.mass, hv, k.dog, geo.dim)
@@ -289,8 +295,8 @@ def build(geo: Geometry, widths: Widths, opts: Options,
                                                                     what)
         if out.fallback_reason is not None:
             out.correction = "none"
-            out.L_sym = out.L = free = L = None  # let the Richardson rows go before the plain ones come
-            free, L = stage(replace(kern, dog=False), "plain kernel rows")
+            held, out.L_sym, out.L, L, free = [free], None, None, None, None
+            free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
             out.L_sym = out.L = L
     if out.correction != "none":
         if report is not None:

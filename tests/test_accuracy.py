@@ -4,6 +4,7 @@ positive semidefinite or a stated fallback, the paper's operator unchanged on re
 
 import math
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import igl
@@ -92,14 +93,23 @@ def test_default_is_symmetric_with_zero_row_sums_and_semidefinite():
     assert lam[0] > -1e-8 and abs(lam[0]) < 1e-8 * lam[1]
 
 
-def test_loss_of_semidefiniteness_falls_back_with_the_reason():
+def test_loss_of_semidefiniteness_falls_back_with_the_reason(monkeypatch):
     # at h = ē²/8 the narrow width h/2 is not resolved by spot's vertices: −S of the
     # Richardson operator has eigenvalues near −2 (measured densely), so the build falls back
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
     h = meshlap.default_h(V, F) / 32
+    built = []
+    assemble = meshlap.assembly.assemble
+    monkeypatch.setattr(meshlap.assembly, "assemble", lambda *a, **k: built.append(a[3]) or assemble(*a, **k))
     with pytest.warns(meshlap.MeshWarning, match="not negative semidefinite"):
         op = meshlap.laplacian(V, F, h=h)
     assert op.correction == "none" and "narrow kernel" in op.fallback_reason
+    # the plain kernel's weights were given to the Richardson rows in place (the same pairs):
+    # one neighbour search, and to the bit the rows a build of the plain kernel gives
+    assert len(built) == 1 and built[0].dog
+    plain = assemble(op.geometry.points, op.mass, op.widths, replace(built[0], dog=False))
+    assert np.array_equal(op.L_sym.indptr, plain.indptr) and np.array_equal(op.L_sym.indices, plain.indices)
+    assert np.array_equal(op.L_sym.data, plain.data)
     lam, _ = spectral.eigs(op, 3)
     assert lam[0] > -1e-8
 

@@ -55,3 +55,26 @@ def test_a_localized_negative_mode_is_caught():
     assert lam < -psd.PSD_RTOL * scale and lam >= exact - 1e-9 * scale  # a Ritz value: above λ_min
     margin, reason = psd.check(L, op.mass, V, faces, "mesh")
     assert reason is not None and "not negative semidefinite" in reason and margin < 0
+
+
+def test_a_positive_diagonal_decides_without_the_eigensolver(monkeypatch):
+    # at a quarter of e-bar squared some points' kernel weights sum below zero: the indicator
+    # of such a point has Rayleigh quotient -L_ww < 0, a proof of the failure that needs no
+    # LOBPCG, and an upper bound of the smallest eigenvalue (checked densely)
+    import igl
+
+    V, F = shapes.sphere(2000, kind="random", seed=1)
+    h = 0.25 * float(igl.edge_lengths(V, F).mean()) ** 2
+    op = meshlap.laplacian(V, F, h=h, check_psd=False, pointwise=False)
+    d = op.L_sym.diagonal()
+    assert d.max() > 0
+
+    def unused(*args, **kwargs):
+        raise AssertionError("the eigensolver ran")
+
+    monkeypatch.setattr(meshlap._lobpcg, "lobpcg", unused)
+    faces = geometry.from_mesh(V, F).faces
+    lam, scale = psd.smallest_eigenvalue(op.L_sym, op.mass, V, faces)
+    assert lam == -d.max() and dense_min(op.L_sym, op.mass) <= lam
+    margin, reason = psd.check(op.L_sym, op.mass, V, faces, "mesh")
+    assert reason is not None and margin == lam / scale

@@ -31,7 +31,7 @@ from . import grid, pairs, variable
 from .grid import cutoff_radius, normalization
 
 __all__ = ["Kernel", "MatrixFree", "MemoryGuard", "assemble", "available_memory", "csr", "cutoff_radius",
-           "fmt_bytes", "grid", "normalization", "pairs", "variable"]
+           "fmt_bytes", "grid", "normalization", "pairs", "reweigh", "variable"]
 
 _INT32_MAX = np.iinfo(np.int32).max
 
@@ -246,6 +246,38 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
     # unsorted, as on the one-h path: sorting cost as much as the fill (issue 19), and a matrix
     # that shares these index arrays sorts them first (meshlap.pipeline)
     return csr(data, indices, indptr, n)
+
+
+def reweigh(L: sp.csr_matrix, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel) -> bool:
+    """Give ``L``, as :func:`assemble` built it for another kernel of the same widths, normals
+    and tolerance, the weights of ``kernel``, in place (:func:`variable.revalue`): the result
+    of ``assemble(points, mass, widths, kernel)`` to the bit, without its neighbour search.
+    False (and ``L`` untouched) where that does not apply: points in more than 3 dimensions,
+    the one-h kernel's own path, or rows no longer in their assembled order.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap.widths import Widths
+    >>> V, F = meshlap.shapes.sphere(300, seed=0)
+    >>> g = meshlap.geometry.from_mesh(V, F)
+    >>> w = Widths(0.01, np.full(300, 0.01), False)
+    >>> L = assemble(g.points, g.mass, w, Kernel(dim=2, dog=True))
+    >>> reweigh(L, g.points, g.mass, w, Kernel(dim=2))
+    True
+    >>> bool(np.array_equal(L.data, assemble(g.points, g.mass, w, Kernel(dim=2)).data))
+    True
+    """
+    n = len(points)
+    if points.shape[1] > 3 or (kernel.plain and widths.h_vertex is None) or L.has_sorted_indices:
+        return False
+    starts = L.indptr[:-1]
+    if np.any(np.diff(L.indptr) < 1) or not np.array_equal(L.indices[starts], np.arange(n)):
+        return False
+    normals = None if kernel.normals is None else pad3(kernel.normals)
+    variable.revalue(pad3(points), mass, widths.per_point(n), normals, kernel.dog, L.indptr, L.indices,
+                     L.data, kernel.dim)
+    return True
 
 
 @dataclass

@@ -18,31 +18,69 @@ from .._jit import each_thread, in_blocks, jit
 from ._intrinsics import _exp_neg, _fetch_add
 from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
 
-__all__ = ["count_entries", "dog_factor", "sort_rows", "variable_csr"]
+__all__ = ["count_entries", "dog_factor", "revalue", "sort_rows", "variable_csr"]
 
 
 @jit(inline="always")
 def _arc_factor(nw0, nw1, nw2, np0, np1, np2):
     # (α/2)/sin(α/2) squared, α the angle between the unit normals: the squared ratio of arc
     # to chord for a circle through both points with those normals (1 for parallel normals)
-    c = nw0 * np0 + nw1 * np1 + nw2 * np2
-    t = min(max(0.5 * (1.0 - c), 0.0), 1.0)  # sin²(α/2)
+    t = _sin2_half(nw0, nw1, nw2, np0, np1, np2)
     if t <= 0.1:
-        # asin(s)/s as a series in t = s² (truncation below 2e-8): no libm call for the
-        # nearly parallel normals of most pairs
-        q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
-                                                                         + t * 63.0 / 2816.0))))
-    else:
-        sn = math.sqrt(t)
-        q = math.asin(sn) / sn
+        return _arc_series(t)
+    sn = math.sqrt(t)
+    q = math.asin(sn) / sn
+    return q * q
+
+
+@jit(inline="always")
+def _sin2_half(nw0, nw1, nw2, np0, np1, np2):
+    # t = sin²(α/2) of the angle α between two unit normals
+    c = nw0 * np0 + nw1 * np1 + nw2 * np2
+    return min(max(0.5 * (1.0 - c), 0.0), 1.0)
+
+
+@jit(inline="always")
+def _arc_series(t):
+    # _arc_factor for t <= 0.1: asin(s)/s as a series in t = s² (truncation below 2e-8), squared;
+    # no libm call and no branch, for the nearly parallel normals of most pairs
+    q = 1.0 + t * (1.0 / 6.0 + t * (3.0 / 40.0 + t * (5.0 / 112.0 + t * (35.0 / 1152.0
+                                                                     + t * 63.0 / 2816.0))))
     return q * q
 
 
 @jit(inline="always")
 def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols):
-    # what _gather_var returns, without its stores (the count pass 25% faster). The loop
-    # repeats _gather_var's on purpose: with the pair's d² in a shared inline helper numba
-    # compiled both passes 2.5x slower (measured)
+    # what _gather_var returns, without its stores. The loop repeats _gather_var's on purpose:
+    # with the pair's d² in a shared inline helper numba compiled both passes 2.5x slower
+    # (measured). With normals, the arc factor's series is taken for every candidate, without
+    # a branch, so that the loop vectorizes (the count pass 2x faster); a row with a pair
+    # beyond the series' range (t > 0.1, rare) is counted again by _count_exact
+    if not use_normals:
+        return _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, False, cols, ncols)
+    cnt = 0
+    nw0, nw1, nw2 = nw[0], nw[1], nw[2]
+    n0, n1, n2 = ns[0], ns[1], ns[2]
+    far = 0
+    for i in range(ncols):
+        for j in range(cols[i, 0], cols[i, 1]):
+            dx = xs[j] - x
+            dy = ys[j] - y
+            dz = zs[j] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            lim = lnt4 * 0.5 * (hw + hs[j])
+            t = _sin2_half(nw0, nw1, nw2, n0[j], n1[j], n2[j])
+            far += np.int64((t > 0.1) & (d2 <= lim))
+            cnt += np.int64((d2 * _arc_series(t) <= lim) & (j != sw))
+    if far:
+        return _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, True, cols, ncols)
+    return cnt
+
+
+@jit()
+def _count_exact(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols):
+    # _count_var's count without normals, or with the exact arc factor at every pair within
+    # the cut-off
     cnt = 0
     for i in range(ncols):
         for j in range(cols[i, 0], cols[i, 1]):
@@ -52,14 +90,56 @@ def _count_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols,
             d2 = dx * dx + dy * dy + dz * dz
             lim = lnt4 * 0.5 * (hw + hs[j])  # = lnt4 * h_wp to the bit (halving is exact)
             if use_normals and d2 <= lim:
-                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
+                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[0, j], ns[1, j], ns[2, j])
             cnt += np.int64((d2 <= lim) & (j != sw))
     return cnt
 
 
 @jit(inline="always")
 def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols, ncols, sj, sd, sh):
-    # like _gather, with the per-pair cut-off; sh receives h_wp
+    # like _gather, with the per-pair cut-off; sh receives h_wp. With normals: the pairs within
+    # the chord's cut-off first (the factor is at least 1), then their arc factor's series in
+    # a loop of its own, which vectorizes, then those the factor moves beyond the cut-off
+    # dropped; a row with a pair beyond the series' range (t > 0.1) takes _gather_arc. The
+    # same operations per pair as the exact loop, so the same values
+    pos = 0
+    for i in range(ncols):
+        for j in range(cols[i, 0], cols[i, 1]):
+            dx = xs[j] - x
+            dy = ys[j] - y
+            dz = zs[j] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            hp = 0.5 * (hw + hs[j])
+            sj[pos] = j
+            sd[pos] = d2
+            sh[pos] = hp
+            pos += np.int64((d2 <= lnt4 * hp) & (j != sw))
+    if not use_normals:
+        return pos
+    nw0, nw1, nw2 = nw[0], nw[1], nw[2]
+    n0, n1, n2 = ns[0], ns[1], ns[2]
+    far = 0
+    for i in range(pos):
+        j = sj[i]
+        t = _sin2_half(nw0, nw1, nw2, n0[j], n1[j], n2[j])
+        far += np.int64(t > 0.1)
+        sd[i] = sd[i] * _arc_series(t)
+    if far:
+        return _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, sd, sh)
+    kept = 0
+    for i in range(pos):
+        d2 = sd[i]
+        hp = sh[i]
+        sj[kept] = sj[i]
+        sd[kept] = d2
+        sh[kept] = hp
+        kept += np.int64(d2 <= lnt4 * hp)
+    return kept
+
+
+@jit()
+def _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, sd, sh):
+    # _gather_var's gather with the exact arc factor at every pair within the cut-off
     pos = 0
     for i in range(ncols):
         for j in range(cols[i, 0], cols[i, 1]):
@@ -69,8 +149,8 @@ def _gather_var(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, use_normals, cols
             d2 = dx * dx + dy * dy + dz * dz
             hp = 0.5 * (hw + hs[j])
             # the factor is at least 1: a pair already beyond the cut-off needs none
-            if use_normals and d2 <= lnt4 * hp:
-                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[j, 0], ns[j, 1], ns[j, 2])
+            if d2 <= lnt4 * hp:
+                d2 = d2 * _arc_factor(nw[0], nw[1], nw[2], ns[0, j], ns[1, j], ns[2, j])
             sj[pos] = j
             sd[pos] = d2
             sh[pos] = hp
@@ -172,7 +252,7 @@ def _pass_args(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: n
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     return (order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index, grid.self_slot,
             grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns, _CHUNK_ROWS,
-            hv, np.ascontiguousarray(hv[grid.src_index]), nv, np.ascontiguousarray(nv[grid.src_index]),
+            hv, np.ascontiguousarray(hv[grid.src_index]), nv, np.ascontiguousarray(nv[grid.src_index].T),
             use_normals, lnt4, float(hv.max()), dog_factor(dim) if dog else 0.0, 0.5 * dim)
 
 
@@ -233,6 +313,69 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
         raise RuntimeError("meshlap internal error: the count and fill passes found different "
                            "neighbourhoods; please report this with the mesh")
     return indptr, indices, data.astype(value_dtype, copy=False)
+
+
+@jit()
+def _revalue_rows(start, stop, V, m, hv, nv, use_normals, dogc, half_k, indptr, indices, data):
+    # the weights of rows start..stop recomputed on their stored pattern: d² and h_wp by the
+    # same operations as _gather_var's and _gather_arc's (so the same values, and the same
+    # order of the row's sum); every stored pair is within the cut-off, where the arc factor
+    # applies
+    longest = 1
+    for w in range(start, stop):
+        longest = max(longest, indptr[w + 1] - indptr[w])
+    sd = np.empty(longest)
+    sh = np.empty(longest)
+    sm = np.empty(longest)
+    for w in range(start, stop):
+        a = indptr[w]
+        cnt = indptr[w + 1] - a - 1
+        if cnt < 0:
+            continue
+        x, y, z = V[w, 0], V[w, 1], V[w, 2]
+        hw = hv[w]
+        for i in range(cnt):
+            p = indices[a + 1 + i]
+            dx = V[p, 0] - x
+            dy = V[p, 1] - y
+            dz = V[p, 2] - z
+            d2 = dx * dx + dy * dy + dz * dz
+            if use_normals:
+                d2 = d2 * _arc_factor(nv[w, 0], nv[w, 1], nv[w, 2], nv[p, 0], nv[p, 1], nv[p, 2])
+            sd[i] = d2
+            sh[i] = 0.5 * (hw + hv[p])
+            sm[i] = m[p]
+        _var_weights(sd, sh, sm, cnt, dogc, half_k, data, a + 1)
+        data[a] = -_sum(data, a + 1, cnt)
+
+
+def revalue(V: np.ndarray, mass: np.ndarray, hv: np.ndarray, normals: np.ndarray | None, dog: bool,
+            indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, dim: int = 2) -> None:
+    """The weights of :func:`variable_csr`'s rows for another kernel (``dog``), in place on
+    their pattern: the kept pairs depend on the widths, normals and tolerance, not on the
+    kernel, so the plain kernel's rows that a failed semidefiniteness check falls back to
+    need no neighbour search, no count and no new arrays. The values are those a new build
+    would give, to the bit (``data`` of another type gets them rounded, as the build's cast).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from meshlap.assembly.grid import build_grid
+    >>> V = np.array([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]], float)
+    >>> args = (V, build_grid(V, np.ones(3), 1.0), np.full(3, 0.01), 1e-8, None)
+    >>> ip, ind, dat = variable_csr(*args, True, np.int32, np.dtype(np.float64))
+    >>> revalue(V, np.ones(3), np.full(3, 0.01), None, False, ip, ind, dat)
+    >>> bool(np.array_equal(dat, variable_csr(*args, False, np.int32, np.dtype(np.float64))[2]))
+    True
+    """
+    use_normals = normals is not None
+    nv = np.ascontiguousarray(normals if use_normals else np.zeros((1, 3)), dtype=np.float64)
+    out = data if data.dtype == np.float64 else np.empty(len(data))
+    in_blocks(_revalue_rows, len(indptr) - 1, np.ascontiguousarray(V, dtype=np.float64),
+              np.ascontiguousarray(mass, dtype=np.float64), np.ascontiguousarray(hv, dtype=np.float64), nv,
+              use_normals, dog_factor(dim) if dog else 0.0, 0.5 * dim, indptr, indices, out)
+    if out is not data:
+        data[:] = out
 
 
 @jit()

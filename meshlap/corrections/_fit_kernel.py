@@ -309,3 +309,14 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                         s += out[ti, a0 + j] * Phi[al, j]
                     pacc += s * s
                 bias[r, 2 * ti + e] = math.sqrt(pacc) * rho ** qq
+
+
+@jit()
+def copy_rows(rows, src_indptr, src_indices, src_data, indptr, indices, data):  # pragma: no cover - compiled
+    # rows of one CSR matrix into the same rows of another whose indptr has room for them
+    for r in rows:
+        a = src_indptr[r]
+        b = indptr[r]
+        for i in range(src_indptr[r + 1] - a):
+            indices[b + i] = src_indices[a + i]
+            data[b + i] = src_data[a + i]

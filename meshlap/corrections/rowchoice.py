@@ -76,6 +76,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
+from ._fit_kernel import copy_rows
 from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
@@ -312,13 +313,7 @@ def _assemble(n: int, pick: np.ndarray, local: list) -> sp.csr_matrix:
     data = np.empty(total)
     indices = np.empty(total, dtype=index)
     for rows, M in chosen:
-        K = counts[rows]
-        rep = np.repeat(np.arange(len(rows)), K)
-        within = np.arange(len(rep)) - np.repeat(np.cumsum(K) - K, K)
-        src = M.indptr[rows][rep] + within
-        dst = indptr[rows][rep] + within
-        data[dst] = M.data[src]
-        indices[dst] = M.indices[src]
+        copy_rows(rows, M.indptr, M.indices, M.data, indptr, indices, data)
     L = sp.csr_matrix((n, n))  # consistent by construction: no check, no copy
     L.data, L.indices, L.indptr = data, indices, indptr
     return L
