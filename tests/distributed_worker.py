@@ -492,6 +492,64 @@ class Checks:
         op = distributed.laplacian(V, F, correction="none", h=0.004, comm=self.comm)
         self._lobpcg("lobpcg_zero_mass", op, 10, mesh=(V, F))
 
+    def lobpcg_global_iterations(self):
+        """The MUMPS-factored cotangent K + σM on all ranks: the 1-rank iteration count (the
+        single machine's preconditioner exactly), where block Jacobi over the ranks needs more."""
+        from mpi4py import MPI
+
+        import meshlap
+        from meshlap import distributed
+        from meshlap.distributed import lobpcg
+
+        V, F = meshlap.shapes.sphere(8000, kind="random", seed=0)
+        counts = {}
+        for comm in (MPI.COMM_SELF, self.comm):
+            op = distributed.laplacian(V, F, correction="none", h=0.002, comm=comm)
+            for pc in ("global", "local"):
+                info = {}
+                lobpcg.eigs(op, 20, mesh=(V, F), info=info, preconditioner=pc)
+                counts[comm.Get_size(), pc] = info["iterations"]
+        one, many = counts[1, "global"], counts[self.size, "global"]
+        assert counts[1, "local"] == one, counts  # one rank: the same factorization either way
+        assert many <= one + 1, counts
+        assert counts[self.size, "local"] > many, counts  # 7 against 10 when written (2 and 3 ranks)
+        self.report("lobpcg_global_iterations", f"iterations: 1 rank {one}, {self.size} ranks global {many}, "
+                    f"local {counts[self.size, 'local']}")
+
+    def lobpcg_fallback(self):
+        """No MUMPS, or a failed factorization: block Jacobi, eigenvalues to 1e-8, no hang."""
+        import warnings
+
+        from petsc4py import PETSc
+
+        import meshlap
+        from meshlap import distributed
+        from meshlap.distributed import lobpcg
+
+        V, F = meshlap.shapes.sphere(1500, seed=0)
+        op = distributed.laplacian(V, F, correction="none", h=0.01, comm=self.comm)
+        lam, _ = lobpcg.eigs(op, 9, mesh=(V, F))
+        solve, has = lobpcg._GlobalSolve, lobpcg._has_mumps
+
+        def fail(A):
+            raise PETSc.Error(76)
+
+        try:
+            lobpcg._GlobalSolve = fail
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                lam_failed, _ = lobpcg.eigs(op, 9, mesh=(V, F))
+            assert any("MUMPS" in str(w.message) for w in caught), caught
+            lobpcg._has_mumps = lambda: False
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # trying MUMPS would warn
+                lam_none, _ = lobpcg.eigs(op, 9, mesh=(V, F))
+        finally:
+            lobpcg._GlobalSolve, lobpcg._has_mumps = solve, has
+        err = max(float(np.abs(got - lam).max() / lam[-1]) for got in (lam_failed, lam_none))
+        assert err <= 1e-8, err
+        self.report("lobpcg_fallback", f"block Jacobi fallback: eigenvalues within {err:.0e}")
+
 
 def main(argv: list[str]) -> None:
     from mpi4py import MPI

@@ -116,6 +116,15 @@ def test_lobpcg_matches_serial(n):
 
 
 @needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
+def test_lobpcg_global_preconditioner_iterations(n):
+    """The global (MUMPS) cotangent preconditioner: on n ranks at most the 1-rank iteration
+    count + 1 (8,000-vertex sphere, k = 20), fewer than block Jacobi's; without MUMPS, or when
+    its factorization fails, block Jacobi with the same eigenvalues (a failure warns)."""
+    mpirun(n, "lobpcg_global_iterations", "lobpcg_fallback")
+
+
+@needs_mpi
 def test_lobpcg_clear_errors():
     from mpi4py import MPI
 
@@ -131,6 +140,8 @@ def test_lobpcg_clear_errors():
         distributed_eigs.eigs(op, 4, mesh=V)
     with pytest.raises(meshlap.MeshError, match="tol"):
         distributed_eigs.eigs(op, 4, tol=2.0)
+    with pytest.raises(meshlap.MeshError, match="preconditioner"):
+        distributed_eigs.eigs(op, 4, mesh=(V, F), preconditioner="jacobi")
     with pytest.raises(meshlap.MeshError, match="method"):
         distributed.eigs(op, 4, method="krylov")
     with pytest.raises(meshlap.MeshError, match="shift-invert"):

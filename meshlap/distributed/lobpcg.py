@@ -7,21 +7,28 @@ ranks of the local Gram matrices (one ``Allreduce`` each), so every rank solves 
 small problem and keeps its share of the Ritz vectors. The iteration is
 :func:`meshlap.spectral.eigs`'s LOBPCG, run on the shares.
 
-The preconditioner is the single machine's, block Jacobi over the ranks: on each rank
+The preconditioner is the single machine's,
 
-    T = (K_r + σM_r)⁻¹ + ½ D_r⁻¹,
+    T = (K + σM)⁻¹ + ½ D⁻¹,
 
-with D = diag(-S) (what saturates the heat-kernel symbol at high frequency) and K_r a sparse
-Laplacian of the rank's own rows, factored once by a sparse LU on that rank alone: for a
-mesh, the block of the cotangent stiffness on the own rows (the faces touching them); for a
-point cloud, a graph Laplacian of the own points' nearest neighbours with heat weights,
-scaled to the operator's quadratic form on the coordinate functions, with the weights of
-each row on other ranks' points on its diagonal. On one rank it is exactly the single
-machine's preconditioner. With a mesh, the start is LOBPCG on the cotangent problem (K as a
-distributed PETSc matrix), whose Ritz values also size the block to hold the k-th
-eigenvalue's cluster, as in :func:`meshlap.spectral.eigs`. Memory per rank: the operator's
-own rows, the LU of a sparse matrix with a handful of entries per row, and about a dozen
-blocks of n_local × (block width) numbers. See docs/distributed.md for the measured figures.
+with D = diag(-S) (what saturates the heat-kernel symbol at high frequency) and K a sparse
+Laplacian of the same geometry. With a mesh and ``preconditioner="global"`` (the default), K
+is the cotangent stiffness assembled as a distributed PETSc matrix and K + σM is factored
+once by MUMPS over all ranks (a sparse matrix of about 7 entries per row, not the operator):
+exactly the single machine's preconditioner, hence its iteration count on any number of
+ranks. Otherwise (``preconditioner="local"``, a point cloud, or a PETSc without MUMPS) it is
+block Jacobi over the ranks: each rank factors by a sparse LU its own block K_r + σM_r,
+which loses the coupling across the cuts and costs iterations (26 against 12 for 50
+eigenpairs of a 100k-vertex sphere on 2 ranks); for a mesh K_r is the block of the cotangent
+stiffness on the own rows (the faces touching them); for a point cloud, a graph Laplacian of
+the own points' nearest neighbours with heat weights, scaled to the operator's quadratic form
+on the coordinate functions, with the weights of each row on other ranks' points on its
+diagonal. With a mesh, the start is LOBPCG on the cotangent problem (K as a distributed PETSc
+matrix, (K + σM)⁻¹ as preconditioner), whose Ritz values also size the block to hold the
+k-th eigenvalue's cluster, as in :func:`meshlap.spectral.eigs`. Memory per rank: the
+operator's own rows, the factors of a sparse matrix with a handful of entries per row (its
+share of MUMPS's), and about a dozen blocks of n_local × (block width) numbers. See
+docs/distributed.md for the measured figures.
 
 Examples
 --------
@@ -52,9 +59,9 @@ __all__ = ["eigs", "finish"]
 
 # nearest neighbours of the point-cloud preconditioner's graph
 _NEIGHBOURS = 10
-# iterations of the start on the cotangent problem, whose block-Jacobi preconditioner makes it
-# slower than the single machine's: 2 ranks, random spheres, the operator's own iterations after
-# a start of 5, 7, 10 or 20: 8, 7, 6, 6 (8k, k = 20); 6 after 10 or 20 (16k, k = 36)
+# iterations of the start on the cotangent problem, as on the single machine; block Jacobi's
+# start is slower, and 10 was chosen for it: 2 ranks, random spheres, the operator's own
+# iterations after a start of 5, 7, 10 or 20: 8, 7, 6, 6 (8k, k = 20); 6 after 10 or 20 (16k)
 _START_ITERATIONS = 10
 
 
@@ -70,10 +77,11 @@ def _allsum(comm):
     return allsum
 
 
-def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any):
+def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any, shift: np.ndarray):
     """The cotangent stiffness K on the points with mass: its rows on this rank as a
-    distributed PETSc matrix (columns numbered over the points with mass, rank by rank) and
-    its own × own block for the local factorization; both from the faces touching own rows."""
+    distributed PETSc matrix (columns numbered over the points with mass, rank by rank), the
+    same with ``shift`` (σ m) added on the diagonal, and K's own × own block for the local
+    factorization; all from the faces touching own rows."""
     from petsc4py import PETSc
 
     try:
@@ -104,10 +112,77 @@ def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any):
     K = sp.csr_matrix((K.data[keep], (K.row[keep], cols[keep])), shape=(len(own), start))
     K.eliminate_zeros()
     sizes = ((len(own), start), (len(own), start))
-    Kg = PETSc.Mat().createAIJ(sizes, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
-                                           K.data), comm=comm)
+
+    def petsc(A: sp.csr_matrix):
+        A.sort_indices()
+        csr = (A.indptr.astype(PETSc.IntType), A.indices.astype(PETSc.IntType), A.data)
+        return PETSc.Mat().createAIJ(sizes, csr=csr, comm=comm)
+
+    D = sp.csr_matrix((shift, (np.arange(len(own)), first + np.arange(len(own)))), shape=K.shape)
     block = sp.csc_matrix(K[:, first:first + len(own)])
-    return (block if block.nnz else None), Kg
+    return (block if block.nnz else None), petsc(K), petsc(sp.csr_matrix(K + D))
+
+
+class _GlobalSolve:
+    """(K + σM)⁻¹ R for this rank's rows of a block R: the distributed cotangent K + σM
+    factored once by MUMPS (KSP "preonly", PC "lu"), applied to the block's columns in one
+    ``MatMatSolve`` of the factor."""
+
+    def __init__(self, A) -> None:
+        from petsc4py import PETSc
+
+        self.A = A
+        self.ksp = PETSc.KSP().create(comm=A.getComm())
+        self.ksp.setOperators(A)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+        self.ksp.setUp()
+        self.factor = pc.getFactorMatrix()
+
+    def solve(self, R: np.ndarray) -> np.ndarray:
+        from petsc4py import PETSc
+
+        (n_local, n), _ = self.A.getSizes()
+        comm = self.A.getComm()
+        B = PETSc.Mat().createDense(((n_local, n), (PETSc.DECIDE, R.shape[1])), comm=comm)
+        B.setUp()
+        B.getDenseArray()[:] = R
+        B.assemble()
+        X = B.duplicate()
+        self.factor.matSolve(B, X)
+        out = X.getDenseArray().copy()
+        B.destroy()
+        X.destroy()
+        return out
+
+
+def _has_mumps() -> bool:
+    from petsc4py import PETSc
+
+    return bool(PETSc.Sys.hasExternalPackage("mumps"))
+
+
+def _global_solve(A, choice: str) -> _GlobalSolve | None:
+    """MUMPS on ``A`` for ``preconditioner="global"`` on more than one rank; None (the local
+    LU) on one rank, where PETSc has no MUMPS, or where its factorization fails on any rank
+    (the ranks agree, no rank left waiting)."""
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    if choice != "global" or A.getComm().getSize() == 1 or not _has_mumps():
+        return None  # one rank: the local LU is the same matrix's, and solves 4x faster than MUMPS
+    try:
+        solver = _GlobalSolve(A)
+        ok = True
+    except PETSc.Error:
+        solver, ok = None, False
+    if not A.getComm().tompi4py().allreduce(ok, op=MPI.LAND):
+        warnings.warn("eigs: the MUMPS factorization of the cotangent K + σM failed; block Jacobi instead",
+                      RuntimeWarning, stacklevel=3)
+        return None
+    return solver
 
 
 def _rank_colors(op: Any) -> tuple[np.ndarray, int]:
@@ -200,14 +275,15 @@ def eigs(
     maxiter: int = 300,
     extra: int | None = None,
     mesh: tuple[Any, Any] | None = None,
+    preconditioner: str = "global",
     seed: int = 0,
     info: dict | None = None,
     progress: ProgressLike = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` by distributed LOBPCG (collective).
 
-    No factorization of the operator: it is only multiplied (stored or matrix-free), and
-    each rank factors a sparse preconditioner of its own rows (module notes).
+    No factorization of the operator: it is only multiplied (stored or matrix-free); the
+    preconditioner factors a sparse Laplacian of the same geometry (module notes).
 
     Parameters
     ----------
@@ -226,6 +302,11 @@ def eigs(
     mesh : (V, F), optional
         The whole mesh in the caller's numbering (the same on every rank): the preconditioner
         is then its cotangent Laplacian; without it, a nearest-neighbour graph of the points.
+    preconditioner : {"global", "local"}, default "global"
+        With a mesh, ``"global"`` factors the distributed cotangent K + σM with MUMPS (the
+        single machine's preconditioner exactly, so about its iteration count); ``"local"``
+        (block Jacobi) factors each rank's own block alone, which loses the coupling across
+        the ranks' cuts. Without a mesh, or with a PETSc built without MUMPS, block Jacobi.
     seed : int, default 0
         Seed of the random start vectors (with the rank).
     info : dict, optional
@@ -260,6 +341,8 @@ def eigs(
     comm = op.comm
     if not (isinstance(tol, (int, float)) and 0 <= tol < 1):
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    if preconditioner not in ("global", "local"):
+        raise MeshError(f"preconditioner must be 'global' or 'local'; got {preconditioner!r}")
     m_all = np.asarray(op.mass, dtype=np.float64)
     P = np.flatnonzero(m_all > 0)
     m = m_all[P]
@@ -283,19 +366,29 @@ def eigs(
 
     diag = -m * op.diagonal()[P]
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
-    K, Kg = _mesh_blocks(op, P, mesh) if mesh is not None else (_cloud_block(op, P, m, allsum), None)
-    T = _lobpcg.CotPreconditioner(K if len(P) else None, m, diag, sigma)
+    glob = None
+    if mesh is None:
+        K, Kg = _cloud_block(op, P, m, allsum), None
+    else:
+        K, Kg, Ag = _mesh_blocks(op, P, mesh, sigma * m)
+        glob = _global_solve(Ag, preconditioner)
+    T = _lobpcg.CotPreconditioner(K if len(P) and glob is None else None, m, diag, sigma)
+    if glob is not None:  # T R = ½ D⁻¹ R + (K + σM)⁻¹ R, the second term now over all ranks
+        half = T
+
+        def T(R: np.ndarray) -> np.ndarray:
+            return half(R) + glob.solve(R)
+
+    def local(R: np.ndarray) -> np.ndarray:  # (K + σM)⁻¹ alone, for the cotangent start
+        if glob is not None:
+            return glob.solve(R)
+        return R / (sigma * m[:, None]) if T.lu is None else T.lu.solve(R)
     adapt = extra is None and Kg is not None
     width = spectral._start_width(k, nb, n_p) if adapt else nb
     X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
     with spectral._one_blas_thread():
         if Kg is not None:
-            # start from the cotangent eigenvectors, the local factors as preconditioner
-            def local(R: np.ndarray) -> np.ndarray:
-                if T.lu is None:
-                    return R / (sigma * m[:, None])
-                return T.lu.solve(R)
-
+            # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as preconditioner
             start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, spectral._START_TOL,
                                    _START_ITERATIONS,
                                    allsum, on_values=False,
