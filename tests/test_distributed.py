@@ -146,6 +146,10 @@ def test_lobpcg_clear_errors():
         distributed.eigs(op, 4, method="krylov")
     with pytest.raises(meshlap.MeshError, match="shift-invert"):
         distributed.eigs(op, 4, blr=1e-10)
+    with pytest.raises(meshlap.MeshError, match="preconditioner"):  # passed through to LOBPCG
+        distributed.eigs(op, 4, mesh=(V, F), preconditioner="jacobi")
+    with pytest.raises(meshlap.MeshError, match="LOBPCG's"):
+        distributed.eigs(op, 4, method="shift-invert", preconditioner="local")
     zero = distributed.laplacian(V, mass=np.where(np.arange(300) < 3, 1.0, 0.0), correction="none", h=0.02,
                                  comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="k"):
