@@ -35,12 +35,13 @@ from .builders import laplacian, mesh_laplacian, point_cloud_laplacian, point_cl
 from .errors import MeshError, MeshWarning, OperatorTooLargeError
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
-from .operator import DEFAULT_TOL, MeshLaplacian, truncation_bound
+from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian, truncation_bound
 from .widths import default_h
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "CORRECTED_TOL",
     "DEFAULT_TOL",
     "Geometry",
     "MeshError",

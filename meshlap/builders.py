@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .geometry import Geometry, point_cloud_geometry
-from .operator import DEFAULT_TOL, MeshLaplacian
+from .operator import MeshLaplacian
 
 __all__ = ["laplacian", "mesh_laplacian", "point_cloud_laplacian", "point_cloud_matrices"]
 
@@ -22,7 +22,7 @@ def laplacian(
     V: Any,
     F: Any = None,
     h: float | None = None,
-    tol: float = DEFAULT_TOL,
+    tol: float | None = None,
     **kwargs: Any,
 ) -> MeshLaplacian:
     """Build the Belkin–Sun–Wang mesh Laplacian of a mesh (SoCG 2008, eq. 1).
@@ -39,8 +39,9 @@ def laplacian(
     h : float or (n,) array_like, optional
         Kernel width (exp(-d²/4h)); default 4ē² narrowed where the geometry bends; with
         ``correction="none"`` the paper's :func:`~meshlap.widths.default_h` = (2ē)².
-    tol : float, default 1e-8
-        Kernel tolerance; 0 for the untruncated operator.
+    tol : float, optional
+        Kernel tolerance; default 1e-6 for the corrected operators (1e-8 on
+        curves), 1e-8 for the paper's (``correction="none"``); 0 for the untruncated operator.
     **kwargs
         ``k``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the
         accuracy options ``correction`` (default "richardson" on surface meshes; "none" is
@@ -72,7 +73,7 @@ def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:
     return V, F, k if k is not None else k_cells
 
 
-def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = DEFAULT_TOL,
+def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | None = None,
                    **kwargs: Any) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """The pair ``(L, M)``: the Belkin–Sun–Wang Laplacian and its lumped mass matrix.
 
@@ -94,7 +95,7 @@ def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float = D
     return op.L, op.M
 
 
-def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float = DEFAULT_TOL, *,
+def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float | None = None, *,
                           denoise: bool | None = None, neighbors: int | None = None, merge_tol: float = 1e-6,
                           outlier_ratio: float = 10.0, **kwargs: Any) -> MeshLaplacian:
     """The heat-kernel Laplacian of a point cloud (Belkin, Sun and Wang, SODA 2009).
@@ -118,8 +119,9 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
         ``op.h_auto`` report it.
     k : int, default 2
         Intrinsic dimension: 1 curve, 2 surface, 3 volume or 3-manifold.
-    tol : float, default 1e-8
-        Kernel tolerance, as for meshes.
+    tol : float, optional
+        Kernel tolerance, as for meshes: default 1e-6 for the corrected operators (1e-8 on
+        curves), 1e-8 for the paper's.
     denoise : bool, optional
         Project the points onto their local tangent planes first (for noisy scans; ``op.V``
         then holds the moved points). Default: when the cloud's normal noise exceeds about

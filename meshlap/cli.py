@@ -434,11 +434,12 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def _kernel_options(p: argparse.ArgumentParser, tol_default: float | None) -> None:
+def _kernel_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--h", type=_positive_float, default=None,
                    help="kernel width h (exp(-d²/4h)); default (2·mean edge length)²")
-    p.add_argument("--tol", type=float, default=tol_default,
-                   help="kernel tolerance: weights below it are dropped (default 1e-8; 0 = exact)")
+    p.add_argument("--tol", type=float, default=None,
+                   help="kernel tolerance: weights below it are dropped (default 1e-6 corrected, "
+                        "1e-8 on curves and with --correction none; 0 = exact)")
     p.add_argument("--correction", choices=("richardson", "none"), default=None,
                    help="default as meshlap.laplacian: richardson (the O(h) bias removed) on surface "
                         "meshes, none (the paper's operator) on point clouds, curves and volumes")
@@ -472,7 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Print a mesh's size, area, the default h, the operator's expected "
                                    "size and a diagnosis (boundaries, unreferenced vertices, ...).")
     p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz")
-    _kernel_options(p, None)
+    _kernel_options(p)
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("build", help="build the operator of a mesh and save it (.npz)",
@@ -480,7 +481,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "(scipy.sparse.load_npz reads L; meshlap.io.load_operator reads all).")
     p.add_argument("input", help="mesh, point cloud or volume file")
     p.add_argument("-o", "--output", help="output .npz (default: the mesh's name with .npz, here)")
-    _kernel_options(p, 1e-8)
+    _kernel_options(p)
     p.add_argument("--float32", action="store_true", help="store the values in float32 (half the memory)")
     p.add_argument("--no-mesh", action="store_true", help="do not store the vertices and faces")
     _progress_option(p)
@@ -491,7 +492,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "M-orthonormal) of a mesh's operator, or of a saved one.")
     p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz from 'meshlap build'")
     p.add_argument("-k", type=_positive_int, default=10, help="number of eigenpairs (default 10)")
-    _kernel_options(p, 1e-8)
+    _kernel_options(p)
     p.add_argument("-o", "--output", help="save eigenvalues and eigenvectors to this .npz")
     p.add_argument("--png", help="draw the first eigenfunctions on the surface into this PNG")
     p.add_argument("--html", help="an interactive view of the eigenfunctions: standalone HTML (needs k3d)")
@@ -527,7 +528,7 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Mean curvature H at every vertex from ΔX = -2H n with the "
                                    "heat-kernel operator; prints percentiles, saves or draws it.")
     p.add_argument("input", help="surface mesh or point cloud file")
-    _kernel_options(p, 1e-8)
+    _kernel_options(p)
     p.add_argument("-o", "--output", help="save H to .npy, .txt or .csv")
     p.add_argument("--png", help="draw the mesh coloured by H into this PNG")
     p.add_argument("--html", help="an interactive view of H: standalone HTML (needs k3d)")

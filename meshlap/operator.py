@@ -30,11 +30,12 @@ from .errors import MeshError, MeshWarning, OperatorTooLargeError
 from .geometry import Geometry, from_mesh
 from .geometry.validation import check_function
 from .lumped import LumpedLaplacian
-from .pipeline import CORRECTIONS
+from .pipeline import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL
 from .progress import ProgressLike, make_progress
 from .widths import CURVATURE_LIMIT, DEFAULT_H_SCALE, default_h
 
 __all__ = [
+    "CORRECTED_TOL",
     "CORRECTIONS",
     "CURVATURE_LIMIT",
     "DEFAULT_H_SCALE",
@@ -46,8 +47,6 @@ __all__ = [
     "truncation_bound",
 ]
 
-#: Default kernel tolerance: Gaussian weights below 1e-8 of the peak are dropped.
-DEFAULT_TOL = 1e-8
 
 
 def as_geometry(V: Any, F: Any = None, k: int | None = None) -> Geometry:
@@ -119,7 +118,9 @@ class MeshLaplacian(LumpedLaplacian):
         normals, else 0.
     check_psd : bool, default True
         Check that −S is positive semidefinite (Richardson only).
-    tol : float, default 1e-8
+    tol : float, optional
+        Default 1e-6 for the corrected operators (1e-8 on curves, where 1e-6 costs accuracy),
+        1e-8 for the paper's (``correction="none"``).
         Kernel tolerance: weights exp(-d²/4h) < tol are dropped, which cuts the sums off at
         r = sqrt(4h ln(1/tol)). For every vertex w the truncated operator differs from the
         exact one by at most ``tol * A * max_p |f(p) - f(w)| / (4π h²)`` with A the total
@@ -199,7 +200,7 @@ class MeshLaplacian(LumpedLaplacian):
         V: Any,
         F: Any = None,
         h: float | None = None,
-        tol: float = DEFAULT_TOL,
+        tol: float | None = None,
         *,
         exact: bool = False,
         dtype: Any = np.float64,

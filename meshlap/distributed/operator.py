@@ -38,8 +38,8 @@ from .. import widths as widths_mod
 from ..errors import MeshError
 from ..geometry import Geometry
 from ..geometry.validation import check_faces, check_h, check_tol, check_vertices
-from ..operator import DEFAULT_TOL, as_geometry
-from ..pipeline import Options
+from ..operator import as_geometry
+from ..pipeline import DEFAULT_TOL, Options
 from ..progress import ProgressLike, make_progress
 from .comm import (
     _BLOCK_ENTRIES,
@@ -446,7 +446,7 @@ def laplacian(
     mass: Any = None,
     *,
     h: float | None = None,
-    tol: float = DEFAULT_TOL,
+    tol: float | None = None,
     comm: Any = None,
     scattered: bool = False,
     matrix_free: bool = False,
@@ -475,8 +475,8 @@ def laplacian(
         with ``V``; zero-mass points get rows but contribute to none.
     h : float
         Kernel width (required without F).
-    tol : float, default 1e-8
-        Kernel tolerance; the halo is r = sqrt(4h ln(1/tol)) wide.
+    tol : float, optional
+        Kernel tolerance, halo r = sqrt(4h ln(1/tol)); default 1e-6 corrected, 1e-8 paper's/curves.
     comm : mpi4py communicator, default MPI.COMM_WORLD
     scattered : bool, default False
         Each rank passes its own chunk; the global numbering is the chunks in rank order.
@@ -511,7 +511,6 @@ def laplacian(
     """
     MPI, PETSc = _mpi()
     comm = MPI.COMM_WORLD if comm is None else comm
-    tol = check_tol(tol)
     report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
     if correction != "none":
         if matrix_free or (F is None and not isinstance(V, Geometry)):
@@ -524,6 +523,7 @@ def laplacian(
         return _corrected(comm, V, F, k, h, tol, partition, correction, options, report)
     if options:
         raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
+    tol = check_tol(DEFAULT_TOL if tol is None else tol)
     V = np.asarray(V, dtype=np.float64)
     if len(V):
         V = check_vertices(V)
