@@ -45,7 +45,8 @@ DEFAULT_TOL = 1e-8
 #: given. Against 1e-8 on a 16k-vertex sphere: 24.5% fewer entries, eigenvalues moved by at most
 #: 1.9e-6 relative, against the operator's own 1.8e-3 error; ``op @ f`` (the fitted rows) does
 #: not use the kernel. Curves keep 1e-8: only 8% fewer entries there, and their eigenvalues'
-#: error (3e-5) grew by 15% (issue 19, benchmarks/RESULTS.md).
+#: error (3e-5) grew by 15%; so does the Galerkin pencil (``Options.pencil_tol``; issue 19,
+#: benchmarks/RESULTS.md).
 CORRECTED_TOL = 1e-6
 
 
