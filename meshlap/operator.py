@@ -48,7 +48,6 @@ __all__ = [
 ]
 
 
-
 def as_geometry(V: Any, F: Any = None, k: int | None = None) -> Geometry:
     """Stage 1's entry: a :class:`~meshlap.geometry.Geometry` as it is, or one from a mesh.
 
