@@ -3,10 +3,11 @@
 LOBPCG (Knyazev 2001) for ``A x = λ M x`` with ``M = diag(m) > 0``, in the basis selection of
 Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and
 M-orthogonal to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the
-identity and is never formed; of the operator's Gram matrix only the rows of W and P are
-products over the long dimension (X's own block is diag(θ), and P.T A W is W.T A P
-transposed), and P's update is found and orthonormalized in the small coefficient space; X and
-P are kept side by side in one array, so that each of these products is one BLAS call.
+identity and is never formed; of the operator's Gram matrix only the rows of W are products
+over the long dimension (X's own block is diag(θ); P is the basis times coefficients E
+orthogonal to the Ritz vectors' C, so P.T A X = 0 and P.T A P = E.T G E come from the last
+small problem), and P's update is found and orthonormalized in the small coefficient space; X
+and P are kept side by side in one array, so that each of these products is one BLAS call.
 What stays proportional to n per iteration is
 one product with A, one preconditioner application, the orthogonalization of W and the
 combinations that form the new X and P.
@@ -352,6 +353,7 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     # dimension below is then one BLAS call that reads each array once
     XP, AXP = matmul(X, Q), matmul(AX, Q)
     nb = XP.shape[1]
+    PAP = np.zeros((0, 0))  # P.T A P; no P yet
     for it in range(maxiter + 1):
         X, AX = XP[:, :nb], AXP[:, :nb]
         R = AX - (mc * X) * lam
@@ -377,11 +379,11 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         # its mass Gram matrix is I by construction, and its block of X is diag(θ)
         q, s = XP.shape[1], XP.shape[1] + W.shape[1]
         G = np.zeros((s, s))
-        G[nb:q, :q] = inner(XP[:, nb:], AXP)
         G[q:, :q] = inner(W, AXP)
         G[q:, q:] = inner(W, AW)
         G = allsum(G)
         G[np.arange(nb), np.arange(nb)] = lam
+        G[nb:q, nb:q] = PAP  # P's rows from the last small problem (below); P.T A X = 0
         lam_all, C = np.linalg.eigh(G)
         C, lam = C[:, :nb], lam_all[:nb]
         # the new directions: the update's part outside the old X, orthogonal to the new X,
@@ -391,6 +393,8 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         for _ in range(2):
             E -= C @ (C.T @ E)
         E, _ = svqb(E, np.ones(s))
+        # the new P = basis @ E: E ⟂ C, so its rows of the next Gram matrix are E.T G E
+        PAP = E.T @ (np.tril(G) + np.tril(G, -1).T) @ E
         CE = np.hstack([C, E])
         XP_new = matmul(XP, CE[:q])
         XP_new += matmul(W, CE[q:])
