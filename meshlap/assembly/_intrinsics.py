@@ -1,5 +1,6 @@
-"""Compiled building blocks of the kernels: an atomic counter, a fused multiply-add, and a
-vectorizable exp(−x) (libm's exp does not vectorize), accurate to about an ulp."""
+"""Compiled building blocks of the kernels: an atomic counter, a fused multiply-add, a
+vectorizable exp(−x) (libm's exp does not vectorize), accurate to about an ulp, and the
+diagonal that makes a Laplacian's row sum to zero."""
 
 from __future__ import annotations
 
@@ -95,3 +96,18 @@ def _exp_neg(x):
     # the low mantissa bits of 2^52 + 1023 + k hold the biased exponent 1023 + k (in [1, 1023])
     scale = _bits_as_float(_float_as_bits(k + _SHIFTER) << 52)
     return p * scale if x >= -708.0 else 0.0
+
+
+@jit(inline="always")
+def zero_row_sum(q, indptr, indices, data):  # pragma: no cover
+    """Set row q's diagonal entry (where the row has one) to minus the sum of its other
+    entries, added in their stored order, so that the row sums to zero."""
+    diag = -1
+    s = 0.0
+    for e in range(indptr[q], indptr[q + 1]):
+        if indices[e] == q:
+            diag = e
+        else:
+            s += data[e]
+    if diag >= 0:
+        data[diag] = -s

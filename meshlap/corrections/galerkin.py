@@ -35,6 +35,7 @@ from pykdtree.kdtree import KDTree
 
 from .._jit import in_blocks, jit
 from ..assembly import Kernel, assemble, cutoff_radius
+from ..assembly._intrinsics import zero_row_sum
 from ..assembly.variable import dog_factor
 from ..errors import MeshError
 from ..geometry import frames as frames_mod
@@ -92,12 +93,9 @@ def _unfold_rows(start, stop, indptr, indices, data, X, N, W, near, h, dogc, nor
     for q in range(start, stop):
         if not near[q]:
             continue
-        diag = -1
-        s = 0.0
         for e in range(indptr[q], indptr[q + 1]):
             r = indices[e]
             if r == q:
-                diag = e
                 continue
             c = 2.0 if not near[r] else N[q, 0] * N[r, 0] + N[q, 1] * N[r, 1] + N[q, 2] * N[r, 2]
             if c < cos_crease:
@@ -129,9 +127,7 @@ def _unfold_rows(start, stop, indptr, indices, data, X, N, W, near, h, dogc, nor
                     d2u = (math.sqrt(aq) + math.sqrt(ar)) ** 2 + (sq - sr) ** 2
                     ex = math.exp(-max(d2u, chord) / (4.0 * h))
                     data[e] = W[r] * norm * (ex * (dogc * ex - 1.0) if dogc != 0.0 else ex)
-            s += data[e]
-        if diag >= 0:
-            data[diag] = -s
+        zero_row_sum(q, indptr, indices, data)
 
 
 def _unfold(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, W: np.ndarray,
@@ -188,12 +184,9 @@ def _arc_coordinates(P: np.ndarray, seg: np.ndarray) -> tuple[np.ndarray, np.nda
 def _arc_rows(start, stop, indptr, indices, data, curve, s, loop, W, h, dogc, norm):  # pragma: no cover
     # the kernel of the distance along the curve; points of different curves do not interact
     for q in range(start, stop):
-        diag = -1
-        total = 0.0
         for e in range(indptr[q], indptr[q + 1]):
             r = indices[e]
             if r == q:
-                diag = e
                 continue
             if curve[q] != curve[r]:
                 data[e] = 0.0
@@ -204,9 +197,7 @@ def _arc_rows(start, stop, indptr, indices, data, curve, s, loop, W, h, dogc, no
                     d = c - d
                 ex = math.exp(-d * d / (4.0 * h))
                 data[e] = W[r] * norm * (ex * (dogc * ex - 1.0) if dogc != 0.0 else ex)
-            total += data[e]
-        if diag >= 0:
-            data[diag] = -total
+        zero_row_sum(q, indptr, indices, data)
 
 
 def _along_curves(Lq: sp.csr_matrix, P: np.ndarray, seg: np.ndarray, owner: np.ndarray, t: np.ndarray,

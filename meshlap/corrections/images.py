@@ -18,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._jit import in_blocks, jit
+from ..assembly._intrinsics import zero_row_sum
 from ..assembly.variable import dog_factor
 from ..geometry.frames import BoundaryFrames
 
@@ -32,12 +33,9 @@ def _image_rows(start, stop, indptr, indices, data, P, pos, bpt, nu, mass, hv, d
         iw = pos[w]
         if iw < 0:
             continue
-        diag = -1
-        s = 0.0
         for q in range(indptr[w], indptr[w + 1]):
             p = indices[q]
             if p == w:
-                diag = q
                 continue
             ip = pos[p]
             if ip >= 0:
@@ -69,9 +67,7 @@ def _image_rows(start, stop, indptr, indices, data, P, pos, bpt, nu, mass, hv, d
                     else:
                         norm = 1.0 / (hp * (4.0 * math.pi * hp) ** half_k)
                     data[q] += mass[p] * 0.5 * (ew + ep) * norm
-            s += data[q]
-        if diag >= 0:  # rows keep summing to zero
-            data[diag] = -s
+        zero_row_sum(w, indptr, indices, data)  # rows keep summing to zero
 
 
 def neumann_images(L: sp.csr_matrix, P: np.ndarray, frames: BoundaryFrames, mass: np.ndarray,

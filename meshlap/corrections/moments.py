@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from .._dense import chol_solve, cholesky, sym_eigh
 from .._jit import in_blocks, jit
+from ..assembly._intrinsics import zero_row_sum
 
 __all__ = ["moment_correction", "second_moment_scale"]
 
@@ -90,21 +91,16 @@ def _moment_rows(start, stop, indptr, indices, data, P, k, out, failed):  # prag
             failed[w] = 1
             continue
         chol_solve(G, r, m)
-        diag = -1
-        s = 0.0
         for q in range(a, b):
             p = indices[q]
             if p == w:
-                diag = q
                 continue
             _monomials(P, p, w, vec, k, inv, u, phi)
             corr = 0.0
             for i in range(m):
                 corr += r[i] * phi[i]
             out[q] = data[q] + abs(data[q]) * corr
-            s += out[q]
-        if diag >= 0:
-            out[diag] = -s
+        zero_row_sum(w, indptr, indices, out)
 
 
 @jit(inline="always")

@@ -27,6 +27,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from .._jit import in_blocks, jit
+from ..assembly._intrinsics import zero_row_sum
 
 __all__ = ["SHORTCUT_RATIO", "THIN_WIDTHS", "drop_shortcuts", "thin_fraction"]
 
@@ -71,12 +72,9 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
                     heapq.heappush(heap, (nd, w))
         for i in range(vptr[a], vptr[a + 1]):
             q = vpts[i]
-            diag = -1
-            total = 0.0
             for e in range(indptr[q], indptr[q + 1]):
                 r = indices[e]
                 if r == q:
-                    diag = e
                     continue
                 chord = 0.0
                 for c in range(X.shape[1]):
@@ -84,9 +82,7 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
                 if data[e] != 0.0 and dist[corner[r]] > ratio * math.sqrt(chord) + slack[q] + slack[r]:
                     data[e] = 0.0
                     hit[q] = True
-                total += data[e]
-            if diag >= 0:
-                data[diag] = -total
+            zero_row_sum(q, indptr, indices, data)
         for j in range(count):
             dist[seen[j]] = np.inf
 
