@@ -40,8 +40,8 @@ def laplacian(
         Kernel width (exp(-d²/4h)); default 4ē² narrowed where the geometry bends; with
         ``correction="none"`` the paper's :func:`~meshlap.widths.default_h` = (2ē)².
     tol : float, optional
-        Kernel tolerance; default 1e-6 for the corrected operators (1e-8 on
-        curves), 1e-8 for the paper's (``correction="none"``); 0 for the untruncated operator.
+        Kernel tolerance; default 1e-6 for the corrected operators (their Galerkin pencil
+        keeps 1e-8), 1e-8 for the paper's (``correction="none"``); 0 for the untruncated operator.
     **kwargs
         ``k``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the
         accuracy options ``correction`` (default "richardson" on surface meshes; "none" is
@@ -120,8 +120,8 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     k : int, default 2
         Intrinsic dimension: 1 curve, 2 surface, 3 volume or 3-manifold.
     tol : float, optional
-        Kernel tolerance, as for meshes: default 1e-6 for the corrected operators (1e-8 on
-        curves), 1e-8 for the paper's.
+        Kernel tolerance, as for meshes: default 1e-6 for the corrected operators, 1e-8 for
+        the paper's.
     denoise : bool, optional
         Project the points onto their local tangent planes first (for noisy scans; ``op.V``
         then holds the moved points). Default: when the cloud's normal noise exceeds about

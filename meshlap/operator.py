@@ -118,8 +118,8 @@ class MeshLaplacian(LumpedLaplacian):
     check_psd : bool, default True
         Check that −S is positive semidefinite (Richardson only).
     tol : float, optional
-        Default 1e-6 for the corrected operators, 1e-8 for the paper's (``correction="none"``),
-        on curves and for the Galerkin pencil, where 1e-6 costs measurable accuracy.
+        Default 1e-6 for the corrected operators, 1e-8 for the paper's (``correction="none"``)
+        and for the Galerkin pencil (of meshes and curves), where 1e-6 costs measurable accuracy.
         Kernel tolerance: weights exp(-d²/4h) < tol are dropped, which cuts the sums off at
         r = sqrt(4h ln(1/tol)). For every vertex w the truncated operator differs from the
         exact one by at most ``tol * A * max_p |f(p) - f(w)| / (4π h²)`` with A the total

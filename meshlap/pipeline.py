@@ -41,25 +41,23 @@ POINTWISE = (True, False, "fit")
 QUADRATURES = ("vertex", "galerkin")
 #: Kernel tolerance of the paper's operator: Gaussian weights below 1e-8 of the peak are dropped.
 DEFAULT_TOL = 1e-8
-#: Kernel tolerance of the corrected operators on surfaces, volumes and clouds when none is
-#: given. Against 1e-8 on a 16k-vertex sphere: 24.5% fewer entries, eigenvalues moved by at most
-#: 1.9e-6 relative, against the operator's own 1.8e-3 error; ``op @ f`` (the fitted rows) does
-#: not use the kernel. Curves keep 1e-8: only 8% fewer entries there, and their eigenvalues'
-#: error (3e-5) grew by 15%; so does the Galerkin pencil (``Options.pencil_tol``; issue 19,
-#: benchmarks/RESULTS.md).
+#: Kernel tolerance of the corrected operators when none is given. Against 1e-8 on a 16k-vertex
+#: sphere: 24.5% fewer entries, eigenvalues moved by at most 1.9e-6 relative, against the
+#: operator's own 1.8e-3 error; ``op @ f`` (the fitted rows) does not use the kernel. The
+#: Galerkin pencil keeps 1e-8 (``Options.pencil_tol``): there 1e-6 grew a circle's eigenvalue
+#: error (3e-5) by 15% and moved spot's by 8% (issue 19, benchmarks/RESULTS.md).
 CORRECTED_TOL = 1e-6
 
 
-def default_tol(tol: Any, correction: str | None, dim: int = 2) -> Any:
-    """``tol``, or when it is None the default for ``correction`` (None: the corrected default)
-    on a geometry of intrinsic dimension ``dim``.
+def default_tol(tol: Any, correction: str | None) -> Any:
+    """``tol``, or when it is None the default for ``correction`` (None: the corrected default).
 
-    >>> default_tol(None, "none"), default_tol(None, None), default_tol(None, None, 1), default_tol(0.0, None)
-    (1e-08, 1e-06, 1e-08, 0.0)
+    >>> default_tol(None, "none"), default_tol(None, None), default_tol(0.0, None)
+    (1e-08, 1e-06, 0.0)
     """
     if tol is not None:
         return tol
-    return DEFAULT_TOL if correction == "none" or dim == 1 else CORRECTED_TOL
+    return DEFAULT_TOL if correction == "none" else CORRECTED_TOL
 
 
 @dataclass(frozen=True)
@@ -98,7 +96,7 @@ class Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         pencil_tol = DEFAULT_TOL if tol is None else tol
-        tol = default_tol(tol, correction, geo.dim)
+        tol = default_tol(tol, correction)
         if correction not in CORRECTIONS:
             raise MeshError(f"correction must be one of {', '.join(CORRECTIONS)}; got {correction!r}")
         try:

@@ -48,6 +48,11 @@ def _slepc():
     return SLEPc
 
 
+def _has_mumps() -> bool:
+    """Whether this PETSc has MUMPS (Debian's has; a minimal build may not)."""
+    return bool(_mpi()[1].Sys.hasExternalPackage("mumps"))
+
+
 # -- communication helpers ------------------------------------------------------------------
 def _exchange(comm, dest: np.ndarray, *arrays: np.ndarray) -> list[np.ndarray]:
     """Send row i of every array to rank dest[i]; returns the rows received, by source rank."""

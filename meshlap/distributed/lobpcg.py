@@ -54,6 +54,7 @@ from .. import _lobpcg, spectral
 from ..errors import MeshError
 from ..geometry.validation import check_faces, check_k, check_vertices
 from ..progress import ProgressLike, make_progress
+from .comm import _has_mumps
 
 __all__ = ["eigs", "finish"]
 
@@ -156,12 +157,6 @@ class _GlobalSolve:
         B.destroy()
         X.destroy()
         return out
-
-
-def _has_mumps() -> bool:
-    from petsc4py import PETSc
-
-    return bool(PETSc.Sys.hasExternalPackage("mumps"))
 
 
 def _global_solve(A, choice: str) -> _GlobalSolve | None:

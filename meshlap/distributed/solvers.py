@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import MeshError
 from ..geometry.validation import check_k
-from .comm import _mpi, _slepc
+from .comm import _has_mumps, _mpi, _slepc
 from .operator import DistributedLaplacian
 
 __all__ = ["eigs", "heat_flow", "implicit_heat", "mean_curvature_normal"]
@@ -276,7 +276,7 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh:
     if solver not in ("auto", "mumps", "iterative"):
         raise MeshError(f"solver must be 'auto', 'mumps' or 'iterative'; got {solver!r}")
     if solver == "auto":
-        solver = "mumps" if PETSc.Sys.hasExternalPackage("mumps") else "iterative"
+        solver = "mumps" if _has_mumps() else "iterative"
     if solver == "mumps":
         ksp.setType("preonly")
         pc.setType("cholesky")
