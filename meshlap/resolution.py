@@ -19,7 +19,7 @@ for its peer (linear FEM; on a surface's point cloud, robust-laplacian):
   √(2h) of the boundary, κ_b the boundary's curvature times √(2h), c the mass within √(2h) of
   a crease and ν the noise in mean edges; where the corrected kernel's -S was not semidefinite
   and the build fell back to the plain kernel, ``A_F·w^-P_F + A_P·b·hλ``, w the width in mean
-  edges;
+  edges (on a point cloud ``C_F·(1 + C_FE·ē²λ)`` in place of ``A_F``);
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
   tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments);
 * a surface's point cloud has no cells and no FEM: its peer is robust-laplacian's
@@ -74,7 +74,7 @@ DEFAULT_MODEL = {"A_H": 0.0131, "A_2": 0.142, "A_Q": 0.00366, "P_Q": 0.571, "R_0
                  "A_B": 0.0789, "A_K": 0.25, "A_C": 0.18, "A_N": 1.24,
                  "A_W": 0.000641, "Q_W": 3.76, "P_W": 2.19, "R_W": 1.0,
                  "A_F": 0.0374, "P_F": 0.548, "A_P": 3.54,
-                 # point clouds' sampling term, fitted on their rows alone (``--clouds``)
+                 # point clouds' sampling and fallback terms, fitted on their rows alone (``--clouds``)
                  "C_W": 6.23e-05, "Q_C": 0.156, "P_C": 4.24, "C_E": 14.2, "C_F": 0.0417, "C_FE": 7.95}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
 #: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
