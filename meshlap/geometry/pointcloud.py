@@ -312,8 +312,8 @@ def noise_ratio(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = 
 
     σ̂² is the residual of a quadratic height fit over each point's tangent k-plane (its PCA
     frame), per degree of freedom left: the fit absorbs the surface's bending, which a plane's
-    residual would read as noise (it grows as a²·(aκ)², 0.04 on 1,000 random points of a torus
-    of tube radius 0.4, while its quadratic residual is 2e-4). Clean samples of smooth
+    residual would read as noise (it grows as a²·(aκ)²: 0.033 on 1,000 random points of a
+    torus of tube radius 0.4, whose quadratic residual is 1.5e-4). Clean samples of smooth
     surfaces measure below 1e-3 (the cubic terms); 16,000 sphere points with 1% radial noise
     0.095, 4,000 0.028. ``pca`` takes the frames of
     :func:`meshlap.geometry.frames.pca_frames` when they exist.
