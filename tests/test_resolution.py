@@ -137,8 +137,8 @@ def test_sphere_cloud_16_eigenvalues_within_1_percent():
 
 def test_narrow_cloud_warns_and_names_robust_laplacian():
     # 4,000 random sphere points (benchmarks/calibrate_resolution.py --clouds): at h = ē²/2 the default
-    # is 76% off against robust-laplacian's 6.1% (predicted 53% and 7.2%), warned; at its own 4ē²,
-    # 0.85% (predicted 0.58%), silent
+    # is 76% off against robust-laplacian's 6.1% (predicted 63% and 6.7%), warned; at its own 4ē²,
+    # 0.85% (predicted 0.59%), silent
     P = samples.sphere_points(4000, "random", seed=0)
     e2 = meshlap.geometry.point_cloud_geometry(P).spacing ** 2
     with pytest.MonkeyPatch.context() as mp:  # the report is a formula: it needs no robust-laplacian
