@@ -45,7 +45,7 @@ MUST_STAY_SILENT = ("sphere, 16,000 random vertices", "same, 0.5% radial noise")
 #: (cube surfaces, fandisk, discs) take the Galerkin pencil, whose error is not this model's.
 FROZEN = ("A_K", "A_C")
 #: The default's constants that only point clouds' rows constrain.
-CLOUD_KEYS = ("C_W", "Q_C", "P_C", "C_E")
+CLOUD_KEYS = ("C_W", "Q_C", "P_C", "C_E", "C_F", "C_FE")
 #: FEM's model is simpler and better known than the default's: its residuals weigh more.
 FEM_WEIGHT = 3.0
 
@@ -79,39 +79,14 @@ def inputs():
 
 
 @functools.cache
-def _torus_exact(R=1.0, r=0.4, n=800):
-    """The torus's first eigenvalues, separated: e^{imφ}·g(θ) with -(ρg')'/(r²ρ) + m²g/ρ² = λg,
-    ρ = R + r·cos θ, in second-order finite volumes on n cells (within 5e-6 of 2,000 cells', 5e-4
-    of the cotangent Laplacian's on a 20,000-vertex torus)."""
-    t = np.arange(n) * 2 * math.pi / n
-    dt = 2 * math.pi / n
-    rho, half = R + r * np.cos(t), R + r * np.cos(t + dt / 2)
-    c = half / (r * r * dt)
-    K = np.diag(c + np.roll(c, 1)) - np.diag(c[:-1], 1) - np.diag(c[:-1], -1)
-    K[0, -1] = K[-1, 0] = -c[-1]
-    lam = []
-    for m in range(6):
-        vals = np.linalg.eigvalsh((K + np.diag(m * m * dt / rho)) / np.sqrt(np.outer(rho * dt, rho * dt)))[:6]
-        lam += [v for v in vals for _ in range(1 if m == 0 else 2)]
-    return np.sort(lam)[:B.K]
+def _torus_exact():
+    """The first eigenvalues of the torus of radii 1 and 0.4 (:func:`meshlap.samples.torus_eigenvalues`)."""
+    return samples.torus_eigenvalues(B.K)
 
 
-def _torus_points(n, kind, seed=0, R=1.0, r=0.4, noise=0.0):
-    """n points on the torus of radii (R, r): i.i.d. by area ("random") or the vertices of
-    ``shapes.torus``, a grid each moved by up to a quarter cell ("jittered"; on the exact grid, a
-    lattice of rings, both operators are 15-25% off and the point masses sum to 6% over the
-    area); ``noise``: moved along the normal by a Gaussian of that standard deviation."""
-    rng = np.random.default_rng(seed)
-    if kind == "jittered":
-        P = shapes.torus(n, R, r, seed=seed)[0]
-        th, ph = shapes.torus_angles(P, R)
-    else:  # θ by rejection, its density ∝ R + r·cos θ
-        th = rng.uniform(0, 2 * math.pi, 4 * n)
-        th = th[rng.uniform(0, R + r, 4 * n) < R + r * np.cos(th)][:n]
-        ph = rng.uniform(0, 2 * math.pi, n)
-    normal = np.column_stack([np.cos(th) * np.cos(ph), np.cos(th) * np.sin(ph), np.sin(th)])
-    centre = R * np.column_stack([np.cos(ph), np.sin(ph), np.zeros_like(ph)])
-    return centre + normal * (r + noise * rng.standard_normal((len(th), 1)))
+def _torus_points(n, kind, noise=0.0):
+    """:func:`meshlap.samples.torus_points` of radii (1, 0.4), seed 0."""
+    return samples.torus_points(n, kind, noise=noise)
 
 
 def _square_points(n, kind, seed=0):

@@ -114,7 +114,8 @@ class MeshLaplacian(LumpedLaplacian):
         with its Gaussian weights (:func:`meshlap.corrections.highorder.pointwise_rows`).
     curvature_limit : float, optional
         β of h_w = min(h, β/κ_w²); default 0.05 with the correction, automatic h and
-        normals, else 0.
+        normals, else 0. On a surface's point cloud h_w stays at least half of h
+        (:data:`meshlap.widths.CLOUD_CAP_FLOOR`).
     check_psd : bool, default True
         Check that −S is positive semidefinite (Richardson only).
     tol : float, optional

@@ -19,7 +19,7 @@ for its peer (linear FEM; on a surface's point cloud, robust-laplacian):
   √(2h) of the boundary, κ_b the boundary's curvature times √(2h), c the mass within √(2h) of
   a crease and ν the noise in mean edges; where the corrected kernel's -S was not semidefinite
   and the build fell back to the plain kernel, ``A_F·w^-P_F + A_P·b·hλ``, w the width in mean
-  edges;
+  edges (on a point cloud ``C_F·(1 + C_FE·ē²λ)`` in place of ``A_F``);
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
   tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments);
 * a surface's point cloud has no cells and no FEM: its peer is robust-laplacian's
@@ -74,8 +74,8 @@ DEFAULT_MODEL = {"A_H": 0.0131, "A_2": 0.142, "A_Q": 0.00366, "P_Q": 0.571, "R_0
                  "A_B": 0.0789, "A_K": 0.25, "A_C": 0.18, "A_N": 1.24,
                  "A_W": 0.000641, "Q_W": 3.76, "P_W": 2.19, "R_W": 1.0,
                  "A_F": 0.0374, "P_F": 0.548, "A_P": 3.54,
-                 # point clouds' sampling term, fitted on their rows alone (``--clouds``)
-                 "C_W": 0.000943, "Q_C": 0.214, "P_C": 1.39, "C_E": 9.38}
+                 # point clouds' sampling and fallback terms, fitted on their rows alone (``--clouds``)
+                 "C_W": 6.23e-05, "Q_C": 0.156, "P_C": 4.24, "C_E": 14.2, "C_F": 0.0417, "C_FE": 7.95}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
 #: benchmarks/bench_spectra.py where it is chosen (coarse torus, coarse sphere, cube surface,
 #: squares and discs; 0.19-0.52), rounded up; on curves 0.02-0.47 (circles, an ellipse, a
@@ -103,7 +103,7 @@ FEM_MODEL = {"F_E": 0.0193, "F_Q": 0.418, "F_T": 0.0384, "F_N": 5.68,
 
 #: The constants of robust-laplacian's ``point_cloud_laplacian`` on a surface's cloud, fitted by
 #: ``benchmarks/calibrate_resolution.py`` on its cloud rows (module docstring).
-CLOUD_PEER_MODEL = {"R_E": 0.0607, "R_Q": 0.207, "R_F": 0.116, "Q_0": 0.278, "P_R": 0.5, "R_N": 1.08}
+CLOUD_PEER_MODEL = {"R_E": 0.116, "R_Q": 0.191, "R_F": 0.097, "Q_0": 0.275, "P_R": 0.5, "R_N": 1.74}
 #: What a surface's point cloud is compared against, and what the warning names.
 CLOUD_PEER = "robust_laplacian.point_cloud_laplacian(P)"
 
@@ -313,9 +313,12 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
     narrowed = min(fig.narrowed / c["R_0"], 1.0) ** -c["P_Q"]
     if fig.fallback:  # the plain kernel at these widths, its -S semidefinite where the corrected was not
         # fitted on two rows (20,000 random vertices at ē²/2, a 13³ cube of tetrahedra at ē²/16);
-        # 400,000 random vertices at ē² (benchmarks/RESULTS.md, at scale): 3.9% against 5.4% measured
+        # 400,000 random vertices at ē² (benchmarks/RESULTS.md, at scale): 3.9% against 5.4% measured.
+        # A cloud's point masses are a coarser quadrature than a mesh's, and more so the fewer
+        # points a wavelength holds (random squares at ē²/2: 15% at 1,000 points, 8.7% at 4,000)
+        quad = (c["C_F"] * (1 + c["C_FE"] * hl / max(fig.width, 1e-3) ** 2) if fig.cloud else c["A_F"])
         return {f"the correction fell back to the plain kernel: its quadrature at {fig.width:.2f} mean edges":
-                    c["A_F"] * max(fig.width, 1e-3) ** -c["P_F"],
+                    quad * max(fig.width, 1e-3) ** -c["P_F"],
                 "the correction fell back to the plain kernel: its O(h) bias": c["A_P"] * hl * fig.bend}
     # below about R_W of the default width in squared edges the sampling's quadrature error takes
     # over, and refining at a fixed width in edges does not shrink it (at h = ē² on random spheres:

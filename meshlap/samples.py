@@ -9,7 +9,9 @@ Every generator takes a seed, so every sample is reproducible.
 * the unit cube as a tetrahedral mesh (k = 3): Neumann eigenvalues π²(a² + b² + c²);
 * S³ ⊂ R⁴ as points (k = 3): eigenvalues l(l + 2) with multiplicity (l + 1)², so 3 (×4);
 * the flat torus (cos θ, sin θ, cos φ, sin φ) ⊂ R⁴ (k = 2, isometric to [0, 2π)²):
-  eigenvalues a² + b², so 1 (×4), 2 (×4).
+  eigenvalues a² + b², so 1 (×4), 2 (×4);
+* the torus of revolution of radii R and r in R³ as points: eigenvalues of separated 1-D
+  problems (:func:`torus_eigenvalues`).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import math
 import numpy as np
 
 from .errors import MeshError
-from .shapes import _check_count, fibonacci_sphere
+from .shapes import _check_count, fibonacci_sphere, torus, torus_angles
 
 __all__ = [
     "CLOUD_KINDS",
@@ -29,6 +31,8 @@ __all__ = [
     "flat_torus_points",
     "sphere_points",
     "three_sphere_points",
+    "torus_eigenvalues",
+    "torus_points",
 ]
 
 #: Samplings understood by :func:`sphere_points` and :func:`circle`.
@@ -140,6 +144,65 @@ def flat_torus_points(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np
     n = _check_count(n, 4, "flat_torus_points")
     theta, phi = np.random.default_rng(seed).uniform(0, 2 * math.pi, size=(2, n))
     return np.column_stack([np.cos(theta), np.sin(theta), np.cos(phi), np.sin(phi)]), theta, phi
+
+
+def torus_points(n: int, kind: str = "random", seed: int = 0, R: float = 1.0, r: float = 0.4,
+                 noise: float = 0.0) -> np.ndarray:
+    """n points on the torus of revolution of radii (R, r) in R³.
+
+    ``"random"``: i.i.d. uniform by area; ``"jittered"``: the vertices of
+    :func:`meshlap.shapes.torus`, a grid each moved by up to a quarter cell (on the exact grid,
+    a lattice of rings, point-cloud Laplacians are 15-25% off). ``noise``: each point moved
+    along its normal by a Gaussian of that standard deviation.
+
+    Examples
+    --------
+    >>> P = torus_points(500, noise=0.01)
+    >>> rho = np.hypot(np.hypot(P[:, 0], P[:, 1]) - 1.0, P[:, 2])     # distance to the core circle
+    >>> bool(0.35 < rho.min() and rho.max() < 0.45)
+    True
+    """
+    n = _check_count(n, 4, "torus_points")
+    rng = np.random.default_rng(seed)
+    if kind == "jittered":
+        th, ph = torus_angles(torus(n, R, r, seed=seed)[0], R)
+    elif kind == "random":  # θ by rejection, its density ∝ R + r·cos θ
+        th = rng.uniform(0, 2 * math.pi, 4 * n)
+        th = th[rng.uniform(0, R + r, 4 * n) < R + r * np.cos(th)][:n]
+        ph = rng.uniform(0, 2 * math.pi, n)
+    else:
+        raise MeshError(f"unknown torus sampling {kind!r}; use 'random' or 'jittered'")
+    normal = np.column_stack([np.cos(th) * np.cos(ph), np.cos(th) * np.sin(ph), np.sin(th)])
+    centre = R * np.column_stack([np.cos(ph), np.sin(ph), np.zeros_like(ph)])
+    return centre + normal * (r + noise * rng.standard_normal((len(th), 1)))
+
+
+def torus_eigenvalues(k: int = 10, R: float = 1.0, r: float = 0.4, cells: int = 800) -> np.ndarray:
+    """The first k eigenvalues of -Δ on the torus of radii (R, r), separated: e^{imφ}·g(θ)
+    with -(ρg')'/(r²ρ) + m²g/ρ² = λg, ρ = R + r·cos θ, in second-order finite volumes on
+    ``cells`` cells (within 5e-6 of 2,000 cells', 5e-4 of the cotangent Laplacian's on a
+    20,000-vertex torus).
+
+    Examples
+    --------
+    >>> lam = torus_eigenvalues(5)
+    >>> float(lam[0]) < 1e-9, bool(np.allclose(lam[1], lam[2]))      # m = ±1: a pair
+    (True, True)
+    """
+    t = np.arange(cells) * 2 * math.pi / cells
+    dt = 2 * math.pi / cells
+    rho, half = R + r * np.cos(t), R + r * np.cos(t + dt / 2)
+    c = half / (r * r * dt)
+    K = np.diag(c + np.roll(c, 1)) - np.diag(c[:-1], 1) - np.diag(c[:-1], -1)
+    K[0, -1] = K[-1, 0] = -c[-1]
+    lam: list[float] = []
+    m = 0
+    while True:  # the order m's eigenvalues grow with m²: stop above the k-th
+        vals = np.linalg.eigvalsh((K + np.diag(m * m * dt / rho)) / np.sqrt(np.outer(rho * dt, rho * dt)))[:k]
+        if len(lam) >= k and vals[0] > sorted(lam)[k - 1]:
+            return np.sort(lam)[:k]
+        lam += [float(v) for v in vals for _ in range(1 if m == 0 else 2)]
+        m += 1
 
 
 def cube_tetrahedra(n: int) -> tuple[np.ndarray, np.ndarray]:
