@@ -162,7 +162,10 @@ def _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, 
 def _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first):
     # data[first + i] <- m_j K(d², h_wp) over contiguous arrays, one loop per kernel: without
     # an indirect load or a branch in it the loop vectorizes (the weights cost 3x as much
-    # written inline with the gathers); the same operations per entry, so the same values
+    # written inline with the gathers); the same operations per entry, so the same values.
+    # Its callers are compiled with error_model="numpy": numba's default checks every
+    # division for a zero divisor, and that branch kept this loop scalar (5.6x slower
+    # alone, measured; h_wp > 0, so the check never fired and the values are the same)
     if half_k == 1.0:  # surfaces, rounded as the plain operator is
         if dogc != 0.0:
             for i in range(cnt):
@@ -181,7 +184,7 @@ def _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first):
         data[first + i] = sm[i] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
 
 
-@jit()
+@jit(error_model="numpy")
 def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell,
               full, max_columns, chunk, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k, fill,
               indptr, indices, data, counts, status, times, product):
@@ -351,7 +354,7 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     return indptr, indices, data.astype(value_dtype, copy=False)
 
 
-@jit()
+@jit(error_model="numpy")
 def _revalue_rows(start, stop, V, m, hv, nv, use_normals, dogc, half_k, indptr, indices, data):
     # the weights of rows start..stop recomputed on their stored pattern: d² and h_wp by the
     # same operations as _gather_var's and _gather_arc's (so the same values, and the same
