@@ -10,6 +10,18 @@ neither the weights' signs nor diagonal dominance decide it; the check is an eig
 that stops as early as the answer is known. One failure is certain without it: a positive
 diagonal entry of L (a point whose kernel weights sum below zero, where the narrow Gaussian
 falls between the samples) is a vector with a negative Rayleigh quotient.
+
+Cheaper certificates that were weighed (issue 19) and why none is used: Gershgorin's bound on
+(−S, M) is −2 max_w Σ_p |L_wp⁻| (the row's negative weights), −0.043 of the scale on the 16k
+random sphere and −0.85 on spot, against the −1e-6 needed, and no bound of that kind can
+reach 0, which the constant attains exactly. Splitting −S into the graph Laplacians of its
+positive and negative weights, L(W⁺) − L(W⁻), does not help either: the negative part is
+not small on smooth functions (its second moment is 18% of the positive part's on the sphere,
+the continuum's 0.224/1.224, and 33% on spot), so comparing the two needs the negative pairs
+routed through positive ones, and routing a pair through a midpoint (Cauchy–Schwarz,
+(a + b)² ≤ 2a² + 2b²) loses exactly the factor 2 by which 2K_{h/2} dominates K_h in the
+continuum (the symbols' ratio (1 + e^{−hω²/2})/4 ≤ 1/2): a proof with no slack left for the
+sampling, at O(entries × row length). Hence an eigensolver.
 """
 
 from __future__ import annotations
