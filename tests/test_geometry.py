@@ -149,3 +149,24 @@ def test_symmetric_psd_and_heat_for_every_k(which):
     if f is not None:
         u = meshlap.heat.heat_flow(op, f, 0.1)
         assert np.linalg.norm(u) / np.linalg.norm(f) == pytest.approx(decay, rel=0.01)
+
+
+@pytest.mark.parametrize("which", ["plane", "tets", "tets, huge n"])
+def test_boundary_flags_equal_the_unique_rows(which):
+    # the sub-cells that occur once, counted as int64 codes (or, where n^c overflows them,
+    # np.unique over rows): the vertices np.unique's rows give
+    from meshlap.geometry.core import _once
+
+    if which.startswith("tets"):
+        V, T = samples.cube_tetrahedra(5)
+        keys = T[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]].reshape(-1, 3)
+    else:
+        V, F = shapes.plane(800, seed=4)
+        keys = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    n = 2_100_000 if "huge" in which else len(V)  # n³ > 2⁶³: the np.unique path
+    srt = np.sort(keys, axis=1)
+    uniq, counts = np.unique(srt, axis=0, return_counts=True)
+    want = np.zeros(n, dtype=bool)
+    want[uniq[counts == 1].reshape(-1)] = True
+    got = _once(keys, n)
+    assert np.array_equal(got, want) and 0 < got.sum() < len(V)

@@ -272,18 +272,25 @@ def test_variable_rows_equal_brute_force(dim, dog, normals):
     assert err.max() < {True: 5e-10, "rough": 5e-7, False: 1e-13}[normals]
 
 
+def _variable_case(seed, normals):
+    # 500 random sphere points, one without mass, per-point widths, and normals (None,
+    # "radial" or "rough")
+    V, _ = shapes.sphere(500, kind="random", seed=seed)
+    rng = np.random.default_rng(seed + 1)
+    mass = rng.uniform(0.5, 1.5, len(V)) / len(V)
+    mass[seed - 2] = 0.0
+    hv = 0.004 * rng.uniform(0.6, 1.6, len(V))
+    N = None if normals is None else (V / np.linalg.norm(V, axis=1)[:, None] if normals == "radial"
+                                      else _rough_normals(V, rng))
+    return V, mass, hv, N
+
+
 @pytest.mark.parametrize("normals", [None, "radial", "rough"])
 @pytest.mark.parametrize("dog", [True, False])
 def test_revalue_equals_a_new_build(dog, normals):
     # the fallback of a failed semidefiniteness check gives the rows the other kernel's
     # weights on their pattern: bit for bit the rows a new build of that kernel gives
-    V, _ = shapes.sphere(500, kind="random", seed=5)
-    rng = np.random.default_rng(6)
-    mass = rng.uniform(0.5, 1.5, len(V)) / len(V)
-    mass[3] = 0.0
-    hv = 0.004 * rng.uniform(0.6, 1.6, len(V))
-    N = None if normals is None else (V / np.linalg.norm(V, axis=1)[:, None] if normals == "radial"
-                                      else _rough_normals(V, rng))
+    V, mass, hv, N = _variable_case(5, normals)
     g = kernel.build_grid(V, mass, kernel.cutoff_radius(hv.max(), 1e-8))
     var = assembly.variable
     indptr, indices, data = var.variable_csr(V, g, hv, 1e-8, N, not dog, np.int32, np.float64)
@@ -295,3 +302,48 @@ def test_revalue_equals_a_new_build(dog, normals):
     low = var.variable_csr(V, g, hv, 1e-8, N, not dog, np.int32, np.float32)[2]
     var.revalue(V, mass, hv, N, dog, indptr, indices, low)
     assert low.dtype == np.float32 and np.array_equal(low, want[2].astype(np.float32))
+
+
+@pytest.mark.parametrize("normals", [None, "radial", "rough"])
+def test_product_made_during_the_fill_equals_scipys(normals):
+    # the moment scale's block multiplied while the rows are filled (issue 19): the same
+    # values, to the bit, as scipy's product with the finished matrix, on every path of the
+    # fill (chord, arc series, exact arc); the same rows as a fill without it
+    V, mass, hv, N = _variable_case(7, normals)
+    g = kernel.build_grid(V, mass, kernel.cutoff_radius(hv.max(), 1e-6))
+    X = meshlap.corrections.moments.moment_block(V)
+    Y = np.full((len(V), 4), np.nan)
+    rows = assembly.variable.variable_csr(V, g, hv, 1e-6, N, True, np.int32, np.float64, times=X, product=Y)
+    plain = assembly.variable.variable_csr(V, g, hv, 1e-6, N, True, np.int32, np.float64)
+    assert all(np.array_equal(a, b) for a, b in zip(rows, plain, strict=True))
+    L = assembly.csr(rows[2], rows[1], rows[0], len(V))
+    assert np.array_equal(Y, L @ X)
+
+
+def test_assemble_gives_the_product_where_it_fills_in_float64():
+    V, F = shapes.sphere(400, kind="random", seed=9)
+    g = meshlap.geometry.from_mesh(V, F)
+    per_point = meshlap.widths.Widths(0.01, np.full(400, 0.01), False)
+    L, Y = assembly.assemble(g.points, g.mass, per_point, assembly.Kernel(2, dog=True), times=V)
+    assert np.array_equal(Y, L @ V)
+    # the one-h kernel's path and float32 rows: the caller multiplies afterwards
+    L1, none = assembly.assemble(g.points, g.mass, per_point, assembly.Kernel(2, dog=True), times=V,
+                                 dtype=np.float32)
+    assert none is None and L1.dtype == np.float32
+    L2, none = assembly.assemble(g.points, g.mass, meshlap.widths.Widths(0.01, None, False),
+                                 assembly.Kernel(2), times=V)
+    assert none is None and L2.shape == (400, 400)
+
+
+def test_build_moment_scale_equals_the_product_after_the_fill():
+    # a plane with a boundary: the band's rows are left out of the mean; the scale from the
+    # product made during the fill is the scale of scipy's product with the free rows, to the bit
+    V, F = shapes.plane(4000, seed=2)
+    op = meshlap.laplacian(V, F)
+    geo, opts = op.geometry, op.options
+    radius = assembly.cutoff_radius(op.widths.largest, opts.tol)
+    free = assembly.assemble(geo.points, geo.mass, op.widths,
+                             assembly.Kernel(geo.dim, dog=True, normals=geo.normals(), tol=opts.tol))
+    band = geo.boundary_frames(radius)[0]
+    want = meshlap.corrections.second_moment_scale(lambda X: free @ X, geo.points, geo.mass, band, geo.dim)
+    assert op.correction == "richardson" and 0 < len(band) < len(V) and op.moment_scale == want != 1.0

@@ -78,3 +78,19 @@ def test_a_positive_diagonal_decides_without_the_eigensolver(monkeypatch):
     assert lam == -d.max() and dense_min(op.L_sym, op.mass) <= lam
     margin, reason = psd.check(op.L_sym, op.mass, V, faces, "mesh")
     assert reason is not None and margin == lam / scale
+
+
+def test_the_diagonal_and_constant_product_from_the_fill_give_the_same_margin(monkeypatch):
+    # on a closed mesh the checked rows are the filled ones: the build hands the check their
+    # diagonal and product with the constant, and makes neither again (issue 19); the margin
+    # is the one the check computes from the matrix alone, to the bit
+    V, F = shapes.sphere(1500, kind="random", seed=6)
+    geo = geometry.from_mesh(V, F)
+    calls = []
+    real = sp.csr_matrix.diagonal
+    monkeypatch.setattr(sp.csr_matrix, "diagonal", lambda self, k=0: calls.append(k) or real(self, k))
+    op = meshlap.laplacian(V, F, pointwise=False)
+    assert op.correction == "richardson" and calls == []
+    kern = meshlap.assembly.Kernel(2, dog=True, normals=geo.normals(), tol=op.options.tol)
+    free = meshlap.assembly.assemble(geo.points, geo.mass, op.widths, kern)
+    assert op._built.psd_margin == psd.check(free, geo.mass, V, geo.faces, "mesh")[0] and calls == [0]

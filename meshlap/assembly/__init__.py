@@ -165,7 +165,8 @@ def pad3(P: np.ndarray) -> np.ndarray:
 
 def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel, *,
              dtype=np.float64, guard: MemoryGuard | None = None,
-             progress: Callable[[float, str], None] | None = None) -> sp.csr_matrix:
+             progress: Callable[[float, str], None] | None = None,
+             times: np.ndarray | None = None) -> sp.csr_matrix | tuple[sp.csr_matrix, np.ndarray | None]:
     """The kernel operator L = (K M − diag(K m)) · normalization, as CSR (rows start with
     their diagonal).
 
@@ -184,6 +185,11 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
         Called with the entry count before the arrays are allocated.
     progress : callable, optional
         ``progress(fraction, stage)``.
+    times : (n, c) ndarray, optional
+        A block to multiply L with while its rows are filled (the moment scale's |x|² and x,
+        :func:`meshlap.corrections.moments.moment_block`): then
+        ``(L, L @ times)`` is returned, the product equal to the bit to scipy's ``L @ times``,
+        or ``(L, None)`` where the rows are not filled in float64 on the per-point path.
 
     Examples
     --------
@@ -194,19 +200,26 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
     >>> L = assemble(g.points, g.mass, Widths(0.01, None, False), Kernel(dim=2))
     >>> bool(np.allclose(L @ np.ones(500), 0))
     True
+    >>> L, Y = assemble(g.points, g.mass, Widths(0.01, np.full(500, 0.01), False), Kernel(2, dog=True),
+    ...                 times=V)
+    >>> bool(np.array_equal(Y, L @ V))
+    True
     """
     n = len(points)
     radius = cutoff_radius(widths.largest, kernel.tol)
+    one_h = kernel.plain and widths.h_vertex is None
+    fused = times is not None and points.shape[1] <= 3 and not one_h and np.dtype(dtype) == np.float64
+    if times is not None and not fused:
+        return assemble(points, mass, widths, kernel, dtype=dtype, guard=guard, progress=progress), None
     if points.shape[1] > 3:
         if guard is not None:
             guard(pairs.count_entries(points, radius))
-        if kernel.plain and widths.h_vertex is None:
+        if one_h:
             return pairs.assemble(points, mass, widths.h, radius, kernel.dim, dtype)
         return pairs.assemble_variable(points, mass, widths.per_point(n), kernel.tol, kernel.dim,
                                        kernel.dog, kernel.normals, dtype)
     P = pad3(points)
     g = grid.build_grid(P, mass, radius)
-    one_h = kernel.plain and widths.h_vertex is None
     normals = None if kernel.normals is None else pad3(kernel.normals)
     hv = None if one_h else widths.per_point(n)
     # the sample is counted by the kernel that then builds (one fewer to compile)
@@ -240,12 +253,14 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
 
     if progress is not None:
         progress(0.0, "kernel rows")
+    product = np.empty((n, times.shape[1])) if fused else None
     indptr, indices, data = variable.variable_csr(P, g, hv, kernel.tol, normals,
                                                   kernel.dog, index_dtype, np.dtype(dtype), max_nnz=check,
-                                                  dim=kernel.dim)
+                                                  dim=kernel.dim, times=times, product=product)
     # unsorted, as on the one-h path: sorting cost as much as the fill (issue 19), and a matrix
     # that shares these index arrays sorts them first (meshlap.pipeline)
-    return csr(data, indices, indptr, n)
+    L = csr(data, indices, indptr, n)
+    return (L, product) if fused else L
 
 
 def reweigh(L: sp.csr_matrix, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel) -> bool:

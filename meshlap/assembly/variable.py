@@ -162,7 +162,10 @@ def _gather_arc(x, y, z, sw, hw, nw, xs, ys, zs, hs, ns, lnt4, cols, ncols, sj, 
 def _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first):
     # data[first + i] <- m_j K(d², h_wp) over contiguous arrays, one loop per kernel: without
     # an indirect load or a branch in it the loop vectorizes (the weights cost 3x as much
-    # written inline with the gathers); the same operations per entry, so the same values
+    # written inline with the gathers); the same operations per entry, so the same values.
+    # Its callers are compiled with error_model="numpy": numba's default checks every
+    # division for a zero divisor, and that branch kept this loop scalar (5.6x slower
+    # alone, measured; h_wp > 0, so the check never fired and the values are the same)
     if half_k == 1.0:  # surfaces, rounded as the plain operator is
         if dogc != 0.0:
             for i in range(cnt):
@@ -181,12 +184,13 @@ def _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first):
         data[first + i] = sm[i] * kern / (hp * (4.0 * math.pi * hp) ** half_k)
 
 
-@jit()
+@jit(error_model="numpy")
 def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_start, dims, lo, cell,
               full, max_columns, chunk, hv, hs, nv, ns, use_normals, lnt4, hmax, dogc, half_k, fill,
-              indptr, indices, data, counts, status):
+              indptr, indices, data, counts, status, times, product):
     # one thread's share (each_thread): chunks of rows from the shared counter. fill=False:
-    # counts[w] = entries of row w; fill=True: write the row into CSR
+    # counts[w] = entries of row w; fill=True: write the row into CSR, and where times has
+    # columns, product[w] = the row times them
     n_rows = len(rows)
     n_chunks = (n_rows + chunk - 1) // chunk
     cols = np.empty((max_columns, 2), dtype=np.int64)
@@ -228,6 +232,23 @@ def _var_rows(next_chunk, rows, V, xs, ys, zs, m, src_index, self_slot, cell_sta
             _var_weights(sd, sh, sm, cnt, dogc, half_k, data, first)
             indices[start] = w
             data[start] = -_sum(data, first, cnt)
+            if times.shape[1]:
+                _row_times(w, start, cnt + 1, indices, data, times, product)
+
+
+@jit(inline="always")
+def _row_times(w, start, length, indices, data, times, product):
+    # product[w] = row w times the block, added in the row's stored order one entry after the
+    # other, as scipy's CSR product adds them (the same values to the bit), while the row is
+    # still in cache
+    c = times.shape[1]
+    for k in range(c):
+        product[w, k] = 0.0
+    for q in range(start, start + length):
+        a = data[q]
+        p = indices[q]
+        for k in range(c):
+            product[w, k] += a * times[p, k]
 
 
 def dog_factor(dim: int) -> float:
@@ -261,8 +282,9 @@ def _count_pass(args: tuple, n: int, index_dtype) -> np.ndarray:
     # pass's type, so that one compiled specialization serves both passes
     counts = np.zeros(n, dtype=np.int64)
     dummy_i = np.zeros(1, dtype=index_dtype)
+    none = np.zeros((1, 0))
     each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, False, dummy_i, dummy_i, np.zeros(1), counts,
-                np.zeros(1, dtype=np.int64))
+                np.zeros(1, dtype=np.int64), none, none)
     return counts
 
 
@@ -286,7 +308,8 @@ def count_entries(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals
 def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: np.ndarray | None,
                  dog: bool, index_dtype, value_dtype,
                  max_nnz: Callable[[int], None] | None = None, dim: int = 2,
-                 rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 rows: np.ndarray | None = None, times: np.ndarray | None = None,
+                 product: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """CSR arrays (indptr, indices, data) of L with per-vertex widths ``hv``.
 
     Pair width h_wp = (h_w + h_p)/2 with the matching factor 1/(h_wp (4π h_wp)^{k/2}), so the
@@ -295,7 +318,20 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     ``normals`` multiplies d² by the squared arc/chord ratio of the pair. ``grid`` must be
     built for the largest radius. ``max_nnz`` is called with the exact count before the
     arrays are allocated (a memory guard). ``rows`` (default all) fills only those rows; the
-    others stay empty (one MPI rank's own rows).
+    others stay empty (one MPI rank's own rows). With ``times`` (n, c) float64, ``product``
+    (n, c) receives L @ times, computed while each row is filled (in float64, summed in the
+    row's stored order: what scipy's product with the float64 matrix gives, to the bit).
+
+    Examples
+    --------
+    >>> from meshlap.assembly.grid import build_grid
+    >>> V = np.random.default_rng(0).random((200, 3))
+    >>> X, Y = np.column_stack([(V**2).sum(axis=1), V]), np.empty((200, 4))
+    >>> ip, ind, dat = variable_csr(V, build_grid(V, np.ones(200), 1.0), np.full(200, 0.01), 1e-8, None,
+    ...                             True, np.int32, np.dtype(np.float64), times=X, product=Y)
+    >>> import scipy.sparse as sp
+    >>> bool(np.array_equal(Y, sp.csr_matrix((dat, ind, ip), shape=(200, 200)) @ X))
+    True
     """
     n = len(V)
     args = _pass_args(V, grid, hv, tol, normals, dog, dim, rows)
@@ -308,14 +344,17 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     indices = np.empty(nnz, dtype=index_dtype)
     data = np.empty(nnz, dtype=np.float64)
     status = np.zeros(1, dtype=np.int64)
-    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, True, indptr, indices, data, counts, status)
+    none = np.zeros((1, 0))
+    each_thread(_var_rows, np.zeros(1, dtype=np.int64), *args, True, indptr, indices, data, counts, status,
+                none if times is None else np.ascontiguousarray(times, dtype=np.float64),
+                none if product is None else product)
     if status[0]:
         raise RuntimeError("meshlap internal error: the count and fill passes found different "
                            "neighbourhoods; please report this with the mesh")
     return indptr, indices, data.astype(value_dtype, copy=False)
 
 
-@jit()
+@jit(error_model="numpy")
 def _revalue_rows(start, stop, V, m, hv, nv, use_normals, dogc, half_k, indptr, indices, data):
     # the weights of rows start..stop recomputed on their stored pattern: d² and h_wp by the
     # same operations as _gather_var's and _gather_arc's (so the same values, and the same

@@ -281,9 +281,26 @@ def _mean_cell_edge(P: np.ndarray, cells: np.ndarray) -> float:
 def _once(keys: np.ndarray, n: int) -> np.ndarray:
     # vertices of the sorted sub-cells (rows of keys) that occur exactly once
     srt = np.sort(keys, axis=1)
-    uniq, counts = np.unique(srt, axis=0, return_counts=True)
     flag = np.zeros(n, dtype=bool)
-    flag[uniq[counts == 1].reshape(-1)] = True
+    c = srt.shape[1]
+    if float(n) ** c >= 2.0**63:  # the rows' digits in base n do not fit in an int64
+        uniq, counts = np.unique(srt, axis=0, return_counts=True)
+        flag[uniq[counts == 1].reshape(-1)] = True
+        return flag
+    # each row as one int64 (its digits in base n), sorted: 14x faster than np.unique over
+    # rows (0.048 s against 0.0035 s for a 16k sphere's edges, issue 19)
+    code = srt[:, 0].astype(np.int64)
+    for i in range(1, c):
+        code = code * n + srt[:, i]
+    code.sort()
+    same = code[1:] == code[:-1]
+    single = np.ones(len(code), dtype=bool)
+    single[1:] &= ~same
+    single[:-1] &= ~same
+    code = code[single]
+    for _ in range(c):
+        flag[code % n] = True
+        code //= n
     return flag
 
 
