@@ -301,11 +301,10 @@ def test_feature_width_pencil_symmetric_rows_sum_to_zero_semidefinite():
     assert np.abs(S @ np.ones(len(V))).max() < 1e-9 * abs(S).max()
     lam = sla.eigh(-S.toarray(), np.diag(m), eigvals_only=True)
     assert lam[0] > -1e-10 * lam[-1]
-    # the build's own semidefinite check runs on it (feature_width=True: the convex creases
-    # are not features of the default, so here only the thin parts would narrow: none)
-    op = meshlap.laplacian(V, F, feature_width=True)
-    assert op.quadrature == "galerkin" and op.psd_margin is not None and op._built.narrowed == 0
+    # the default narrows next to concave creases only: the cube's are convex (across them
+    # the unfolded distance is exact), it has no thin part, and keeps one width
     assert galerkin.creases(V, F, concave=True).shape == (0, 2)
+    assert meshlap.laplacian(V, F)._built.narrowed == 0
 
 
 def test_feature_width_narrows_next_to_grooves_not_on_noise():
@@ -337,6 +336,8 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
     assert meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin")._built.narrowed == 0
     narrowed = meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin", feature_width=True)
     assert narrowed._built.narrowed > 0.5 and "(feature size)" in repr(narrowed)
+    # the build's semidefinite check ran on the narrowed pencil, and passed
+    assert narrowed.quadrature == "galerkin" and narrowed.psd_margin > -1e-6
     with pytest.raises(MeshError, match="feature_width must be"):
         meshlap.laplacian(V, F, feature_width="yes")
     with pytest.raises(MeshError, match="not with quadrature='vertex'"):

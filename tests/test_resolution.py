@@ -174,6 +174,7 @@ def test_creases_are_found_and_warned():
     op, warned = build(meshlap.laplacian, V, F)
     r = op.resolution
     assert op.quadrature == "galerkin" and warned and r.creases > 0.3 and 0.08 < op._built.narrowed < 0.2
+    assert op.psd_margin is not None and op.psd_margin > -1e-6  # checked on the narrowed pencil
     assert 0.1 < r.shortcuts < 0.25 and 0.002 < r.thin < 0.01
     assert 2 * r.fem_error < r.predicted_error < 8 * r.fem_error
     assert "too coarse" in repr(r) and "use instead: meshlap.baselines.cotangent" in repr(r)
