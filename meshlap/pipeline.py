@@ -80,6 +80,9 @@ class Options:
     #: the Galerkin pencil's tolerance: ``tol`` when given, else 1e-8 (at 1e-6 its short-cut
     #: test moves spot's eigenvalue 5 by 8% of its error, issue 19)
     pencil_tol: float = DEFAULT_TOL
+    #: the Galerkin pencil's width narrower next to creases and on thin parts
+    #: (:mod:`meshlap.corrections.features`): None where its width is automatic
+    feature_width: bool | None = None
 
     @property
     def plain(self) -> bool:
@@ -92,7 +95,8 @@ class Options:
                 neumann: bool | None = None, curvature_limit: float | None = None,
                 check_psd: bool = True, matrix_free: bool = False, tol: float | None = None,
                 exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
-                pointwise_degree: int | None = None, quadrature: str | None = None) -> Options:
+                pointwise_degree: int | None = None, quadrature: str | None = None,
+                feature_width: bool | None = None) -> Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         pencil_tol = DEFAULT_TOL if tol is None else tol
@@ -149,6 +153,12 @@ class Options:
             if matrix_free or adaptive or np.ndim(h) == 1:
                 raise MeshError("quadrature='galerkin' uses one h and stores S: not with matrix_free, "
                                 "adaptive or a per-point h")
+        if feature_width is not None and not isinstance(feature_width, bool):
+            raise MeshError(f"feature_width must be True, False or None; "
+                            f"got {feature_width!r}")
+        if feature_width and quadrature == "vertex":
+            raise MeshError("feature_width narrows the Galerkin pencil's kernel: "
+                            "not with quadrature='vertex'")
         from .assembly import available_memory
 
         return cls(correction, arc_distance, pointwise, neumann, bool(adaptive), float(curvature_limit),
@@ -156,7 +166,7 @@ class Options:
                    int(available_memory() * 0.8) if max_memory is None
                    else int(check_positive(max_memory, "max_memory")),
                    None if pointwise_degree is None else int(pointwise_degree), quadrature,
-                   0.0 if exact else check_tol(pencil_tol))
+                   0.0 if exact else check_tol(pencil_tol), feature_width)
 
 
 @dataclass
@@ -180,6 +190,7 @@ class Built:
     galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
     shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
     thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
+    narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -241,10 +252,18 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     # quadrature points within the Galerkin kernel's cut-off
     boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
-    folds = gal.creases(geo.points, tri) if geo.faces is not None and geo.ambient_dim == 3 else None
+    surface = geo.faces is not None and geo.ambient_dim == 3
+    folds = gal.creases(geo.points, tri) if surface else None
+    hv = None
+    # the feature width where the width is automatic (an explicit h, as the smoothing flow's, is
+    # kept), never on noise: its fake creases and opposite sides would narrow it
+    if surface and opts.feature_width is not False and (widths.h_auto or opts.feature_width) \
+            and gal.shape_measures(geo.points, tri)[1] <= gal.AUTO_MAX_ROUGHNESS:
+        grooves = gal.creases(geo.points, tri, concave=True)
+        hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
     info: dict = {}
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
-                               tol=opts.pencil_tol, guard=guard, info=info)
+                               tol=opts.pencil_tol, guard=guard, info=info, h_vertex=hv)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if dog and opts.check_psd:
@@ -256,6 +275,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
             return  # the vertex pencil stays
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
+    out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
     out.shortcuts = info.get("shortcuts", 0.0)
     normals = geo.normals() if geo.faces is not None and geo.ambient_dim == 3 else None
     if normals is not None:

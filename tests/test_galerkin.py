@@ -11,7 +11,7 @@ from scipy.sparse.linalg import eigsh
 
 import meshlap
 from meshlap import MeshError, shapes, spectral
-from meshlap.corrections import galerkin
+from meshlap.corrections import features, galerkin
 
 
 def _err(lam, ref):
@@ -264,3 +264,81 @@ def test_pairs_through_the_air_are_dropped():
     # the regime test reads a quantile: fandisk's 2 longest of 38,838 edges (2.64 mean edges) pass
     Vf, Ff = igl.read_triangle_mesh("tests/data/fandisk.obj")
     assert galerkin.wins(meshlap.geometry.from_mesh(Vf, Ff))
+
+
+def test_split_points_exact_for_quadratics_and_unsplit_as_before():
+    P = np.array([[0.0, 0, 0], [2, 0, 0], [0, 1, 0]])
+    for s in (1, 2, 3):
+        X, W, Phi, face, corner = galerkin.split_points(P, np.array([[0, 1, 2]]), np.array([s]))
+        assert len(X) == 3 * s * s and np.allclose(Phi @ P, X) and (face == 0).all()
+        assert abs(W @ X[:, 0] ** 2 - 2 / 3) < 1e-12  # ∫x² over the triangle of area 1
+        assert (corner == Phi.toarray().argmax(axis=1)).all()
+    V, F = shapes.sphere(300, seed=0)
+    X0, W0, Phi0 = galerkin.quadrature_points(V, F)
+    X1, W1, Phi1, _, corner = galerkin.split_points(V, F, np.ones(len(F), dtype=int))
+    assert (X0 == X1).all() and (W0 == W1).all() and (Phi0 != Phi1).nnz == 0 and (corner == F.ravel()).all()
+
+
+def test_feature_width_pencil_symmetric_rows_sum_to_zero_semidefinite():
+    # the cube surface's creases (convex: the default leaves them, here passed to narrow): the
+    # width is the floor on a crease, grows with the distance to it, h beyond 1 width; the
+    # triangles there are cut in 4; S symmetric with zero row sums, -S semidefinite
+    V, F = _cube_surface(6)
+    g = meshlap.geometry.from_mesh(V, F)
+    h = galerkin.H_SCALE * g.spacing**2
+    folds = galerkin.creases(V, F)
+    hv = features.feature_widths(V, g.normals(), folds, h, crease=1.0)
+    d = features.crease_distance(V, folds, np.inf)
+    assert np.allclose(hv[d < 1e-9], features.FEATURE_FLOOR * h)
+    far = d > math.sqrt(2 * h)
+    assert far.sum() > 20 and (hv[far] == h).all()
+    order = np.argsort(d, kind="stable")
+    assert (np.diff(hv[order]) >= -1e-15).all()
+    info = {}
+    S, m = galerkin.galerkin_pencil(V, F, h, 2, crease_edges=folds, info=info, h_vertex=hv)
+    assert info["points"] > 3 * len(F)
+    assert abs(S - S.T).max() < 1e-12 * abs(S).max()
+    assert np.abs(S @ np.ones(len(V))).max() < 1e-9 * abs(S).max()
+    lam = sla.eigh(-S.toarray(), np.diag(m), eigvals_only=True)
+    assert lam[0] > -1e-10 * lam[-1]
+    # the default narrows next to concave creases only: the cube's are convex (across them
+    # the unfolded distance is exact), it has no thin part, and keeps one width
+    assert galerkin.creases(V, F, concave=True).shape == (0, 2)
+    assert meshlap.laplacian(V, F)._built.narrowed == 0
+
+
+def test_feature_width_narrows_next_to_grooves_not_on_noise():
+    # fandisk: its 115 concave creases (of 700) narrow the width on 12% of its area
+    Vf, Ff = igl.read_triangle_mesh("tests/data/fandisk.obj")
+    g = meshlap.geometry.from_mesh(Vf, Ff)
+    h = galerkin.H_SCALE * g.spacing**2
+    grooves = galerkin.creases(Vf, Ff, concave=True)
+    assert 50 < len(grooves) < 200 and len(galerkin.creases(Vf, Ff)) > 500
+    hv = features.feature_widths(Vf, g.normals(), grooves, h)
+    near = features.crease_distance(Vf, grooves, 0.5 * math.sqrt(2 * h)) < np.inf
+    assert near.any() and (hv[near] < h).all() and 0.05 < (hv < h).mean() < 0.3
+    # the 0.5% radial noise of bench_spectra's noisy sphere makes fake creases: ungated, the
+    # width would narrow on a quarter of the sphere (89% at 16,000 vertices); the build's
+    # noise gate narrows nothing
+    V, F = shapes.sphere(2000, kind="random", seed=0)
+    noisy = V * (1 + 0.005 * np.random.default_rng(1).standard_normal((len(V), 1)))
+    gn = meshlap.geometry.from_mesh(noisy, F)
+    hn = galerkin.H_SCALE * gn.spacing**2
+    fake = features.feature_widths(noisy, gn.normals(), galerkin.creases(noisy, F, concave=True), hn)
+    assert (fake < hn).mean() > 0.2
+    op = meshlap.laplacian(noisy, F, quadrature="galerkin")
+    assert op.quadrature == "galerkin" and op._built.narrowed == 0 and "feature size" not in repr(op)
+    off = meshlap.laplacian(noisy, F, quadrature="galerkin", feature_width=False)
+    assert (op.L_sym != off.L_sym).nnz == 0
+    # an explicit h (the smoothing flow's) keeps one width unless asked
+    Vt, Ft = shapes.torus(300, seed=0)  # its tube is 2.5 kernel widths across at h = 0.5 ē²
+    ht = galerkin.H_SCALE * meshlap.geometry.from_mesh(Vt, Ft).spacing**2
+    assert meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin")._built.narrowed == 0
+    narrowed = meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin", feature_width=True)
+    assert narrowed._built.narrowed > 0.5 and "(feature size)" in repr(narrowed)
+    # the build's semidefinite check ran on the narrowed pencil, and passed
+    assert narrowed.quadrature == "galerkin" and narrowed.psd_margin > -1e-6
+    with pytest.raises(MeshError, match="feature_width must be"):
+        meshlap.laplacian(V, F, feature_width="yes")
+    with pytest.raises(MeshError, match="not with quadrature='vertex'"):
+        meshlap.laplacian(V, F, feature_width=True, quadrature="vertex")

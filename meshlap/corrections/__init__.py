@@ -6,7 +6,8 @@
   point-wise rows exact for quadratics (what ``op @ f`` applies);
 * :mod:`~meshlap.corrections.galerkin`: the symmetric pencil from the kernel integrated over
   the cells with the hat functions, for coarse meshes and curves (``quadrature="galerkin"``),
-  without the pairs :mod:`~meshlap.corrections.shortcuts` finds through the air;
+  without the pairs :mod:`~meshlap.corrections.shortcuts` finds through the air, its width
+  narrower next to creases and on thin parts (:mod:`~meshlap.corrections.features`);
 * :mod:`~meshlap.corrections.psd`: the semidefiniteness check of the Richardson kernel, with
   the plain kernel as its fallback;
 * :mod:`~meshlap.corrections.highorder` and :mod:`~meshlap.corrections.rowchoice`: point-wise
@@ -17,9 +18,9 @@ The Richardson (difference of Gaussians) kernel itself is a kernel choice, made 
 :mod:`meshlap.assembly`.
 """
 
-from . import galerkin, highorder, images, moments, psd, rowchoice, shortcuts
+from . import features, galerkin, highorder, images, moments, psd, rowchoice, shortcuts
 from .images import neumann_images
 from .moments import moment_correction, second_moment_scale
 
-__all__ = ["galerkin", "highorder", "images", "moment_correction", "moments", "neumann_images", "psd",
-           "rowchoice", "second_moment_scale", "shortcuts"]
+__all__ = ["features", "galerkin", "highorder", "images", "moment_correction", "moments", "neumann_images",
+           "psd", "rowchoice", "second_moment_scale", "shortcuts"]

@@ -24,10 +24,10 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from .._jit import in_blocks, jit
 from ..assembly._intrinsics import zero_row_sum
+from .features import thickness
 
 __all__ = ["SHORTCUT_RATIO", "THIN_WIDTHS", "drop_shortcuts", "thin_fraction"]
 
@@ -88,7 +88,8 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
 
 
 def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, radius: float,
-                   ratio: float | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
+                   ratio: float | None = None, face: np.ndarray | None = None,
+                   corner: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The kernel operator on the quadrature points of a triangle mesh without its short cuts.
 
     Parameters
@@ -106,6 +107,9 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
         The kernel's cut-off: no pair is farther apart.
     ratio : float, optional
         The path over the chord beyond which a pair is dropped; :data:`SHORTCUT_RATIO` by default.
+    face, corner : (q,) int ndarray, optional
+        Each point's triangle and its vertex of largest weight at the point, for points other than
+        three per triangle (:func:`meshlap.corrections.galerkin.split_points`).
 
     Returns
     -------
@@ -134,10 +138,12 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
     length = np.linalg.norm(P[edges[:, 0]] - P[edges[:, 1]], axis=1)
     both = np.r_[edges, edges[:, ::-1]]
     A = sp.csr_matrix((np.r_[length, length], (both[:, 0], both[:, 1])), shape=(n, n))
-    corner = np.ascontiguousarray(tri.ravel())
+    if corner is None:
+        face, corner = np.repeat(np.arange(len(tri)), 3), tri.ravel()
+    corner = np.ascontiguousarray(corner, dtype=np.int64)
     order = np.argsort(corner, kind="stable")
     vptr = np.r_[0, np.cumsum(np.bincount(corner, minlength=n))].astype(np.int64)
-    slack = np.repeat(longest, 3)
+    slack = longest[face]
     limit = ratio * radius + 2.0 * float(longest.max())
     out = sp.csr_matrix(Lq, dtype=np.float64, copy=True)
     hit = np.zeros(len(X), dtype=np.bool_)
@@ -164,16 +170,7 @@ def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: f
     >>> thin_fraction(V, geo.normals(), geo.mass, 0.1), thin_fraction(V, geo.normals(), geo.mass, 1.0)
     (0.0, 1.0)
     """
-    pairs = cKDTree(P).query_pairs(THIN_WIDTHS * width, output_type="ndarray")
-    if not len(pairs):
-        return 0.0
-    i, j = pairs[:, 0], pairs[:, 1]
-    d = P[j] - P[i]
-    reach = np.linalg.norm(d, axis=1) * math.cos(math.pi / 4)
-    across = (((normals[i] * normals[j]).sum(axis=1) < -0.5) & (np.abs((d * normals[i]).sum(axis=1)) > reach)
-              & (np.abs((d * normals[j]).sum(axis=1)) > reach))
-    thin = np.zeros(len(P), dtype=bool)
-    thin[i[across]] = thin[j[across]] = True
+    thin = np.isfinite(thickness(P, normals, THIN_WIDTHS * width))
     if separated is not None:
         thin &= ~separated
     return float(mass[thin].sum() / mass.sum())
