@@ -76,7 +76,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
-from ._fit_kernel import copy_rows
+from ._fit_kernel import copy_rows, neighbour_medians
 from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
@@ -252,16 +252,22 @@ def _local_noise(resid: np.ndarray, nb: np.ndarray, comm: Any, own: np.ndarray, 
         return np.full(len(resid), float(noise)), typical
     if typical is None:
         return np.zeros(len(resid)), None
+    # an all-NaN neighbourhood takes the typical level
     finite = np.where(np.isfinite(resid), resid, np.nan)
-    with warnings.catch_warnings():  # an all-NaN neighbourhood takes the typical level
-        warnings.simplefilter("ignore", RuntimeWarning)
-        return np.nan_to_num(np.nanmedian(finite[nb], axis=1), nan=typical), typical
+    return np.nan_to_num(_medians(finite, nb, True), nan=typical), typical
+
+
+def _medians(values: np.ndarray, nb: np.ndarray, skip_nan: bool) -> np.ndarray:
+    # np.nanmedian(values[nb], axis=1) (skip_nan) or np.median, the same numbers compiled
+    out = np.empty(len(nb))
+    neighbour_medians(np.ascontiguousarray(values, dtype=np.float64), nb, skip_nan, out)
+    return out
 
 
 def _scale(fit: RowFit, nb: np.ndarray, k: int, d: int, diameter: float, spacing: float) -> np.ndarray:
     # ℓ = 1/κ, κ the median of the fit's curvature over the neighbours, from 4 spacings to the
     # diameter (a volume, k = d, has no curvature: the diameter)
-    kappa = np.median(fit.curvature[nb], axis=1) if k < d else np.zeros(len(nb))
+    kappa = _medians(fit.curvature, nb, False) if k < d else np.zeros(len(nb))
     return np.maximum(np.minimum(1.0 / np.maximum(kappa, 1e-300), diameter), 4.0 * spacing)
 
 
@@ -439,7 +445,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         curv_fit = _candidate(P, idx_c, dist_c, 2, _C_WIDE, k, normals, everyone, noise_dof=False)
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
-    scale = _scale(curv_fit, nb, k, d, diameter, spacing)
+    scale = first_scale if curv_fit is noise_fit[0] else _scale(curv_fit, nb, k, d, diameter, spacing)
 
     best = np.full(n, np.inf)
     pick = np.full(n, -1)
