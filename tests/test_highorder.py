@@ -336,3 +336,15 @@ def test_neighbour_medians_are_numpys():
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 np.testing.assert_array_equal(out, numpy_median(v[nb], axis=1))
+
+
+def test_fit_rows_in_any_order_are_the_same_rows():
+    P = shapes.fibonacci_sphere(500)
+    indptr, indices, dist = highorder.knn_pattern(P, 30)
+    h = dist.reshape(500, 30)[:, -1] ** 2 / 48
+    plain = highorder.fit_rows(P, indptr, indices, h, (4, 2))
+    order = np.random.default_rng(0).permutation(500)
+    for a, b in zip(plain, highorder.fit_rows(P, indptr, indices, h, (4, 2), order=order), strict=True):
+        assert np.array_equal(a.matrix.data, b.matrix.data) and np.array_equal(a.residual, b.residual)
+    with pytest.raises(MeshError, match="permutation"):
+        highorder.fit_rows(P, indptr, indices, h, (4,), order=np.zeros(500, dtype=int))

@@ -115,7 +115,7 @@ def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
 
 
 @jit()
-def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
+def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
           targets, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
     # Cholesky factor of a leading block is the leading block of the factor); outputs by target
@@ -135,7 +135,8 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     # two dimensions only: each other allocation, np.ones or a third dimension, is one more
     # numba overload to compile)
     Kb = 0
-    for r in range(start, stop):
+    for i in range(start, stop):
+        r = order[i]
         Kb = max(Kb, indptr[r + 1] - indptr[r])
     # Vandermonde with two more degrees, for the probes of the error model; stored by
     # monomial (rows contiguous over the neighbours, for the sums over them)
@@ -164,7 +165,8 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     t = np.empty(k)
     lam = np.empty(m)
     acc = np.empty(Kb)
-    for r in range(start, stop):
+    for o in range(start, stop):  # row r = order[o]: the caller's order, for the memory's sake
+        r = order[o]
         w = centers[r]
         a0 = indptr[r]
         K = indptr[r + 1] - a0
