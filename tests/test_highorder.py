@@ -3,6 +3,7 @@ width and degree (meshlap.corrections.rowchoice). Tolerances are about twice the
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -288,3 +289,62 @@ def test_noise_level_is_the_weighted_residual_over_the_fits_degrees_of_freedom()
         assert abs(fit.residual[w] / math.sqrt((th * r * r).sum() / dof) - 1) < 1e-8
     # and the estimate is the noise: 0.01 within its spread over 500 points
     assert abs(np.median(fit.residual) / 0.01 - 1) < 0.15
+
+
+# -- the same rows as before --------------------------------------------------------------------
+def test_rows_pinned_to_the_previous_implementation():
+    # choose_rows on a clean sphere (degree 6 everywhere) and a slightly noisy one (degrees 6, 4
+    # and 2 on every compact width), against values the code before the compiled fit was
+    # reorganised computed (tests/data/README.md); that change kept every sum's order, so the
+    # rows agreed bit for bit here, and a tolerance far below the rows' own error (1e-4) allows
+    # only for another CPU's rounding of the vectorized Gram sums
+    ref = np.load(Path(__file__).parent / "data" / "rowchoice_reference.npz")
+    for name in ("clean", "mixed"):
+        P = ref[f"{name}_points"]
+        L, choice = rowchoice.choose_rows(P)
+        x, y, z = P.T
+        Lf = L @ np.column_stack([x * x, np.exp(x), np.sin(x + 2 * y) * z])
+        np.testing.assert_array_equal(choice.degree, ref[f"{name}_degree"])
+        np.testing.assert_array_equal(choice.neighbors, ref[f"{name}_neighbors"])
+        scale = np.abs(ref[f"{name}_Lf"]).max()
+        np.testing.assert_allclose(Lf, ref[f"{name}_Lf"], rtol=1e-7, atol=1e-7 * scale)
+        for field in ("h", "scale", "predicted"):
+            np.testing.assert_allclose(getattr(choice, field), ref[f"{name}_{field}"], rtol=1e-7)
+        if name == "clean":  # its noise level is rounding (1e-5 of the spacing): only its size
+            assert choice.noise.max() < 1e-3 * choice.spacing
+        else:
+            np.testing.assert_allclose(choice.noise, ref[f"{name}_noise"], rtol=1e-7)
+
+
+def test_neighbour_medians_are_numpys():
+    # the compiled medians of the noise level and the scale: the numbers of np.nanmedian and
+    # np.median, NaN, infinities and ties included
+    from meshlap.corrections._fit_kernel import neighbour_medians
+
+    rng = np.random.default_rng(0)
+    for t in range(60):
+        v = rng.standard_normal(300) * 10.0 ** rng.integers(-12, 3)
+        v[rng.random(300) < 0.3 * (t % 2)] = np.nan
+        v[rng.random(300) < 0.1 * (t % 3 == 0)] = np.inf
+        v[rng.random(300) < 0.1 * (t % 5 == 0)] = -np.inf
+        if t % 7 == 0:
+            v = np.round(v)
+        nb = rng.integers(0, 300, (300, int(rng.integers(1, 17))))
+        for skip, numpy_median in ((True, np.nanmedian), (False, np.median)):
+            out = np.empty(300)
+            neighbour_medians(v, nb, skip, out)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                np.testing.assert_array_equal(out, numpy_median(v[nb], axis=1))
+
+
+def test_fit_rows_in_any_order_are_the_same_rows():
+    P = shapes.fibonacci_sphere(500)
+    indptr, indices, dist = highorder.knn_pattern(P, 30)
+    h = dist.reshape(500, 30)[:, -1] ** 2 / 48
+    plain = highorder.fit_rows(P, indptr, indices, h, (4, 2))
+    order = np.random.default_rng(0).permutation(500)
+    for a, b in zip(plain, highorder.fit_rows(P, indptr, indices, h, (4, 2), order=order), strict=True):
+        assert np.array_equal(a.matrix.data, b.matrix.data) and np.array_equal(a.residual, b.residual)
+    with pytest.raises(MeshError, match="permutation"):
+        highorder.fit_rows(P, indptr, indices, h, (4,), order=np.zeros(500, dtype=int))

@@ -13,6 +13,33 @@ PIVOT_TOL = 1e-11
 
 
 @jit()
+def _covariance3(P, nbr, th, tot, mean, C):  # pragma: no cover - compiled
+    # _frame's weighted mean and covariance in three dimensions: the same sums in the same order
+    # (the same numbers), side by side in registers, where the general loops keep one running
+    # sum at a time or keep them in memory
+    s0 = s1 = s2 = 0.0
+    for j in range(len(nbr)):
+        p = nbr[j]
+        s0 += th[j] * P[p, 0]
+        s1 += th[j] * P[p, 1]
+        s2 += th[j] * P[p, 2]
+    m0, m1, m2 = s0 / tot, s1 / tot, s2 / tot
+    mean[0], mean[1], mean[2] = m0, m1, m2
+    c00 = c10 = c11 = c20 = c21 = c22 = 0.0
+    for j in range(len(nbr)):
+        p = nbr[j]
+        x0, x1, x2 = P[p, 0] - m0, P[p, 1] - m1, P[p, 2] - m2
+        t = th[j]
+        c00 += t * x0 * x0
+        c10 += t * x1 * x0
+        c11 += t * x1 * x1
+        c20 += t * x2 * x0
+        c21 += t * x2 * x1
+        c22 += t * x2 * x2
+    C[0, 0], C[1, 0], C[1, 1], C[2, 0], C[2, 1], C[2, 2] = c00, c10, c11, c20, c21, c22
+
+
+@jit()
 def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no cover - compiled
     # B: orthonormal rows, the first k tangent, the rest normal; C, vec (d × d), ev, v (d) scratch
     d = P.shape[1]
@@ -50,19 +77,22 @@ def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no c
     for j in range(len(nbr)):
         tot += th[j]
     mean = v
-    for a in range(d):
-        s = 0.0
-        for j in range(len(nbr)):
-            s += th[j] * P[nbr[j], a]
-        mean[a] = s / tot
-    for a in range(d):
-        for b in range(d):
-            C[a, b] = 0.0
-    for j in range(len(nbr)):
+    if d == 3:
+        _covariance3(P, nbr, th, tot, mean, C)
+    else:
         for a in range(d):
-            xa = P[nbr[j], a] - mean[a]
-            for b in range(a + 1):
-                C[a, b] += th[j] * xa * (P[nbr[j], b] - mean[b])
+            s = 0.0
+            for j in range(len(nbr)):
+                s += th[j] * P[nbr[j], a]
+            mean[a] = s / tot
+        for a in range(d):
+            for b in range(d):
+                C[a, b] = 0.0
+        for j in range(len(nbr)):
+            for a in range(d):
+                xa = P[nbr[j], a] - mean[a]
+                for b in range(a + 1):
+                    C[a, b] += th[j] * xa * (P[nbr[j], b] - mean[b])
     for a in range(d):
         for b in range(a):
             C[b, a] = C[a, b]
@@ -85,7 +115,7 @@ def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
 
 
 @jit()
-def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
+def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
           targets, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
     # Cholesky factor of a leading block is the leading block of the factor); outputs by target
@@ -105,7 +135,8 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     # two dimensions only: each other allocation, np.ones or a third dimension, is one more
     # numba overload to compile)
     Kb = 0
-    for r in range(start, stop):
+    for i in range(start, stop):
+        r = order[i]
         Kb = max(Kb, indptr[r + 1] - indptr[r])
     # Vandermonde with two more degrees, for the probes of the error model; stored by
     # monomial (rows contiguous over the neighbours, for the sums over them)
@@ -117,8 +148,8 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     m = count[degree]
     X = np.empty((Kb, d))
     th = np.empty(Kb)
-    U = np.empty((Kb, k))
-    Z = np.empty((Kb, nc))
+    U = np.empty((k, Kb))  # by coordinate: contiguous over the neighbours
+    Z = np.empty((nc, Kb))
     Phi = np.empty((mb, Kb))
     W = np.empty((m, Kb))
     Y = np.empty((m, Kb))
@@ -127,12 +158,15 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
     ag = np.empty((nc, k))
     gh = np.empty((nc * k, k))
     coef = np.empty(m)
+    bz = np.empty((nc, m))
     zr = np.empty(Kb)
     lev = np.empty(Kb)
+    yi = np.empty(Kb)
     t = np.empty(k)
     lam = np.empty(m)
     acc = np.empty(Kb)
-    for r in range(start, stop):
+    for o in range(start, stop):  # row r = order[o]: the caller's order, for the memory's sake
+        r = order[o]
         w = centers[r]
         a0 = indptr[r]
         K = indptr[r + 1] - a0
@@ -155,25 +189,34 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                 for a in range(d):
                     s += X[j, a] * B[b, a]
                 if b < k:
-                    U[j, b] = s
+                    U[b, j] = s
                     s2 += s * s
                 else:
-                    Z[j, b - k] = s
+                    Z[b - k, j] = s
             rho2 = max(rho2, s2)
         rho = math.sqrt(rho2) if rho2 > 0.0 else 1.0
-        for j in range(K):
-            for b in range(k):
-                U[j, b] /= rho
+        for b in range(k):
+            for j in range(K):
+                U[b, j] /= rho
         for j in range(K):
             Phi[0, j] = 1.0
         for al in range(1, mb):
             pa, va = parent[al], var[al]
             for j in range(K):
-                Phi[al, j] = Phi[pa, j] * U[j, va]
+                Phi[al, j] = Phi[pa, j] * U[va, j]
         for al in range(m):
             for j in range(K):
                 W[al, j] = th[j] * Phi[al, j]
         _gram(W, Phi, m, K, G)
+        # the right-hand sides of the height fits, Σ_j W_αj z_j, for every degree at once: each
+        # sum in the order of the neighbours, the m of them side by side
+        for c in range(nc):
+            for al in range(m):
+                bz[c, al] = 0.0
+            for j in range(K):
+                zj = Z[c, j]
+                for al in range(m):
+                    bz[c, al] += W[al, j] * zj
         for al in range(m):  # a pivot must stay above this fraction of its diagonal entry
             floor[al] = PIVOT_TOL * G[al, al]
         good = cholesky(G, m, floor)
@@ -194,17 +237,14 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
             res = 0.0
             for c in range(nc):
                 for al in range(mq):
-                    s = 0.0
-                    for j in range(K):
-                        s += W[al, j] * Z[j, c]
-                    coef[al] = s
+                    coef[al] = bz[c, al]
                 chol_solve(G, coef, mq)
                 for i in range(k):
                     ag[c, i] = coef[idx1[i]] / rho
                     for jj in range(k):
                         gh[c * k + i, jj] = coef[idx2[i, jj]] * (2.0 if i == jj else 1.0) / rho2
                 for j in range(K):
-                    zr[j] = Z[j, c]
+                    zr[j] = Z[c, j]
                 for al in range(mq):
                     ca = coef[al]
                     for j in range(K):
@@ -222,14 +262,14 @@ def _rows(start, stop, P, centers, indptr, indices, hv, normals, use_normals, k,
                     lev[j] = 0.0
                 for i in range(mq):
                     for j in range(K):
-                        Y[i, j] = Phi[i, j]
-                    for q2 in range(i):
+                        yi[j] = Phi[i, j]
+                    for q2 in range(i):  # (into yi: a row of Y of its own, the loop vectorizes)
                         g = G[i, q2]
                         for j in range(K):
-                            Y[i, j] -= g * Y[q2, j]
+                            yi[j] -= g * Y[q2, j]
                     g = G[i, i]
                     for j in range(K):
-                        Y[i, j] = Y[i, j] / g
+                        Y[i, j] = yi[j] / g
                         lev[j] += Y[i, j] * Y[i, j]
                 for j in range(K):
                     dof += th[j] - th[j] * th[j] * lev[j]
@@ -320,3 +360,33 @@ def copy_rows(rows, src_indptr, src_indices, src_data, indptr, indices, data):  
         for i in range(src_indptr[r + 1] - a):
             indices[b + i] = src_indices[a + i]
             data[b + i] = src_data[a + i]
+
+
+@jit()
+def neighbour_medians(values, nb, skip_nan, out):  # pragma: no cover - compiled
+    # out[i] = np.median(values[nb[i]]), or with skip_nan np.nanmedian (NaN where all are NaN):
+    # the same numbers (the middle one, or the two middle ones' sum halved) without the
+    # masked arrays nanmedian takes for short rows (5x slower than median)
+    w = nb.shape[1]
+    buf = np.empty(w)
+    for i in range(len(out)):
+        c = 0
+        nan = False
+        for j in range(w):
+            x = values[nb[i, j]]
+            if x != x:
+                nan = True
+                continue
+            # insertion sort: a row holds a few neighbours
+            p = c
+            while p > 0 and buf[p - 1] > x:
+                buf[p] = buf[p - 1]
+                p -= 1
+            buf[p] = x
+            c += 1
+        if c == 0 or (nan and not skip_nan):
+            out[i] = np.nan
+        elif c % 2:
+            out[i] = buf[c // 2]
+        else:
+            out[i] = (buf[c // 2 - 1] + buf[c // 2]) / 2.0

@@ -1,0 +1,94 @@
+"""The fitted point-wise rows (`meshlap.corrections.rowchoice.choose_rows`, the default's
+`pointwise="fit"` stage) of this checkout against another version's, in one process.
+
+    git archive dd61feb | tar -x -C /tmp/base      # the version to compare with
+    python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --repeat 7
+    python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --noise 0.01
+
+The base's three modules of the stage (rowchoice, highorder, _fit_kernel) are loaded under
+other names beside this checkout's, everything else shared; the two are run alternately on
+`meshlap.shapes.sphere(n, kind="random", seed=0)` (radial noise of the given level, seed 1),
+best of ``--repeat`` by CPU time (`time.process_time`: other processes' load counts less),
+each stage timed through the progress callback. It prints whether the two gave the same L
+and `RowChoice`, bit for bit. Prints only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import importlib.util
+import re
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+
+import meshlap
+from meshlap.corrections import rowchoice
+
+MODULES = ("_fit_kernel", "highorder", "rowchoice")  # in the order they import each other
+
+
+def load_base(root: Path):
+    """The base's rowchoice module, its relative imports made absolute (the stage's own modules
+    as base_*, the rest of meshlap as this checkout's)."""
+    for name in MODULES:
+        src = (root / "meshlap" / "corrections" / f"{name}.py").read_text()
+        src = re.sub(r"^from \.\.(\w*) import", r"from meshlap.\1 import", src, flags=re.M)
+        src = re.sub(r"^from \.(_fit_kernel|highorder) import", r"from base_\1 import", src, flags=re.M)
+        # numba caches compiled functions by their file: the rewritten modules get files of their own
+        tag = hashlib.sha1(str(root.resolve()).encode()).hexdigest()[:12]
+        path = Path(tempfile.gettempdir()) / f"meshlap-base-{tag}" / f"base_{name}.py"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not path.exists() or path.read_text() != src:
+            path.write_text(src)
+        spec = importlib.util.spec_from_file_location(f"base_{name}", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[f"base_{name}"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["base_rowchoice"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", type=Path, required=True, help="a tree of the version to compare with")
+    ap.add_argument("--n", type=int, default=16000)
+    ap.add_argument("--noise", type=float, default=0.0, help="radial noise, relative to the radius")
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    V = meshlap.shapes.sphere(args.n, kind="random", seed=0)[0]
+    if args.noise:
+        V = V * (1 + args.noise * np.random.default_rng(1).standard_normal(len(V)))[:, None]
+    versions = {"base": load_base(args.base), "this": rowchoice}
+    for module in versions.values():
+        module.choose_rows(V[:2000])  # compiles or loads the kernels
+    best, stages, out = {}, {}, {}
+    for _ in range(args.repeat):
+        for name, module in versions.items():
+            marks = []
+            t = time.process_time()
+            out[name] = module.choose_rows(V, progress=lambda stage, marks=marks: marks.append(
+                (stage, time.process_time())))
+            cpu = time.process_time() - t
+            if cpu < best.get(name, np.inf):
+                best[name] = cpu
+                ends = [m[1] for m in marks[1:]] + [t + cpu]
+                stages[name] = {stage: b - a for (stage, a), b in zip(marks, ends, strict=True)}
+    (La, ca), (Lb, cb) = out["base"], out["this"]
+    same_l = all(np.array_equal(getattr(La, a), getattr(Lb, a)) for a in ("data", "indices", "indptr"))
+    same_c = all(np.array_equal(getattr(ca, a), getattr(cb, a))
+                 for a in ("degree", "neighbors", "h", "noise", "scale", "predicted"))
+    print(f"n = {args.n:,}, noise {args.noise}, {numba.get_num_threads()} threads, CPU s, "
+          f"best of {args.repeat}: "
+          f"base {best['base']:.3f}, this {best['this']:.3f}, base / this {best['base'] / best['this']:.2f}; "
+          f"L identical: {same_l}, RowChoice identical: {same_c}")
+    for name in versions:
+        print(f"  {name}: " + ", ".join(f"{stage} {cpu:.3f}" for stage, cpu in stages[name].items()))
+
+
+if __name__ == "__main__":
+    main()
