@@ -80,7 +80,9 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     # threads (meshlap._jit); one specialization per kernel: none compiled twice
     assert not [k for k, parallel in kernels if parallel], kernels
     assert len({k for k, _ in kernels}) == len(kernels), kernels
-    assert 1 <= len(out["mesh"]) <= 4 and len(out["cloud"]) <= 3, kernels
+    # the mesh: kernel rows, fitted rows, their copy, their compiled neighbour medians (np.nanmedian
+    # was 5x slower) and the Galerkin pencil's short cuts; the time bound below is what matters
+    assert 1 <= len(out["mesh"]) <= 5 and len(out["cloud"]) <= 3, kernels
     # the frames' eigenvectors and the metric's inverse are hand-written (meshlap._dense):
     # numba's np.linalg.eigh and inv compiled 7 more functions, 2 s of CPU on a busy machine
     assert not out["lapack"], out["lapack"]
