@@ -35,8 +35,7 @@ own residual r exceeds σ̂ by far; the excess is shape the fit misses, it reach
 that size would, so E takes σ̂ + max(r − 2σ̂, 0) in its noise term and counts the excess as
 bias (2σ̂: a residual's own noise estimate fluctuates well within it, so noisy data keep their
 wide rows). With it and compact rows whose weights reach e^{−12} at the K-th neighbour (e^{−8}
-before), the clean spot of bench_pointwise, Δf exact: E2 0.080 → 0.035 (libigl's cotangent
-0.042).
+before), the clean spot of bench_pointwise, Δf exact: E2 0.080 → 0.035 (cotangent: 0.042).
 
 The noise term assumes f sampled at the noisy points (its noise σ|∇f|). A smooth f on a
 noisy surface (the paper's Table 4: f of the clean sphere at the noisy vertices) has none, and
