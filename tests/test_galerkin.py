@@ -342,3 +342,19 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
         meshlap.laplacian(V, F, feature_width="yes")
     with pytest.raises(MeshError, match="not with quadrature='vertex'"):
         meshlap.laplacian(V, F, feature_width=True, quadrature="vertex")
+
+
+def test_short_cuts_dropped_in_place_as_in_a_copy():
+    # a flattened sphere: its two sides closer than the cut-off lose their pairs; copy=False
+    # changes the operator it is given and keeps the same entries as the copy
+    from meshlap.assembly import Kernel, assemble, cutoff_radius
+    from meshlap.corrections.shortcuts import drop_shortcuts
+    V, F = shapes.sphere(500, seed=0)
+    V = V * np.array([1.0, 1.0, 0.05])
+    X, W, _ = galerkin.quadrature_points(V, F)
+    Lq = assemble(X, W, meshlap.widths.Widths(0.01, None, False), Kernel(2))
+    radius = cutoff_radius(0.01, 1e-8)
+    copied, hit = drop_shortcuts(Lq, V, F, X, radius)
+    assert hit.any() and abs(copied - Lq).max() > 0
+    inplace, hit2 = drop_shortcuts(Lq, V, F, X, radius, copy=False)
+    assert (hit2 == hit).all() and abs(inplace - copied).max() == 0 and abs(Lq - copied).max() == 0

@@ -89,7 +89,7 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
 
 def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndarray, radius: float,
                    ratio: float | None = None, face: np.ndarray | None = None,
-                   corner: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
+                   corner: np.ndarray | None = None, copy: bool = True) -> tuple[sp.csr_matrix, np.ndarray]:
     """The kernel operator on the quadrature points of a triangle mesh without its short cuts.
 
     Parameters
@@ -110,11 +110,14 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
     face, corner : (q,) int ndarray, optional
         Each point's triangle and its vertex of largest weight at the point, for points other than
         three per triangle (:func:`meshlap.corrections.galerkin.split_points`).
+    copy : bool, default True
+        False: change a float64 ``Lq`` in place (each row reads only its own entries), one
+        operator less in memory.
 
     Returns
     -------
     Lq : scipy.sparse.csr_matrix
-        A copy, the short cuts' entries zero, rows summing to zero again.
+        The short cuts' entries zero, rows summing to zero again (a copy unless ``copy=False``).
     hit : (3f,) bool ndarray
         The points that lost a pair.
 
@@ -145,7 +148,7 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
     vptr = np.r_[0, np.cumsum(np.bincount(corner, minlength=n))].astype(np.int64)
     slack = longest[face]
     limit = ratio * radius + 2.0 * float(longest.max())
-    out = sp.csr_matrix(Lq, dtype=np.float64, copy=True)
+    out = sp.csr_matrix(Lq, dtype=np.float64, copy=copy)
     hit = np.zeros(len(X), dtype=np.bool_)
     in_blocks(_drop_rows, n, vptr, order.astype(np.int64), A.indptr.astype(np.int64),
               A.indices.astype(np.int64), A.data, out.indptr, out.indices, out.data, corner,
