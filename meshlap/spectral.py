@@ -431,10 +431,11 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=Non
     ordered = _ordered_L(op, P)
     order = slice(None) if ordered is None else ordered[1]
     m = m[order]
+    minus_m = -m
 
     def apply_A(Xp: np.ndarray) -> np.ndarray:
         if ordered is not None:
-            return -m[:, None] * _lobpcg.csr_times(ordered[0], Xp)
+            return _lobpcg.csr_times(ordered[0], Xp, minus_m)
         if full:
             return -m[:, None] * apply_block(op, Xp)
         X = np.zeros((n, Xp.shape[1]))
@@ -461,6 +462,11 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=Non
             # (the same factorization, without ½ D⁻¹), to a residual of _START_TOL
             cb = _lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2)
             Kr = sp.csr_matrix(K)
+            # one step of inverse iteration first: it damps the random block's high frequencies
+            # by their eigenvalue before the first Rayleigh–Ritz step (k = 20, 36, 50 on the 16k
+            # sphere, spot, fandisk and the bunny: 1-3 fewer start iterations, the same LOBPCG
+            # iterations but for 3 of 15 cases, one more)
+            X0 = T.lu.solve(m[:, None] * X0)
             start = _lobpcg.lobpcg(lambda Y: _lobpcg.csr_times(Kr, Y), m, T.lu.solve, X0, k, _START_TOL, 10,
                                    on_values=False, report=cb, cheap=True)
             X0 = start.X[:, :_block_size(start.lam, k, nb) if adapt else nb]
