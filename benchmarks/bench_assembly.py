@@ -377,8 +377,8 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         "",
         f"`meshlap.shapes.sphere({r['n']}, kind='random', seed=0)`; the default `meshlap.laplacian(V, F)` "
         f"(h = {r['h']:.4g}) against the paper's `meshlap.laplacian(V, F, h=h, correction='none')`, "
-        "best of 3 each (by CPU time) after a warm-up, in the same process; the default's stages "
-        "timed by its progress callback. The last two rows are the options that trade the "
+        f"best of {r['repeat']} each (by CPU time) after a warm-up, in the same process; the default's "
+        "stages timed by its progress callback. The last two rows are the options that trade the "
         "accuracy of `op @ f` (relative L2 error against the exact Δ eˣ = (1 − x² − 2x) eˣ on the "
         "unit sphere) for "
         "build time; the symmetric pencil, and so the spectra, is the same in all three.",
