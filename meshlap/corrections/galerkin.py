@@ -306,7 +306,7 @@ def _split_rule(s: int) -> np.ndarray:
 
 def split_points(P: np.ndarray, tri: np.ndarray, split: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, sp.csr_matrix, np.ndarray, np.ndarray]:
-    """The degree-2 rule on every triangle cut into ``split[t]``² equal triangles.
+    """The degree-2 rule on every triangle t cut into split[t]² equal triangles.
 
     A narrow kernel needs more points than the 3 of :func:`quadrature_points` (3 points at
     h = ē²/4 lose 1% on the 4,000-vertex square); with ``split`` all 1 the points, weights
