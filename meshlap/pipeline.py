@@ -277,10 +277,9 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Built,
     out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
     out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
     out.shortcuts = info.get("shortcuts", 0.0)
-    normals = geo.normals() if geo.faces is not None and geo.ambient_dim == 3 else None
-    if normals is not None:
-        out.thin = corrections.shortcuts.thin_fraction(geo.points, normals, geo.mass, float(np.sqrt(2 * h)),
-                                                         info.get("shortcut_vertices"))
+    if surface:
+        out.thin = corrections.shortcuts.thin_fraction(geo.points, geo.normals(), geo.mass,
+                                                       float(np.sqrt(2 * h)), info.get("shortcut_vertices"))
     if not opts.pointwise:
         out.L = L
 
@@ -328,9 +327,9 @@ def build(geo: Geometry, widths: Widths, opts: Options,
             # the Richardson rows also give, while each row is in cache, the moment scale's
             # product and the check's with the constant (on a 16k sphere the moment scale
             # 0.05 -> 0.00 s and the check 0.105 -> 0.085 s, the fill about 0.01 s more)
-            one = corrections.psd.unit_constant(geo.mass)
             times = np.column_stack([corrections.moments.moment_block(geo.points),
-                                     np.full(geo.n_points, one)]) if k.dog else None
+                                     np.full(geo.n_points, corrections.psd.unit_constant(geo.mass))]
+                                    ) if k.dog else None
             free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
                                      progress=None if report is None else (lambda f, s: report(0.6 * f, s)),
                                      times=times)

@@ -276,8 +276,7 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
         parent, var = _recursion(exps)
         targets = np.asarray(degrees, dtype=np.int64)
         order = np.arange(rows) if order is None else np.asarray(order, dtype=np.int64)
-        seen = np.bincount(order.clip(0, rows), minlength=rows + 1)[:rows] if order.shape == (rows,) else None
-        if seen is None or not (seen == 1).all():
+        if order.shape != (rows,) or not np.array_equal(np.sort(order), np.arange(rows)):
             raise MeshError(f"fit_rows: order must be a permutation of the {rows} rows")
         in_blocks(_rows, rows, order, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count,
                   targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)

@@ -292,12 +292,8 @@ def _once(keys: np.ndarray, n: int) -> np.ndarray:
     code = srt[:, 0].astype(np.int64)
     for i in range(1, c):
         code = code * n + srt[:, i]
-    code.sort()
-    same = code[1:] == code[:-1]
-    single = np.ones(len(code), dtype=bool)
-    single[1:] &= ~same
-    single[:-1] &= ~same
-    code = code[single]
+    uniq, counts = np.unique(code, return_counts=True)
+    code = uniq[counts == 1]
     for _ in range(c):
         flag[code % n] = True
         code //= n
