@@ -23,14 +23,22 @@ like size it is about 1/c of the sum of their squares, which ends the iteration 
 (2l+1)-fold eigenvalues one iteration sooner. A relative eigenvalue accuracy ε so needs a
 residual of only about √(ε·θ·δ), not ε·θ: half the iterations for ε = 1e-8.
 
-The product with a stored operator (:func:`csr_times`) splits the rows over numba's threads
-and adds 16 entries of a row per pass over the row's accumulator, in the entries' order: the
-accumulator's load and store per entry, not the reading of the matrix, bounded the plain loop.
+The product with a stored operator (:func:`csr_times`) adds 16 entries of a row per pass over
+the row's accumulator, in the entries' order: the accumulator's load and store per entry, not
+the reading of the matrix, bounded the plain loop. Its rows are shared, in shares of equal
+entries, among meshlap's own threads (:func:`meshlap._jit.each_thread`'s pool), each running
+the compiled loop with one numba thread. numba's OpenMP workers, which a parallel loop on
+numba's threads would use, keep spinning for about 8 ms of CPU after each loop (GNU OpenMP's
+default wait policy): on two cores they took the second core from the dense steps that follow
+each product, and their CPU time counted against the solve. meshlap's threads sleep when idle,
+and the process's threading settings (``OMP_WAIT_POLICY``, numba's threading layer) stay the
+user's.
 
 The products over the long dimension (``A @ B`` with a small B, ``A.T @ B``) share their rows
-among numba's threads (:func:`matmul`, :func:`inner`), BLAS staying on one thread each: a
-threaded BLAS here competes with numba's still-spinning workers (3-10× slower, measured),
-where a share of the rows per thread does not. ``A.T @ B`` adds the products of fixed blocks of
+among the same threads (:func:`matmul`, :func:`inner`), BLAS staying on one thread each: a
+threaded BLAS here competed with the spinning OpenMP workers of the products (3-10× slower,
+measured when the products ran on numba's threads), where a share of the rows per thread
+does not. ``A.T @ B`` adds the products of fixed blocks of
 rows in a fixed order, so that the results do not depend on the number of threads.
 
 The preconditioner factor is a sparse LU in symmetric mode, applied to wide blocks with
@@ -44,6 +52,7 @@ import math
 from collections.abc import Callable
 from typing import NamedTuple
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 from numba import prange
@@ -94,6 +103,9 @@ def _backward(indptr, indices, data, diag, X):  # pragma: no cover - compiled
 _UNROLL = 16
 
 
+# compiled as a parallel loop for the code numba's parfor lowering makes of it (the column loop
+# vectorized; the same loop compiled serially ran 6× slower, measured), but always called with
+# one numba thread, on row shares run by meshlap's own threads (module notes)
 @jit(parallel=True)
 def _spmm(indptr, indices, data, X, Y, scale):  # pragma: no cover - compiled
     n = len(indptr) - 1
@@ -119,10 +131,14 @@ def _spmm(indptr, indices, data, X, Y, scale):  # pragma: no cover - compiled
         Y[i] = acc * scale[i]
 
 
+# products with fewer multiply-adds than this run on the calling thread alone
+_SERIAL_WORK = 1 << 17
+
+
 def csr_times(A: sp.csr_matrix, X: np.ndarray, scale: np.ndarray | None = None) -> np.ndarray:
-    """``A @ X`` for a CSR matrix (rows in any column order) and a block, on numba's threads;
+    """``A @ X`` for a CSR matrix (rows in any column order) and a block, on meshlap's threads;
     with ``scale``, row i of the product times ``scale[i]`` (``diag(scale) @ A @ X``, in the
-    same pass).
+    same pass). Each row is summed by the same code whatever the number of threads.
 
     Examples
     --------
@@ -134,7 +150,25 @@ def csr_times(A: sp.csr_matrix, X: np.ndarray, scale: np.ndarray | None = None) 
     """
     Y = np.empty((A.shape[0], X.shape[1]))
     scale = np.ones(A.shape[0]) if scale is None else np.asarray(scale, dtype=np.float64)
-    _spmm(A.indptr, A.indices, A.data, np.ascontiguousarray(X, dtype=np.float64), Y, scale)
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    indptr = A.indptr
+    threads, _ = _threads()
+    shares = 1 if A.nnz * X.shape[1] < _SERIAL_WORK else threads
+    # row shares of equal entries
+    edges = np.searchsorted(indptr, np.linspace(0, A.nnz, shares + 1), side="left").tolist()
+    edges[0], edges[-1] = 0, A.shape[0]
+
+    def share(a: int, b: int) -> None:
+        was = numba.get_num_threads()
+        numba.set_num_threads(1)  # this thread runs the kernel's loop itself
+        try:
+            for t in range(a, b):
+                lo, hi = edges[t], edges[t + 1]
+                _spmm(indptr[lo:hi + 1], A.indices, A.data, X, Y[lo:hi], scale[lo:hi])
+        finally:
+            numba.set_num_threads(was)
+
+    _in_threads(share, shares, 2)
     return Y
 
 

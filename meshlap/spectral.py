@@ -59,10 +59,10 @@ _START_TOL = 0.1
 
 
 def _one_blas_thread() -> contextlib.AbstractContextManager:
-    """Keep BLAS on one thread while numba's threads run the sparse products.
+    """Keep BLAS on one thread while meshlap's threads share the products' rows.
 
-    The dense steps here are small (n × a few k); a threaded BLAS between two parallel numba
-    regions competes with numba's still-spinning workers and was measured 3-10× slower.
+    The dense steps here are small (n × a few k); a threaded BLAS between two parallel
+    products competed with their spinning OpenMP workers and was measured 3-10× slower.
     """
     try:
         from threadpoolctl import threadpool_limits
@@ -83,7 +83,7 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
     product when L is stored.
 
     scipy's sparse-times-dense product runs on one thread; this one splits rows over
-    numba's threads and accepts CSR rows in any column order (the operator stores its
+    meshlap's threads and accepts CSR rows in any column order (the operator stores its
     diagonal first). Matrix-free operators fall back to ``op @ X``.
 
     Examples

@@ -119,7 +119,8 @@ def test_lobpcg_matches_serial(n):
 @pytest.mark.parametrize("n", [2, 3])
 def test_lobpcg_global_preconditioner_iterations(n):
     """The global (MUMPS) cotangent preconditioner: on n ranks at most the 1-rank iteration
-    count + 1 (8,000-vertex sphere, k = 20), fewer than block Jacobi's; without MUMPS, or when
+    count + 1 (8,000-vertex sphere, k = 20), fewer than block Jacobi's, the smoothed start in at
+    most 4 iterations; without MUMPS, or when
     its factorization fails, block Jacobi with the same eigenvalues (a failure warns)."""
     mpirun(n, "lobpcg_global_iterations", "lobpcg_fallback")
 

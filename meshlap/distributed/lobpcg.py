@@ -23,9 +23,10 @@ eigenpairs of a 100k-vertex sphere on 2 ranks); for a mesh K_r is the block of t
 stiffness on the own rows (the faces touching them); for a point cloud, a graph Laplacian of
 the own points' nearest neighbours with heat weights, scaled to the operator's quadratic form
 on the coordinate functions, with the weights of each row on other ranks' points on its
-diagonal. With a mesh, the start is LOBPCG on the cotangent problem (K as a distributed PETSc
-matrix, (K + σM)⁻¹ as preconditioner), whose Ritz values also size the block to hold the
-k-th eigenvalue's cluster, as in :func:`meshlap.spectral.eigs`. Memory per rank: the
+diagonal. With a mesh, the start is one step of inverse iteration on a random block,
+(K + σM)⁻¹ M X₀, then LOBPCG on the cotangent problem (K as a distributed PETSc matrix,
+(K + σM)⁻¹ as preconditioner), whose Ritz values also size the block to hold the k-th
+eigenvalue's cluster, as in :func:`meshlap.spectral.eigs`. Memory per rank: the
 operator's own rows, the factors of a sparse matrix with a handful of entries per row (its
 share of MUMPS's), and about a dozen blocks of n_local × (block width) numbers. See
 docs/distributed.md for the measured figures.
@@ -306,8 +307,8 @@ def eigs(
         Seed of the random start vectors (with the rank).
     info : dict, optional
         Filled with ``iterations``, the relative ``residuals`` ``‖r‖ / max(λ, λ_k)`` of the
-        k pairs, their eigenvalue ``error_bounds`` relative to tol's scale, and the ``block``
-        width.
+        k pairs, their eigenvalue ``error_bounds`` relative to tol's scale, the ``block``
+        width and the cotangent start's ``start_iterations`` (0 without a mesh).
     progress : bool or callable, optional
         As in :func:`meshlap.spectral.eigs`: ``True`` draws a bar on rank 0's stderr; a
         callable gets ``(fraction, stage)`` on every rank, the same calls everywhere.
@@ -381,9 +382,12 @@ def eigs(
     adapt = extra is None and Kg is not None
     width = spectral._start_width(k, nb, n_p) if adapt else nb
     X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
+    start = None
     with spectral._one_blas_thread():
         if Kg is not None:
-            # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as preconditioner
+            # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as preconditioner,
+            # after one step of inverse iteration on the random block, as on the single machine
+            X0 = local(m[:, None] * X0)
             start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, spectral._START_TOL,
                                    _START_ITERATIONS,
                                    allsum, on_values=False,
@@ -399,7 +403,8 @@ def eigs(
                       RuntimeWarning, stacklevel=2)
     if info is not None:
         scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
-        info.update(iterations=it, residuals=out.residuals[:k] / scale, error_bounds=out.ratio[:k], block=nb)
+        info.update(iterations=it, residuals=out.residuals[:k] / scale, error_bounds=out.ratio[:k], block=nb,
+                    start_iterations=0 if start is None else start.iterations)
     if report is not None:
         report(1.0, "done")
     return finish(op, P, lam[:k], X[:, :k])
