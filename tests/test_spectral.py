@@ -362,3 +362,28 @@ def test_orthogonalize_passes_twice_only_where_it_cancelled():
     A = sp.random(50, 50, density=0.2, random_state=1, format="csr")
     X, s = rng.standard_normal((50, 3)), rng.standard_normal(50)
     assert np.allclose(_lobpcg.csr_times(A, X, s), s[:, None] * (A @ X), rtol=1e-14, atol=1e-14)
+
+
+def test_block_product_is_the_same_on_any_number_of_threads():
+    # csr_times shares its rows (of unequal lengths) among meshlap's threads, each running the
+    # compiled loop with one numba thread: the same bits as on one thread, numba's count restored
+    import numba
+
+    from meshlap import _lobpcg
+
+    rng = np.random.default_rng(3)
+    A = sp.random(4000, 4000, density=0.01, random_state=3, format="csr")
+    long_rows = sp.random(4000, 4000, density=0.02, random_state=4).multiply(np.arange(4000)[:, None] < 500)
+    A = sp.csr_matrix(A + sp.diags(rng.uniform(1, 2, 4000)) + long_rows)  # the first 500 three times longer
+    X, s = rng.standard_normal((4000, 40)), rng.standard_normal(4000)
+    assert A.nnz * X.shape[1] >= _lobpcg._SERIAL_WORK
+    threads = numba.get_num_threads()
+    shared = _lobpcg.csr_times(A, X, s)
+    assert numba.get_num_threads() == threads
+    numba.set_num_threads(1)
+    try:
+        alone = _lobpcg.csr_times(A, X, s)
+    finally:
+        numba.set_num_threads(threads)
+    assert np.array_equal(shared, alone)
+    assert np.allclose(shared, s[:, None] * (A @ X), rtol=1e-13, atol=1e-13)
