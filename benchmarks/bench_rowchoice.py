@@ -5,8 +5,9 @@
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --repeat 7
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --noise 0.01
 
-The base's three modules of the stage (rowchoice, highorder, _fit_kernel) are loaded under
-other names beside this checkout's, everything else shared; the two are run alternately on
+The base's modules of the stage (rowchoice, highorder, _fit_kernel and the small dense algebra
+they compile, meshlap/_dense.py) are loaded under other names beside this checkout's,
+everything else shared; the two are run alternately on
 `meshlap.shapes.sphere(n, kind="random", seed=0)` (radial noise of the given level, seed 1),
 best of ``--repeat`` by CPU time (`time.process_time`: other processes' load counts less),
 each stage timed through the progress callback. It prints whether the two gave the same L
@@ -30,16 +31,19 @@ import numpy as np
 import meshlap
 from meshlap.corrections import rowchoice
 
-MODULES = ("_fit_kernel", "highorder", "rowchoice")  # in the order they import each other
+# in the order they import each other
+MODULES = ("_dense", "corrections/_fit_kernel", "corrections/highorder", "corrections/rowchoice")
 
 
 def load_base(root: Path):
     """The base's rowchoice module, its relative imports made absolute (the stage's own modules
     as base_*, the rest of meshlap as this checkout's)."""
-    for name in MODULES:
-        src = (root / "meshlap" / "corrections" / f"{name}.py").read_text()
-        src = re.sub(r"^from \.\.(\w*) import", r"from meshlap.\1 import", src, flags=re.M)
-        src = re.sub(r"^from \.(_fit_kernel|highorder) import", r"from base_\1 import", src, flags=re.M)
+    for where in MODULES:
+        name = where.rsplit("/", 1)[-1]
+        src = (root / "meshlap" / f"{where}.py").read_text()
+        for pattern, repl in ((r"^from \.\.?(_dense|_fit_kernel|highorder) import", r"from base_\1 import"),
+                              (r"^from \.\.?(\w*) import", r"from meshlap.\1 import")):
+            src = re.sub(pattern, repl, src, flags=re.M)
         # numba caches compiled functions by their file: the rewritten modules get files of their own
         tag = hashlib.sha1(str(root.resolve()).encode()).hexdigest()[:12]
         path = Path(tempfile.gettempdir()) / f"meshlap-base-{tag}" / f"base_{name}.py"

@@ -10,9 +10,13 @@ from .._jit import jit
 
 # A Cholesky pivot below this fraction of its diagonal means the monomial adds nothing new.
 PIVOT_TOL = 1e-11
+# Every divisor in the fit is nonzero by construction (a weight sum holding the centre's 1, a
+# pivot above its floor, a guarded radius): IEEE division without numba's ZeroDivisionError test,
+# the same numbers for 3-10% less CPU a fit (16,000 points, degrees 2-6, with meshlap._dense's)
+_IEEE = "numpy"
 
 
-@jit()
+@jit(error_model=_IEEE)
 def _covariance3(P, nbr, th, tot, mean, C):  # pragma: no cover - compiled
     # _frame's weighted mean and covariance in three dimensions: the same sums in the same order
     # (the same numbers), side by side in registers, where the general loops keep one running
@@ -39,7 +43,7 @@ def _covariance3(P, nbr, th, tot, mean, C):  # pragma: no cover - compiled
     C[0, 0], C[1, 0], C[1, 1], C[2, 0], C[2, 1], C[2, 2] = c00, c10, c11, c20, c21, c22
 
 
-@jit()
+@jit(error_model=_IEEE)
 def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no cover - compiled
     # B: orthonormal rows, the first k tangent, the rest normal; C, vec (d × d), ev, v (d) scratch
     d = P.shape[1]
@@ -114,7 +118,7 @@ def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
             G[al, be] = s
 
 
-@jit()
+@jit(error_model=_IEEE)
 def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
           targets, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
