@@ -325,11 +325,11 @@ def build(geo: Geometry, widths: Widths, opts: Options,
         if free is None or not assembly.reweigh(free, geo.points, geo.mass, widths, k):
             free = None
             # the Richardson rows also give, while each row is in cache, the moment scale's
-            # product and the check's with the constant (on a 16k sphere the moment scale
-            # 0.05 -> 0.00 s and the check 0.105 -> 0.085 s, the fill about 0.01 s more)
-            times = np.column_stack([corrections.moments.moment_block(geo.points),
-                                     np.full(geo.n_points, corrections.psd.unit_constant(geo.mass))]
-                                    ) if k.dog else None
+            # product and the check's with the constant and its start's random vectors (on a
+            # 16k sphere the moment scale 0.05 -> 0.00 s and the check 0.105 -> 0.03 s)
+            times = np.column_stack([corrections.moments.moment_block(geo.points)]
+                                    + ([corrections.psd.fill_columns(geo.points, geo.mass)] if opts.check_psd
+                                       else [])) if k.dog else None
             free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
                                      progress=None if report is None else (lambda f, s: report(0.6 * f, s)),
                                      times=times)
@@ -349,9 +349,9 @@ def build(geo: Geometry, widths: Widths, opts: Options,
             report(0.7, "semidefinite check")
         what = "mesh" if geo.faces is not None else geo.source
         # what the fill made, where the checked rows are the filled ones (no mirror images):
-        # their diagonal (each row's first entry) and product with the constant
+        # their diagonal (each row's first entry) and product with [x, fill_columns]
         fused = L is free and moments[0] is not None
-        known = (free.data[free.indptr[:-1]], moments[0][:, -1]) if fused else None
+        known = (free.data[free.indptr[:-1]], moments[0][:, 1:]) if fused else None
         out.psd_margin, out.fallback_reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo),
                                                                     what, known)
         if out.fallback_reason is not None:
@@ -364,7 +364,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
             report(0.8, "moment scale")
         out.moment_scale = corrections.second_moment_scale(
             lambda X: free @ X, geo.points, geo.mass, band, geo.dim,
-            None if moments[0] is None else moments[0][:, :-1])
+            None if moments[0] is None else moments[0][:, :1 + geo.points.shape[1]])
         L.data *= out.moment_scale
     if opts.pointwise:
         if report is not None:

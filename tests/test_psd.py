@@ -94,3 +94,48 @@ def test_the_diagonal_and_constant_product_from_the_fill_give_the_same_margin(mo
     kern = meshlap.assembly.Kernel(2, dog=True, normals=geo.normals(), tol=op.options.tol)
     free = meshlap.assembly.assemble(geo.points, geo.mass, op.widths, kern)
     assert op._built.psd_margin == psd.check(free, geo.mass, V, geo.faces, "mesh")[0] and calls == [0]
+
+
+def fill_products(L, V, mass):
+    # what the build hands the check: L's diagonal and its product with [V, fill_columns]
+    return L.diagonal(), L @ np.column_stack([V, psd.fill_columns(V, mass)])
+
+
+def counted_products(monkeypatch):
+    calls = []
+    real = meshlap.spectral.apply_block
+    monkeypatch.setattr(meshlap.spectral, "apply_block", lambda op, X: calls.append(X.shape) or real(op, X))
+    return calls
+
+
+def test_the_start_products_from_the_fill_save_the_first_product(monkeypatch):
+    # the coordinate functions' and random vectors' products come from the fill: LOBPCG's
+    # start multiplies nothing, one product of six columns fewer than alone, and the result
+    # is the one the check computes alone
+    V, F = shapes.sphere(1500, kind="random", seed=6)
+    op = meshlap.laplacian(V, F, check_psd=False, pointwise=False)
+    faces = geometry.from_mesh(V, F).faces
+    calls = counted_products(monkeypatch)
+    alone = psd.smallest_eigenvalue(op.L_sym, op.mass, V, faces)
+    made = len(calls)
+    fused = psd.smallest_eigenvalue(op.L_sym, op.mass, V, faces, known=fill_products(op.L_sym, V, op.mass))
+    assert made >= 1 and calls[0][1] == 6 and len(calls) == 2 * made - 1
+    assert abs(fused[0] - alone[0]) < 1e-12 * alone[1] and fused[1] == alone[1]
+
+
+def test_an_indefinite_operator_still_fails_from_the_fills_start(monkeypatch):
+    # the localized mode of the test above, the start's products from the fill: the iteration
+    # still finds it, and what it returns is a Ritz value, an upper bound of the smallest
+    # eigenvalue (measured densely)
+    V, F = shapes.sphere(1300, kind="random", seed=5)
+    op = meshlap.laplacian(V, F, check_psd=False)
+    faces = geometry.from_mesh(V, F).faces
+    a, b = int(F[100, 0]), int(F[100, 1])
+    L = spiked(op.L_sym, op.mass, a, b, 1e-2)
+    exact = dense_min(L, op.mass)
+    calls = counted_products(monkeypatch)
+    alone, _ = psd.smallest_eigenvalue(L, op.mass, V, faces)
+    made = len(calls)
+    lam, scale = psd.smallest_eigenvalue(L, op.mass, V, faces, known=fill_products(L, V, op.mass))
+    assert made >= 2 and len(calls) == 2 * made - 1  # the start's product saved
+    assert exact <= lam < -psd.PSD_RTOL * scale and exact <= alone < -psd.PSD_RTOL * scale

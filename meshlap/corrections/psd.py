@@ -22,6 +22,43 @@ routed through positive ones, and routing a pair through a midpoint (Cauchy–Sc
 (a + b)² ≤ 2a² + 2b²) loses exactly the factor 2 by which 2K_{h/2} dominates K_h in the
 continuum (the symbols' ratio (1 + e^{−hω²/2})/4 ≤ 1/2): a proof with no slack left for the
 sampling, at O(entries × row length). Hence an eigensolver.
+
+What it certifies. A failure is proved: the value returned is the Rayleigh quotient of a
+vector (a point's indicator, or a Ritz vector), an upper bound of λ_min. A pass is not a
+proof: LOBPCG stopped when the smallest Ritz value's Kato–Temple estimate, with the next Ritz
+value standing in for the gap, was within ``tol``, and a negative mode outside the search
+space goes unseen. Nor is it a probabilistic certificate: the random columns are guards, and a
+random start's guarantee (Kuczyński–Woźniakowski) would need about 10⁴ products to resolve
+−PSD_RTOL of the scale. What is measured instead (``benchmarks/RESULTS.md``, i19p): over 35
+inputs near the sampling limit (2,000-vertex random sphere, plane and torus, spot, a 12³
+tetrahedral cube; h = 0.3-1 ē²) against LAPACK's smallest eigenvalue, the 9 indefinite ones
+fail (3 by a positive diagonal) and the 26 semidefinite ones pass; the negative modes are
+localized (1-40 points of participation) at points of large mass, where the narrow kernel
+falls between samples. Its margin is thin in places: on the plane at 0.35 ē² it proves
+−1.4e-6 of the scale against a true −1.7e-3.
+
+The stopping tolerance (issue 19). It decides how long the search runs where no failure shows:
+LOBPCG ends once the smallest Ritz value's estimate is within ``tol`` of it, and the poorer
+the sampling the poorer the coordinate functions are as eigenvectors, so the longer it
+searches. Looser tolerances were measured and rejected. 3e-2 finds every failure of the sweep
+above, of 13 more inputs near its boundary (spot at 0.45 and 0.55 ē², two more random spheres,
+a plane, a thin torus) and of 50,000- and 100,000-vertex random spheres at 0.5 ē², at the same
+iteration as 1e-3, and stops at the start where the operator is well resolved (100,000
+vertices at h = ē²: 8 iterations and 3.5 s of CPU at 1e-3, none and 0.13 s at 3e-2, which
+would meet issue 19's budget at 400,000), but it passes ``tests/test_psd.py``'s mode at two
+neighbouring vertices (−1e-2 of its energy, 1,300 vertices) that 1e-3 finds. 0.1, a rule that
+only decides the sign, also passes spot at 0.5 ē² (λ_min −6.9e-4 of the scale, found at 1e-3
+after 9 iterations, missed at 0.1 after 6). Also rejected: start vectors aimed at the
+large-mass points (random vectors weighted by mass or restricted to its top 3-10%) miss that
+mode at 0.1 too; a Jacobi preconditioner (no cotangent factor) needs 20-40 iterations where
+the factor needs 3-5; principal submatrices of 16-64 points (Cauchy interlacing: a negative
+one proves the failure) around the heaviest points or over grid cells miss spot's mode in
+every variant tried. What changed is the start: the build hands over, besides L's diagonal,
+L's products with the coordinates and the random start columns, made while each row is in
+cache (:func:`fill_columns`), so LOBPCG's start costs no product: where the start decides (the
+16k sphere at the default width) the check takes 0.02-0.04 s of CPU instead of 0.08-0.10 s;
+where LOBPCG iterates (spot, fandisk, 400,000 points at h = ē²) the first of its 6-10 block
+products is saved.
 """
 
 from __future__ import annotations
@@ -36,7 +73,7 @@ import scipy.sparse as sp
 from ..geometry import Polygons
 from ..lumped import SparseLaplacian
 
-__all__ = ["PSD_RTOL", "check", "smallest_eigenvalue", "unit_constant"]
+__all__ = ["PSD_RTOL", "check", "fill_columns", "smallest_eigenvalue", "unit_constant"]
 
 # points up to which a failed iterative check is repeated with a dense eigensolver, and up to
 # which the check is dense from the start
@@ -44,6 +81,11 @@ _DENSE_MAX = 4000
 _DENSE_DIRECT = 1200
 #: −S counts as semidefinite when λ_min ≥ −PSD_RTOL · max_w(−L_ww).
 PSD_RTOL = 1e-6
+# columns of the start block: the coordinate functions and random vectors up to this many
+_START = 6
+# LOBPCG stops once the smallest Ritz value's error estimate is this fraction of it (module
+# notes: 3e-2 and 0.1, measured, each miss a failure that 1e-3 finds)
+_TOL = 1e-3
 
 
 def unit_constant(mass: np.ndarray) -> float:
@@ -58,29 +100,47 @@ def unit_constant(mass: np.ndarray) -> float:
     return 1.0 / math.sqrt(float(mass[mass > 0].sum()))
 
 
+def fill_columns(V: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """The columns whose product with L the build makes while it fills the rows, after the
+    coordinates' (which the moment scale has): the constant :func:`unit_constant` and the
+    start block's random vectors, the ones :func:`smallest_eigenvalue` draws itself.
+
+    Examples
+    --------
+    >>> B = fill_columns(np.zeros((4, 3)), np.full(4, 0.25))
+    >>> B.shape, B[:, 0].tolist()
+    ((4, 4), [1.0, 1.0, 1.0, 1.0])
+    """
+    rng = np.random.default_rng(0)
+    random = rng.standard_normal((len(mass), _START - min(V.shape[1], 3)))
+    return np.column_stack([np.full(len(mass), unit_constant(mass)), random])
+
+
 def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,
-                        tol: float = 1e-3, maxiter: int = 40,
+                        tol: float = _TOL, maxiter: int = 40,
                         known: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[float, float]:
     """The two ends that decide whether −S = −M L is positive semidefinite.
 
     Returns (λ_min, λ_scale): the smallest eigenvalue of the pencil (−S, M) on the points
-    with mass and the scale ``max_w −L_ww`` it is to be compared with. ``known``: L's
-    diagonal and its product with the constant :func:`unit_constant` (scipy's product, to the
-    bit), where the build made them while filling the rows: two passes over L saved (the
-    check 0.105 -> 0.085 s of CPU on the 16k sphere); the product is used only where every
-    point has mass.
+    with mass (an upper bound of it where the iteration stops early, below) and the scale
+    ``max_w −L_ww`` it is to be compared with. ``known``: what the build made while filling
+    the rows, L's diagonal and L's product with the block ``[V, fill_columns(V, mass)]``
+    (scipy's product, to the bit); used where every point has mass, it leaves LOBPCG's start
+    no product to make (the check's only one where the start decides, as on the 16k sphere at
+    the default width: 0.085 -> 0.03 s of CPU).
 
     Where L's rows sum to zero (not on an MPI rank's diagonal block) the constant is an
     eigenvector with eigenvalue 0: it is deflated, and LOBPCG (:mod:`meshlap._lobpcg`) looks
     for the smallest eigenvalue on its M-orthogonal complement, one target vector and five
     guards: the coordinate functions (smooth, near the bottom of a semidefinite spectrum) and
-    random vectors (every frequency, where a negative mode of the difference of Gaussians
-    lives). The preconditioner is :func:`meshlap.spectral.eigs`'s (the cotangent factor when
-    ``faces`` are triangles in R³, plus ½ D⁻¹). The iteration ends at the first Ritz value
-    below −PSD_RTOL · scale, which proves the failure (a Ritz value bounds an eigenvalue from
-    above), or when the smallest is known to ``tol`` relative (the Kato–Temple bound). Before
-    it, a diagonal entry L_ww above PSD_RTOL · scale proves the failure at no cost: −L_ww is
-    the Rayleigh quotient of the indicator of w, and that bound is returned.
+    random vectors (every frequency). The preconditioner is :func:`meshlap.spectral.eigs`'s
+    (the cotangent factor when ``faces`` are triangles in R³, plus ½ D⁻¹). The iteration ends
+    at the first Ritz value below −PSD_RTOL · scale, which proves the failure (a Ritz value
+    bounds an eigenvalue from above), or when the smallest Ritz value's error estimate (the
+    Kato–Temple bound with the next Ritz value standing in for the gap) is ``tol`` of it: an
+    estimate, not a bound (module notes). Before it, a diagonal entry L_ww above
+    PSD_RTOL · scale proves the failure at no cost: −L_ww is the Rayleigh quotient of the
+    indicator of w, and that bound is returned.
     """
     from .. import _lobpcg
     from ..spectral import _cot_stiffness, _one_blas_thread, _scale_shift, apply_block
@@ -91,9 +151,11 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     m = mass[P]
     Lp = sp.csr_matrix(L if len(P) == len(mass) else L[P][:, P], dtype=np.float64)
     op = SparseLaplacian(Lp, m)
-    one = np.full(len(P), unit_constant(mass))
+    u = unit_constant(mass)
+    one = np.full(len(P), u)
+    fill = None if known is None or len(P) < len(mass) else known[1]
     # L's rows sum to zero: the constant is in the kernel, up to rounding
-    r = -(Lp @ one) if known is None or len(P) < len(mass) else -known[1]
+    r = -(Lp @ one) if fill is None else -fill[:, V.shape[1]]
     const = float(one @ (m * r))
     deflate = math.sqrt(float(m @ (r * r))) <= 1e-10 * scale
     if len(P) <= _DENSE_DIRECT:
@@ -121,16 +183,35 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
             made.append(_lobpcg.CotPreconditioner(K, m, -m * diag[P], _scale_shift(m)))
         return project(made[0](R))
 
-    rng = np.random.default_rng(0)
-    coords = V[P][:, :3] - (m @ V[P][:, :3]) / m.sum()
+    d = min(V.shape[1], 3)
+    coords = V[P][:, :d] - (m @ V[P][:, :d]) / m.sum()
     smooth = coords if deflate else np.hstack([one[:, None], coords])
-    X0 = project(np.hstack([smooth, rng.standard_normal((len(P), 6 - smooth.shape[1]))]))
+    # the same draw as fill_columns'
+    raw = np.hstack([smooth, np.random.default_rng(0).standard_normal((len(P), _START - smooth.shape[1]))])
+    X0 = project(raw)
+    start: list = []
+    if deflate and fill is not None:
+        # the start's product from the fill's, by linearity: with L·one = −r, the centred
+        # coordinates' L(V − 1cᵀ) = LV + (r/u)cᵀ, and the projection's L(X − one·oneᵀMX) =
+        # LX + r·oneᵀMX
+        LX = np.hstack([fill[:, :d] + (r / u)[:, None] * ((m @ V[:, :d]) / m.sum())[None, :],
+                        fill[:, V.shape[1] + 1:]])
+        LX += r[:, None] * (one @ (m[:, None] * raw))[None, :]
+        X, T = _lobpcg.svqb(X0, m)
+        start.append((X, -m[:, None] * _lobpcg.matmul(LX, T)))
+        X0 = X
+
+    def apply(X: np.ndarray) -> np.ndarray:
+        if start:  # LOBPCG's first product, of its start: our M-orthonormal X0 recombined
+            S, AS = start.pop()
+            return _lobpcg.matmul(AS, _lobpcg.inner(S, m[:, None] * X))
+        return -m[:, None] * apply_block(op, X)
+
     with _one_blas_thread(), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
             # the search directions are kept off the constant; A X needs nothing (A 1 = 0)
-            out = _lobpcg.lobpcg(lambda X: -m[:, None] * apply_block(op, X), m,
-                                 precond, X0, 1 if deflate else 2, tol, maxiter,
+            out = _lobpcg.lobpcg(apply, m, precond, X0, 1 if deflate else 2, tol, maxiter,
                                  floor=-PSD_RTOL * scale)
         except np.linalg.LinAlgError:
             # the Gram matrices break down on a strongly indefinite pencil: decide densely where
