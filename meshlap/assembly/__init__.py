@@ -189,7 +189,8 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
         A block to multiply L with while its rows are filled (the moment scale's |x|² and x,
         :func:`meshlap.corrections.moments.moment_block`): then
         ``(L, L @ times)`` is returned, the product equal to the bit to scipy's ``L @ times``,
-        or ``(L, None)`` where the rows are not filled in float64 on the per-point path.
+        or ``(L, None)`` where the rows are not filled in float64 on the per-point path or
+        ``times`` has more than :data:`variable.BLOCK` columns.
 
     Examples
     --------
@@ -208,7 +209,8 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
     n = len(points)
     radius = cutoff_radius(widths.largest, kernel.tol)
     one_h = kernel.plain and widths.h_vertex is None
-    fused = times is not None and points.shape[1] <= 3 and not one_h and np.dtype(dtype) == np.float64
+    fused = (times is not None and points.shape[1] <= 3 and not one_h and np.dtype(dtype) == np.float64
+             and times.shape[1] <= variable.BLOCK)
     if times is not None and not fused:
         return assemble(points, mass, widths, kernel, dtype=dtype, guard=guard, progress=progress), None
     if points.shape[1] > 3:
