@@ -334,13 +334,13 @@ def test_assemble_gives_the_product_where_it_fills_in_float64():
                                  assembly.Kernel(2), times=V)
     assert none is None and L2.shape == (400, 400)
     # a block wider than the fill's registers: the caller multiplies afterwards
-    wide = np.column_stack([V, V])
+    wide = np.column_stack([V, V, V])
     L3, none = assembly.assemble(g.points, g.mass, per_point, assembly.Kernel(2, dog=True), times=wide)
     assert none is None and np.array_equal(L3.data, L.data)
-    with pytest.raises(ValueError, match="at most 5 columns"):
+    with pytest.raises(ValueError, match="at most 8 columns"):
         assembly.variable.variable_csr(g.points, kernel.build_grid(g.points, g.mass, 1.0), per_point.h_vertex,
                                        1e-8, None, True, np.int32, np.dtype(np.float64), times=wide,
-                                       product=np.empty((400, 6)))
+                                       product=np.empty((400, 9)))
 
 
 def test_build_moment_scale_equals_the_product_after_the_fill():

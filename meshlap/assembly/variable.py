@@ -21,8 +21,9 @@ from .grid import _CHUNK_ROWS, Grid, _candidates, _columns, _sum
 __all__ = ["count_entries", "dog_factor", "revalue", "sort_rows", "variable_csr"]
 
 #: Most columns of the block that the fill multiplies its rows with (``times=``), one
-#: register each: the moment scale's |x|², x, y, z and the check's constant.
-BLOCK = 5
+#: register each: the moment scale's |x|², x, y, z, the check's constant and its start's
+#: three random vectors (:func:`meshlap.corrections.psd.fill_columns`).
+BLOCK = 8
 
 
 @jit(inline="always")
@@ -252,8 +253,8 @@ def _row_times(w, first, cnt, sj, data, tv, ts, product):
     # product[w] = row w times the block, added in the row's stored order one entry after the
     # other, as scipy's CSR product adds them (the same values to the bit), while the row is
     # still in cache. The block has BLOCK columns (zero-padded), one register each: with the
-    # column count unknown to the compiler each sum went through memory (the product cost
-    # 3.7x as much on a 16k sphere; 1.8x with 8 columns). ts is the block in source order,
+    # column count unknown to the compiler each sum went through memory (3.7x the cost on a
+    # 16k sphere, measured with 5 columns). ts is the block in source order,
     # read in the order of the row's sources (near each other in memory)
     a = data[first - 1]  # the diagonal, first in the row
     s0 = 0.0 + a * tv[w, 0]
@@ -261,6 +262,9 @@ def _row_times(w, first, cnt, sj, data, tv, ts, product):
     s2 = 0.0 + a * tv[w, 2]
     s3 = 0.0 + a * tv[w, 3]
     s4 = 0.0 + a * tv[w, 4]
+    s5 = 0.0 + a * tv[w, 5]
+    s6 = 0.0 + a * tv[w, 6]
+    s7 = 0.0 + a * tv[w, 7]
     for i in range(cnt):
         a = data[first + i]
         j = sj[i]
@@ -269,11 +273,17 @@ def _row_times(w, first, cnt, sj, data, tv, ts, product):
         s2 += a * ts[j, 2]
         s3 += a * ts[j, 3]
         s4 += a * ts[j, 4]
+        s5 += a * ts[j, 5]
+        s6 += a * ts[j, 6]
+        s7 += a * ts[j, 7]
     product[w, 0] = s0
     product[w, 1] = s1
     product[w, 2] = s2
     product[w, 3] = s3
     product[w, 4] = s4
+    product[w, 5] = s5
+    product[w, 6] = s6
+    product[w, 7] = s7
 
 
 def dog_factor(dim: int) -> float:
