@@ -56,11 +56,12 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 from numba import prange
+from scipy.linalg import blas
 
 from ._jit import _threads, jit
 
-__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "csr_times", "eig_error", "inner", "lobpcg",
-           "lobpcg_progress", "matmul", "svqb"]
+__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "combine", "csr_times", "eig_error", "inner",
+           "lobpcg", "lobpcg_progress", "matmul", "svqb"]
 
 # the relative half-width of the window of Ritz values counted as one cluster by the bound
 _WINDOW = 0.05
@@ -227,6 +228,33 @@ def inner(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
     _in_threads(share, len(starts), 2)
     return parts.sum(axis=0)
+
+
+def combine(pairs: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """``A @ CA + B @ CB`` for each (A, CA, B, CB), tall A and B, rows shared among the threads
+    in one pass: the second product is added in place by BLAS, no temporary.
+
+    Examples
+    --------
+    >>> A, B = np.ones((10000, 3)), np.ones((10000, 2))
+    >>> combine([(A, np.ones((3, 2)), B, np.ones((2, 2)))])[0][-1].tolist()
+    [5.0, 5.0]
+    """
+    outs = [np.empty((A.shape[0], CA.shape[1])) for A, CA, _, _ in pairs]
+
+    def share(a: int, b: int) -> None:
+        for (A, CA, B, CB), out in zip(pairs, outs, strict=True):
+            np.matmul(A[a:b], CA, out=out[a:b])
+            _gemm_add(out[a:b], B[a:b], CB)
+
+    _in_threads(share, pairs[0][0].shape[0], 2 * _ROWS)
+    return outs
+
+
+def _gemm_add(out: np.ndarray, A: np.ndarray, C: np.ndarray) -> None:
+    # out += A @ C in place (C-ordered out and A): as the transposes' Fortran-ordered product
+    if out.size:
+        blas.dgemm(1.0, np.asfortranarray(C.T), A.T, beta=1.0, c=out.T, overwrite_c=1)
 
 
 class BlockFactor:
@@ -468,13 +496,9 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         # the new P = basis @ E: E ⟂ C, so its rows of the next Gram matrix are E.T G E
         PAP = E.T @ (np.tril(G) + np.tril(G, -1).T) @ E
         CE = np.hstack([C, E])
-        XP_new = matmul(XP, CE[:q])
-        XP_new += matmul(W, CE[q:])
         if cheap:
-            AXP = apply_A(XP_new)
+            XP, = combine([(XP, CE[:q], W, CE[q:])])
+            AXP = apply_A(XP)
         else:
-            AXP_new = matmul(AXP, CE[:q])
-            AXP_new += matmul(AW, CE[q:])
-            AXP = AXP_new
-        XP = XP_new
+            XP, AXP = combine([(XP, CE[:q], W, CE[q:]), (AXP, CE[:q], AW, CE[q:])])
     return Ritz(lam, np.ascontiguousarray(X), it, res, ratio)

@@ -387,3 +387,20 @@ def test_block_product_is_the_same_on_any_number_of_threads():
         numba.set_num_threads(threads)
     assert np.array_equal(shared, alone)
     assert np.allclose(shared, s[:, None] * (A @ X), rtol=1e-13, atol=1e-13)
+
+
+def test_combined_update_is_the_two_products_summed():
+    # LOBPCG's update A @ CA + B @ CB in one pass over row shares, the second product added in
+    # place by BLAS: the sum of the two products, for every pair, past the threaded row count
+    from meshlap import _lobpcg
+
+    rng = np.random.default_rng(4)
+    n = 3 * _lobpcg._ROWS + 7
+    pairs = [(rng.standard_normal((n, 9)), rng.standard_normal((9, 6)), rng.standard_normal((n, 4)),
+              rng.standard_normal((4, 6))) for _ in range(2)]
+    inputs = [tuple(a.copy() for a in pair) for pair in pairs]
+    for (A, CA, B, CB), out in zip(inputs, _lobpcg.combine(pairs), strict=True):
+        assert out.flags.c_contiguous
+        assert np.allclose(out, A @ CA + B @ CB, rtol=0, atol=1e-13)
+    assert all(np.array_equal(a, b) for pair, kept in zip(pairs, inputs, strict=True)
+               for a, b in zip(pair, kept, strict=True))  # the inputs are read, not written
