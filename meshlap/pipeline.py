@@ -208,6 +208,15 @@ class Built:
                     self.pending = None
         return self
 
+    def __getstate__(self) -> dict:
+        # a pickle (or a copy) holds the rows, not the closure that fits them, nor the lock
+        state = dict(self.fit_rows().__dict__)
+        del state["_lock"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _lock=threading.Lock())
+
 
 def _psd_faces(geo: Geometry) -> Any:
     # triangles in R³ precondition the check's eigensolver: a mesh's faces, a cloud's local

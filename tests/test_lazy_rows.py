@@ -1,5 +1,6 @@
 """The default's fitted point-wise rows are fitted on first use, once, with the build's bits (i19l)."""
 
+import pickle
 import threading
 import time
 
@@ -103,13 +104,18 @@ def test_repr_does_not_fit_and_says_so(sphere, counted):
     assert len(counted) == 1
 
 
-def test_saving_fits_the_rows_and_reloads_them(sphere, counted, tmp_path):
+def test_saving_and_pickling_fit_the_rows(sphere, counted, tmp_path):
     V, F = sphere
     op = meshlap.laplacian(V, F)
     back = store.load_operator(store.save_operator(tmp_path / "op", op))
     assert len(counted) == 1 and same(back.L, op.L) and same(back.L_sym, op.L_sym)
     f = np.cos(2 * V)
     assert np.array_equal(back @ f, op @ f) and len(counted) == 1
+    # a pickle, too, holds the rows (fitted before it is written), and the copy its own lock
+    fresh = meshlap.laplacian(V, F)
+    again = pickle.loads(pickle.dumps(fresh))
+    assert len(counted) == 2 and same(again.L, op.L) and again._built.pending is None
+    assert again._built._lock is not fresh._built._lock and np.array_equal(again @ f, op @ f)
 
 
 def test_progress_reports_the_fit_at_first_use(sphere):
