@@ -196,8 +196,10 @@ def table(rows: list[dict], mem: dict) -> list[str]:
 
 def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = None) -> dict:
     """The default build against the paper's operator at the same h on a random n-vertex
-    sphere, best of ``repeat`` each by CPU time (wall beside it), with the default's stages
-    (wall and CPU seconds) timed through its progress callback. ``h_edges``: h = h_edges · ē²
+    sphere, best of ``repeat`` each by CPU time (wall beside it; the variants alternate, so
+    that a change of load falls on each), with the default's stages (wall and CPU seconds)
+    timed through its progress callback. The default fits its point-wise rows on first use:
+    it is timed alone and with its first ``op @ f``. ``h_edges``: h = h_edges · ē²
     for both (ē the mean edge) instead of the default's own h; the warm-up is then a
     2,000-vertex sphere, so that a large n is built only ``repeat`` times each."""
     import meshlap
@@ -217,13 +219,14 @@ def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = No
     # which the fitted rows would reproduce exactly)
     x = V[:, 0]
     f, lap = np.exp(x), (1 - x**2 - 2 * x) * np.exp(x)
-    variants = (("paper", {"h": h, "correction": "none"}), ("default", default_kw),
+    variants = (("paper", {"h": h, "correction": "none"}, False), ("default", default_kw, False),
+                # the build and its first op @ f, which fits the point-wise rows
+                ("default + first op @ f", default_kw, True),
                 # the options that trade the fitted rows' accuracy of op @ f for build time
-                ("pointwise=True", {**default_kw, "pointwise": True}),
-                ("pointwise=False", {**default_kw, "pointwise": False}))
-    for name, kw in variants:
-        best = None
-        for _ in range(repeat):
+                ("pointwise=True", {**default_kw, "pointwise": True}, False),
+                ("pointwise=False", {**default_kw, "pointwise": False}, False))
+    for _ in range(repeat):
+        for name, kw, apply in variants:
             marks = []
 
             def note(fraction, stage, marks=marks):
@@ -231,17 +234,18 @@ def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = No
 
             t, c = time.perf_counter(), time.process_time()
             op = meshlap.laplacian(V, F, progress=note, **kw)
+            if apply:
+                op @ f
             wall, cpu = time.perf_counter() - t, time.process_time() - c
             # the CPU ratio is the steadier figure on a shared machine: the best run by CPU
-            if best is None or cpu < best[1]:
+            if name not in out or cpu < out[name][1]:
                 stages = {}  # stage: (wall, CPU) seconds, from its mark to the next
                 ends = marks[1:] + [("end", t + wall, c + cpu)]
                 for (stage, a, ca), (_, b, cb) in zip(marks, ends, strict=True):
                     w0, c0 = stages.get(stage, (0.0, 0.0))
                     stages[stage] = (w0 + b - a, c0 + cb - ca)
                 err = float(np.linalg.norm(op @ f - lap) / np.linalg.norm(lap))
-                best = (wall, cpu, stages, op.nnz, err)
-        out[name] = best
+                out[name] = (wall, cpu, stages, op.nnz, err)
     return out
 
 
@@ -357,14 +361,17 @@ def _kept_notes(title: str) -> list[str]:
 
 
 def write_default_vs_paper(r: dict, no_write: bool) -> None:
-    (pw, pc, _, pnnz, perr), (dw, dc, stages, dnnz, derr) = r["paper"], r["default"]
+    (pw, pc, _, pnnz, perr), (dw, dc, _, dnnz, derr) = r["paper"], r["default"]
+    fw, fc, stages = r["default + first op @ f"][:3]
     trade = [(name, *r[name]) for name in ("pointwise=True", "pointwise=False") if name in r]
+    # the build's stages and the fit's at first use ("done" twice: the gaps before the fit and op @ f)
     parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in stages.items() if k != "done")
     at = "" if r["h_edges"] is None else f" ({r['h_edges']:g} ē²)"
     print(f"random sphere {r['n']:,}, h = {r['h']:.4g}{at}, best of {r['repeat']}: "
           f"paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
-          f"default {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}); default / paper {dw / pw:.2f}x wall, "
-          f"{dc / pc:.2f}x CPU; stages: {parts}", flush=True)
+          f"default build {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}): {dw / pw:.2f}x wall, {dc / pc:.2f}x CPU "
+          f"of the paper's; default build + first op @ f (fits the point-wise rows) {fw:.3f} s "
+          f"(CPU {fc:.2f} s): {fw / pw:.2f}x wall, {fc / pc:.2f}x CPU; stages: {parts}", flush=True)
     print(f"op @ exp(x), relative L2 error: paper {perr:.2e}, default {derr:.2e}; " + "; ".join(
         f"{name}: {w / pw:.2f}x wall, {c / pc:.2f}x CPU, error {e:.2e}" for name, w, c, _, _, e in trade),
         flush=True)
@@ -377,8 +384,10 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         "",
         f"`meshlap.shapes.sphere({r['n']}, kind='random', seed=0)`; the default `meshlap.laplacian(V, F)` "
         f"(h = {r['h']:.4g}) against the paper's `meshlap.laplacian(V, F, h=h, correction='none')`, "
-        f"best of {r['repeat']} each (by CPU time) after a warm-up, in the same process; the default's "
-        "stages timed by its progress callback. The last two rows are the options that trade the "
+        f"best of {r['repeat']} each (by CPU time) after a warm-up, alternating in the same process; the "
+        "default's stages timed by its progress callback. The default fits its point-wise rows on "
+        "first use (`op @ f`, `op.L`): spectra and heat flow never pay for them, `op @ f` does once. "
+        "The last two rows are the options that trade the "
         "accuracy of `op @ f` (relative L2 error against the exact Δ eˣ = (1 − x² − 2x) eˣ on the "
         "unit sphere) for "
         "build time; the symmetric pencil, and so the spectra, is the same in all three.",
@@ -386,12 +395,14 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         "| build | time (CPU) | entries | / paper's, wall | / paper's, CPU | `op @ f` error, f = eˣ |",
         "|---|---|---|---|---|---|",
         f"| paper's operator | {pw:.3f} s ({pc:.2f} s) | {pnnz:,} | 1.00× | 1.00× | {perr:.2e} |",
-        f"| default | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} | **{dw / pw:.2f}×** | {dc / pc:.2f}× "
-        f"| {derr:.2e} |",
+        f"| default, build alone (point-wise rows not yet fitted) | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} "
+        f"| **{dw / pw:.2f}×** | {dc / pc:.2f}× | {derr:.2e} |",
+        f"| default, build + first `op @ f` (fits the rows) | {fw:.3f} s ({fc:.2f} s) | {dnnz:,} "
+        f"| **{fw / pw:.2f}×** | {fc / pc:.2f}× | {derr:.2e} |",
         *(f"| default, `{name}` | {w:.3f} s ({c:.2f} s) | {nnz:,} | {w / pw:.2f}× | {c / pc:.2f}× | {e:.2e} |"
           for name, w, c, _, nnz, e in trade),
         "",
-        f"The default's stages, wall (CPU): {parts}.",
+        f"The default's stages with its first `op @ f`, wall (CPU): {parts}.",
         *_kept_notes(title),
     ])
 

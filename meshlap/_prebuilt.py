@@ -79,15 +79,16 @@ def warm_up() -> None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the coarse volume's resolution warning: only compiling
+        # fit_rows: the default's point-wise rows, which a build fits on first use
         V, F = meshlap.shapes.sphere(500, seed=0)
-        meshlap.laplacian(V, F)
-        meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(500))
+        meshlap.laplacian(V, F).fit_rows()
+        meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(500)).fit_rows()
         V, F = meshlap.shapes.sphere(1500, seed=0)
         V[:, 2] = np.maximum(V[:, 2], -0.3)
-        meshlap.spectral.eigs(meshlap.laplacian(V, F), 6)
+        meshlap.spectral.eigs(meshlap.laplacian(V, F).fit_rows(), 6)
         meshlap.laplacian(V, F, correction="none")
         _ = meshlap.laplacian(V, F, h=0.01, correction="none", matrix_free=True) @ V
-        meshlap.laplacian(*meshlap.samples.cube_tetrahedra(6), k=3)
+        meshlap.laplacian(*meshlap.samples.cube_tetrahedra(6), k=3).fit_rows()
 
 
 def build(package: Path) -> Path:

@@ -159,8 +159,8 @@ class MeshLaplacian(LumpedLaplacian):
     ----------
     L : scipy.sparse.csr_matrix
         What ``op @ f`` applies, the accurate L f ≈ Δf at every point: by default the
-        fitted point-wise rows (not symmetric in M; their own sparsity pattern); eq. (1) of
-        the paper with ``correction="none"``.
+        fitted point-wise rows (not symmetric in M; their own sparsity pattern), fitted on first
+        use (:meth:`fit_rows`); eq. (1) of the paper with ``correction="none"``.
     L_sym : scipy.sparse.csr_matrix
         The symmetric pencil's L, S = M L_sym: the Richardson kernel with mirror images at the
         boundary (Neumann); ``L`` itself without point-wise rows. Spectra, heat flow and
@@ -275,17 +275,39 @@ class MeshLaplacian(LumpedLaplacian):
     psd_margin = property(lambda self: self._built.psd_margin)
     moment_scale = property(lambda self: self._built.moment_scale)
     boundary_rows = property(lambda self: self._built.boundary_rows)
-    pointwise_unchanged = property(lambda self: self._built.pointwise_unchanged)
+    pointwise_unchanged = property(lambda self: self._built.fit_rows().pointwise_unchanged)
     quadrature = property(lambda self: self._built.quadrature,
                           doc="The symmetric pencil's quadrature in effect: 'vertex' or 'galerkin'.")
     quadrature_h = property(lambda self: self._built.quadrature_h, doc="The Galerkin pencil's h, else None.")
-    pointwise_choice = property(lambda self: self._built.pointwise_choice,
+    pointwise_choice = property(lambda self: self._built.fit_rows().pointwise_choice,
                                 doc="Per-point width and degree of the fitted rows (the default), else None.")
 
     @property
     def pointwise(self) -> bool:
-        """Whether ``L`` holds point-wise rows distinct from ``L_sym``."""
-        return self._built.L is not None and self._built.L is not self._built.L_sym
+        """Whether ``L`` holds point-wise rows distinct from ``L_sym`` (fitted or not yet)."""
+        b = self._built
+        return b.pending is not None or (b.L is not None and b.L is not b.L_sym)
+
+    def fit_rows(self) -> MeshLaplacian:
+        """Compute the fitted point-wise rows now; returns the operator.
+
+        The default's rows (``pointwise="fit"``) are fitted on first use: the first ``op @ f``,
+        ``op.L``, :meth:`matvec`, :meth:`as_linear_operator`, :meth:`error_estimate`,
+        ``op.pointwise_choice``, curvature or saving fits them, once (under a lock, whichever
+        thread comes first), with the same bits a fit at build time gives. Spectra, heat flow
+        and smoothing use the symmetric pencil and never fit them. Call this to pay for them
+        at a time of your choosing (e.g. before timing ``op @ f``, or before threads share
+        the operator); it does nothing when they are held or the operator has none.
+
+        Examples
+        --------
+        >>> import meshlap
+        >>> op = meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0))
+        >>> "fitted on first use" in repr(op), "fitted on first use" in repr(op.fit_rows())
+        (True, False)
+        """
+        self._built.fit_rows()
+        return self
 
     @property
     def radius(self) -> float:
@@ -307,8 +329,9 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def L(self) -> sp.csr_matrix:
-        """What ``op @ f`` applies: L f ≈ Δf at every point (the point-wise rows by default)."""
-        return self._stored(self._built.L)
+        """What ``op @ f`` applies: L f ≈ Δf at every point (the point-wise rows by default,
+        fitted on first use: :meth:`fit_rows`)."""
+        return self._stored(self._built.fit_rows().L)
 
     @property
     def L_sym(self) -> sp.csr_matrix:
@@ -327,11 +350,12 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L_sym and the point-wise values (0 when matrix-free)."""
+        """Bytes held by the CSR arrays of L_sym and the point-wise values (0 when matrix-free);
+        the fitted rows count once fitted (:meth:`fit_rows`)."""
         L = self._built.L_sym
         if L is None:
             return 0
-        P = self._built.L
+        P = L if self._built.L is None else self._built.L  # the fitted rows: none held yet
         # the moment rows share L_sym's indices; the fitted rows and a Galerkin pencil have their own
         shared = P is L or P.indices is L.indices
         extra = (0 if P is L else P.data.nbytes) + (0 if shared else P.indices.nbytes + P.indptr.nbytes)
@@ -361,7 +385,7 @@ class MeshLaplacian(LumpedLaplacian):
         f = check_function(f, self.n_vertices)
         if self._built.matrix_free is not None:
             return self._built.matrix_free(f)
-        return np.asarray(self._built.L @ f)
+        return np.asarray(self.L @ f)
 
     def matvec(self, f: Any) -> np.ndarray:
         """``L @ f`` for a vector or an (n, k) block of functions."""
@@ -371,7 +395,7 @@ class MeshLaplacian(LumpedLaplacian):
         """L as a :class:`scipy.sparse.linalg.LinearOperator` (matrix-free when not stored)."""
         free = self._built.matrix_free
         if free is None:
-            return sp.linalg.aslinearoperator(self._built.L)
+            return sp.linalg.aslinearoperator(self.L)
         return LinearOperator(self.shape, matvec=lambda x: free(np.asarray(x, np.float64).reshape(-1)),
                               matmat=lambda X: free(np.asarray(X, np.float64)), dtype=np.float64)
 
@@ -456,15 +480,19 @@ class MeshLaplacian(LumpedLaplacian):
             rows.append(("storage", "matrix-free"))
         else:
             rows += [("nnz", f"{self.nnz:,} ({self.nnz / self.n_vertices:.1f} per row)"),
-                     ("memory", f"{fmt_bytes(self.nbytes)} ({self.dtype.name})")]
+                     ("memory", f"{fmt_bytes(self.nbytes)} ({self.dtype.name}"
+                      + ("; the fitted rows not yet)" if self._built.pending is not None else ")"))]
         return rows
 
     def _pointwise_note(self) -> str:
+        # read without fitting: a repr must not cost the fit (0.5 s at 16k vertices)
         if not self.pointwise:
             return ""
-        if self.pointwise_choice is not None:
+        if self._built.pending is not None:
+            return " + fitted rows (fitted on first use)"
+        if self._built.pointwise_choice is not None:
             per_row = self._built.L.nnz / max(self.n_vertices, 1)
-            return f" + fitted rows ({per_row:.0f} entries per row; {self.pointwise_choice.summary()})"
+            return f" + fitted rows ({per_row:.0f} entries per row; {self._built.pointwise_choice.summary()})"
         if self.options.pointwise_degree is not None:
             return f" + fitted rows of degree {self.options.pointwise_degree}"
         return " + point-wise moments"

@@ -75,7 +75,8 @@ def _one_blas_thread() -> contextlib.AbstractContextManager:
 def symmetric_L(op: Any) -> Any:
     """The L of the operator's symmetric pencil (``op.L_sym``; ``op.L`` for operators that
     keep one matrix): what spectra and heat flow iterate with."""
-    return getattr(op, "L_sym", op.L)
+    L = getattr(op, "L_sym", None)  # op.L only where there is none: reading it fits the rows
+    return op.L if L is None else L
 
 
 def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
