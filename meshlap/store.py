@@ -38,6 +38,7 @@ from .geometry.validation import check_faces, check_function, existing_file
 from .lumped import LumpedLaplacian
 from .operator import MeshLaplacian
 from .resolution import Resolution
+from .spectral import symmetric_L
 
 __all__ = ["FORMAT_VERSION", "OperatorFormatError", "SavedLaplacian", "load_operator", "save_operator"]
 
@@ -49,11 +50,6 @@ _PARAMS = ("h", "tol", "radius", "moment_scale")
 
 class OperatorFormatError(MeshError):
     """A saved operator file of a layout this version of meshlap does not read."""
-
-
-def _symmetric(op: Any) -> sp.spmatrix:
-    # the symmetric pencil's L (S = M L_sym); operators with one matrix have no L_sym
-    return getattr(op, "L_sym", op.L)
 
 
 def _applied(op: Any) -> sp.spmatrix:
@@ -253,7 +249,7 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
                 raise MeshError("a matrix-free operator is rebuilt from its geometry: save it with mesh=True")
             arrays.update(matrix_free=np.array(True), dtype=np.array(np.dtype(op.dtype).name))
         else:
-            applied, sym = _applied(op), _symmetric(op)
+            applied, sym = _applied(op), symmetric_L(op)
             arrays.update(_csr_arrays("", sp.csr_matrix(applied)))
             if sym is not applied:
                 applied, sym = sp.csr_matrix(applied), sp.csr_matrix(sym)

@@ -353,7 +353,7 @@ def variable_csr(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals:
     ``normals`` multiplies d² by the squared arc/chord ratio of the pair. ``grid`` must be
     built for the largest radius. ``max_nnz`` is called with the exact count before the
     arrays are allocated (a memory guard). ``rows`` (default all) fills only those rows; the
-    others stay empty (one MPI rank's own rows). With ``times`` (n, c ≤ 5) float64, ``product``
+    others stay empty (one MPI rank's own rows). With ``times`` (n, c ≤ :data:`BLOCK`) float64, ``product``
     (n, c) receives L @ times, computed while each row is filled (in float64, summed in the
     row's stored order: what scipy's product with the float64 matrix gives, to the bit).
 

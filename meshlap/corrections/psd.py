@@ -111,9 +111,13 @@ def fill_columns(V: np.ndarray, mass: np.ndarray) -> np.ndarray:
     >>> B.shape, B[:, 0].tolist()
     ((4, 4), [1.0, 1.0, 1.0, 1.0])
     """
-    rng = np.random.default_rng(0)
-    random = rng.standard_normal((len(mass), _START - min(V.shape[1], 3)))
+    random = _guards(len(mass), _START - min(V.shape[1], 3))
     return np.column_stack([np.full(len(mass), unit_constant(mass)), random])
+
+
+def _guards(n: int, count: int) -> np.ndarray:
+    # the start block's random columns: one seeded draw, the same for the fill and the check
+    return np.random.default_rng(0).standard_normal((n, count))
 
 
 def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,
@@ -186,8 +190,7 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     d = min(V.shape[1], 3)
     coords = V[P][:, :d] - (m @ V[P][:, :d]) / m.sum()
     smooth = coords if deflate else np.hstack([one[:, None], coords])
-    # the same draw as fill_columns'
-    raw = np.hstack([smooth, np.random.default_rng(0).standard_normal((len(P), _START - smooth.shape[1]))])
+    raw = np.hstack([smooth, _guards(len(P), _START - smooth.shape[1])])
     X0 = project(raw)
     start: list = []
     if deflate and fill is not None:
