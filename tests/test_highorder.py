@@ -165,9 +165,10 @@ def test_noise_sweep_never_worse_than_the_papers_operator():
 
 
 def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
-    # the compact rows of degree 4 and 6 are built at every point of a clean sphere, and on a
-    # noisy one only on the sample that bounds their noise factor (1/16 of the points, at
-    # least 64): the noise term alone rules them out elsewhere
+    # the compact rows of degree 6 are built at every point of a clean sphere, and on a noisy
+    # one only on the sample that bounds their noise factor (1/16 of the points, at least 64):
+    # the noise term alone rules them out elsewhere; degree 4, built after 6, is ruled out on
+    # most of a clean sphere of 8,000 points by its bias, without changing the rows
     built = []
 
     def spy(P, idx, dist, degree, c, *args, **kw):
@@ -183,8 +184,17 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         built.clear()
         rowchoice.choose_rows(X)
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
-    assert counts[0] == [1200, 1200]
+    assert counts[0][1] == 1200
     assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
+    P, _ = shapes.sphere(8000, kind="random", seed=0)
+    rows = []
+    for floors in (rowchoice._FLOORS, (rowchoice._FLOORS[0], 0.0, 0.0)):  # with and without the bias bound
+        monkeypatch.setattr(rowchoice, "_FLOORS", floors)
+        built.clear()
+        rows.append(rowchoice.choose_rows(P)[0])
+        counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
+    assert counts[2][0] < 0.4 * 8000 and counts[3][0] == 8000  # measured 2,498
+    assert (rows[0] != rows[1]).nnz == 0
 
 
 def test_known_noise_level_is_used():
@@ -348,3 +358,25 @@ def test_fit_rows_in_any_order_are_the_same_rows():
         assert np.array_equal(a.matrix.data, b.matrix.data) and np.array_equal(a.residual, b.residual)
     with pytest.raises(MeshError, match="permutation"):
         highorder.fit_rows(P, indptr, indices, h, (4,), order=np.zeros(500, dtype=int))
+
+
+def test_grid_neighbours_are_the_k_d_trees():
+    # the compiled grid search gives the k-d tree's neighbours and distances to the bit, on a
+    # surface, a volume, a plane, a curve in 2-D and queries off a subset; 4-D falls back
+    from scipy.spatial import cKDTree
+
+    from meshlap.corrections._neighbours import Nearest
+
+    rng = np.random.default_rng(3)
+    sphere, _ = shapes.sphere(3000, kind="random", seed=0)
+    t = rng.uniform(0, 6, 500)
+    for P, Q in [(sphere, sphere), (rng.random((2000, 3)), None), (sphere[::3], sphere),
+                 (np.column_stack([rng.random((900, 2)), np.zeros(900)]), None),
+                 (np.column_stack([np.cos(t), np.sin(t)]), None), (rng.random((300, 4)), None)]:
+        Q = P if Q is None else Q
+        near = Nearest(P)
+        for K in (1, 14, 64):
+            d, i = near.query(Q, K)
+            d0, i0 = cKDTree(P).query(Q, k=K)
+            assert np.array_equal(d, np.reshape(d0, d.shape)) and np.array_equal(i, np.reshape(i0, i.shape))
+        assert (P.shape[1] <= 3) == any(g is not None for g in near._grids.values())

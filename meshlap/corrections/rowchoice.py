@@ -50,11 +50,13 @@ its width, its noise factor falls only as the square root of the points it holds
 16,000 noisy sphere points 96 points spread over the width of 1,000 lose 10-40% of the
 accuracy of all 1,000 at a sixth of the cost (build and ``op @ f``).
 
-The compact rows of degree 4 and 6 are built only where they can win: their noise term alone,
-γ σ̂ ℓ ‖row‖₂, must come within ROBUST of the least predicted error of the rows built before
-(the degree-2 ones; the ladder only lowers it), with ‖row‖₂ bounded below by the rows of a
-sample of the points (:func:`_compact`). Where the data are clean they are built everywhere,
-the same rows as before; on the noisy spheres and tori of bench_pointwise almost nowhere.
+The compact rows of degree 4 and 6 are built only where they can win: a lower bound of their
+predicted error, the noise term γ σ̂ ℓ ‖row‖₂ and the bias β Σ_e probe_e ℓ^{1−q−e}, with ‖row‖₂
+and the probes bounded below by the rows of a sample of the points (:func:`_compact`), must
+come within ROBUST of the least predicted error of the rows built before (degree 6 first, then
+4, then the ladder, which only lowers it). On the noisy spheres and tori of bench_pointwise
+they are built almost nowhere; on clean data degree 6 everywhere and degree 4 where degree 6's
+lead is small (16,000 sphere points: 13% of them, the same rows as building it everywhere).
 With the ladder reusing the curvature fit and one stencil serving a rung's two degrees
 (:func:`meshlap.corrections.highorder.fit_rows`), the row choice on 16,000 points with 1%
 radial noise costs 1.0 s of CPU instead of 1.9 (E2 0.180 → 0.175), on the clean sphere 0.52
@@ -76,6 +78,7 @@ from scipy.spatial import cKDTree
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
 from ._fit_kernel import copy_rows, neighbour_medians
+from ._neighbours import _nearest, _Spread
 from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
@@ -105,6 +108,10 @@ _IN_ORDER = 30_000
 # A fit's residual beyond this multiple of the noise level is shape it misses (a noise estimate
 # from a residual fluctuates well within it)
 _EXCESS = 2.0
+# The least noise factor and probes of a sample's compact rows, times these, bound the others'
+# (_compact; the probes' spread is wider: a quarter of the sample's least is below every one of
+# 16,000 sphere points' at degree 4)
+_FLOORS = (0.5, 0.25, 0.25)
 
 
 @dataclass
@@ -190,63 +197,6 @@ def _candidate(P, idx, dist, degree, c, k, normals, centers, noise_dof=True, pla
     return fits if isinstance(degree, tuple) else fits[0]
 
 
-def _nearest(tree: cKDTree, P: np.ndarray, K: int, centers: np.ndarray, place: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray]:
-    # the K nearest points of P[centers], queried in the order of place (each point's place in
-    # a spatial order: consecutive queries then walk the same nodes, 6% less CPU at 16,000
-    # points and 19% at 100,000), returned in the centres' order: the same neighbours
-    order = np.argsort(place[centers], kind="stable")
-    dist, idx = tree.query(P[centers[order]], k=K, workers=-1)
-    out_i, out_d = np.empty((len(centers), K), dtype=np.int64), np.empty((len(centers), K))
-    out_i[order], out_d[order] = np.reshape(idx, (len(centers), K)), np.reshape(dist, (len(centers), K))
-    return out_i, out_d
-
-
-class _Spread:
-    """Neighbourhoods as wide as the K nearest points, held by at most ``sample`` of them.
-
-    A wide row averages noise; its bias is set by its width, its noise factor by the number
-    of points it holds, which falls only as the square root. So beyond ``sample`` neighbours
-    a stencil takes its points from a random subset of the cloud, n·sample/K of its points
-    (nested subsets, one fixed permutation), whose ``sample`` nearest reach as far as the K
-    nearest of the whole cloud; the centre is always among them. The cost of a row then
-    stays that of ``sample`` neighbours however wide it is.
-    """
-
-    def __init__(self, P: np.ndarray, tree: cKDTree, sample: int, ids: np.ndarray | None = None,
-                 n: int | None = None) -> None:
-        # ids, n: the points' global ids among n in all (one rank's share of them), so that
-        # every rank draws the same subsets
-        self.P, self.tree, self.sample = P, tree, sample
-        self.n = len(P) if n is None else int(n)
-        order = np.random.default_rng(0).permutation(self.n)
-        rank = np.empty(self.n, dtype=np.int64)
-        rank[order] = np.arange(self.n)
-        self.rank = rank if ids is None else rank[ids]  # each point's place in the permutation
-        self.trees: dict[int, tuple[np.ndarray, cKDTree]] = {}
-        self.place = np.empty(len(P), dtype=np.int64)  # each point's place in the tree's order
-        self.place[tree.indices] = np.arange(len(P))
-
-    def __call__(self, K: int, centers: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-        n, S = self.n, self.sample
-        if K <= 1.25 * S or n <= 2 * S:
-            K = min(K, len(self.P))
-            idx, dist = _nearest(self.tree, self.P, K, centers, self.place)
-            return idx, dist, K
-        m = max(S + 1, int(math.ceil(n * S / K)))
-        if m not in self.trees:
-            sub = np.flatnonzero(self.rank < m)
-            self.trees[m] = (sub, cKDTree(self.P[sub]))
-        sub, tree = self.trees[m]
-        S = min(S, len(sub))
-        loc, dist = _nearest(tree, self.P, S, centers, self.place)
-        idx = sub[loc]
-        inside = idx[:, 0] == centers  # the centre is in the subset: its own nearest
-        out_i = np.where(inside[:, None], idx, np.column_stack([centers, idx[:, :-1]]))
-        out_d = np.where(inside[:, None], dist, np.column_stack([np.zeros(len(centers)), dist[:, :-1]]))
-        return out_i, out_d, S
-
-
 def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # the predicted error of each row and its bias part. A fit's residual well beyond the noise
     # level is shape its polynomials miss (a surface rough at the spacing): it reaches Δf as
@@ -287,7 +237,9 @@ def _scale(fit: RowFit, nb: np.ndarray, k: int, d: int, diameter: float, spacing
 def _compact(P, idx, dist, q, k, normals, done, level, scale, sample_own, comm, place) -> list:
     # compact rows of degree q where they can win (the module's docstring): ‖row‖₂ ≥ R/ρ², ρ the
     # K-th neighbour's distance, R half the least ‖row‖₂ ρ² of a sample of the points, whose rows
-    # come first (bench_pointwise's inputs: 12-20 at degree 4, 22-38 at degree 6)
+    # come first (bench_pointwise's inputs: 12-20 at degree 4, 22-38 at degree 6); and its probes
+    # probe_e ≥ F ρ^{q−1+e}, F from the sample's least probe_e / ρ^{q−1+e}: the bias that rules
+    # degree 4 out where degree 6, built before it, is far ahead (clean data)
     sample, own = sample_own
     K = idx.shape[1]
     best = np.full(len(idx), np.inf)
@@ -297,10 +249,13 @@ def _compact(P, idx, dist, q, k, normals, done, level, scale, sample_own, comm, 
     first = np.flatnonzero(sample)
     fits = [_candidate(P, idx[first], dist[first], q, _C_COMPACT, k, normals, first, place=place)]
     ok = (fits[0].degree == q) & own[first]
-    R = fits[0].amplification[ok] * dist[first[ok], -1] ** 2
-    least = _min(comm, float(R.min()) if len(R) else math.inf)
-    floor = 0.5 * least if math.isfinite(least) else 0.0
-    bound = GAMMA * level * scale * floor / np.maximum(dist[:, -1], 1e-300) ** 2
+    rho = np.maximum(dist[:, -1], 1e-300)
+    lows = [fits[0].amplification[ok] * rho[first[ok]] ** 2] + [
+        np.nan_to_num(fits[0].probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
+    least = [_min(comm, float(v.min()) if len(v) else math.inf) for v in lows]
+    floor = [f * x if math.isfinite(x) else 0.0 for f, x in zip(_FLOORS, least, strict=True)]
+    bound = GAMMA * level * scale * floor[0] / rho ** 2 + BETA * (
+        floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
     rest = np.flatnonzero(~sample & (bound <= ROBUST * best))
     if len(rest):
         fits.append(_candidate(P, idx[rest], dist[rest], q, _C_COMPACT, k, normals, rest, place=place))
@@ -424,7 +379,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         Ks, Kn = [min(total, K) for K in Ks], min(total, _K_NOISE)
     # one query serves every compact candidate, the spacing and the neighbourhood medians:
     # the K nearest are a prefix of the Kq nearest
-    idx_all, dist_all = _nearest(tree, P, max(Ks + [Kn, min(16, n)]), everyone, spread.place)
+    idx_all, dist_all = _nearest(spread.near, P, max(Ks + [Kn, min(16, n)]), everyone, spread.place)
     spacing = _sum(comm, float(dist_all[own, 1:min(7, n)].mean(axis=1).sum())) / total
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
@@ -439,7 +394,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     resid = np.minimum(fit.residual, low.residual)
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
     sample = spread.rank < max(_CALIBRATE[0], total // _CALIBRATE[1])
-    for q, K in zip(degrees[-2::-1], Ks[-2::-1], strict=True):
+    for q, K in zip(degrees[:-1], Ks[:-1], strict=True):  # the highest first: it rules lower ones out
         tick(f"compact {q}")
         level = _local_noise(resid, nb, comm, own, noise)[0]
         done = [noise_fit] + [c for fits in compact.values() for c in fits]
