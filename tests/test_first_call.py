@@ -81,16 +81,18 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     assert not [k for k, parallel in kernels if parallel], kernels
     assert len({k for k, _ in kernels}) == len(kernels), kernels
     # the mesh: kernel rows, fitted rows, their copy, their compiled neighbour medians (np.nanmedian
-    # was 5x slower) and the Galerkin pencil's short cuts; the time bound below is what matters
-    assert 1 <= len(out["mesh"]) <= 5 and len(out["cloud"]) <= 3, kernels
+    # was 5x slower), their neighbours' grid search and the Galerkin pencil's short cuts; the time
+    # bound below is what matters
+    assert 1 <= len(out["mesh"]) <= 6 and len(out["cloud"]) <= 3, kernels
     # the frames' eigenvectors and the metric's inverse are hand-written (meshlap._dense):
     # numba's np.linalg.eigh and inv compiled 7 more functions, 2 s of CPU on a busy machine
     assert not out["lapack"], out["lapack"]
     # the mesh compiles the kernel rows and the fitted point-wise rows (_fit_kernel._rows, 8-11 s
     # of it): 11.9 s of CPU on a quiet 2-core machine, 12-18 s with a load of 6-9; numba's
-    # parallel=True made it 34-37 s. The cloud reuses the mesh's kernels and compiles its
-    # masses (3.6 s quiet, 4-7 s loaded)
-    assert mesh < 20.0 and cloud < 10.0
+    # parallel=True made it 34-37 s. The rows' neighbours' grid search (corrections._neighbours)
+    # added 1.5 s at a load of 11 (21.5 s in all at 9-10). The cloud reuses the mesh's kernels
+    # and compiles its masses (3.6 s quiet, 4-7 s loaded)
+    assert mesh < 23.0 and cloud < 10.0
     out, err = first_calls(tmp_path)
     print(f"warm cache, CPU time: mesh {out['cpu'][1]:.2f} s, cloud {out['cpu'][2]:.2f} s")
     assert "compiling" not in err and not out["mesh"] and not out["cloud"]

@@ -82,15 +82,20 @@ class Nearest:
         self._grids[key] = grid
         return grid
 
-    def query(self, Q: np.ndarray, K: int) -> tuple[np.ndarray, np.ndarray]:
-        """(dist, idx), each (len(Q), K): the K nearest points of each query point."""
+    def query(self, Q: np.ndarray, K: int, place: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(dist, idx), each (len(Q), K): the K nearest points of each query point, searched
+        cell by cell, or by the k-d tree in the order of ``place`` (a spatial order of the
+        queries: consecutive ones then walk the same nodes, 6% less CPU at 16,000 points and
+        19% at 100,000)."""
         Q = np.ascontiguousarray(Q, dtype=np.float64)
         grid = self._grid(K) if 1 <= K <= len(self.D) and self.D.shape[1] <= 3 else None
-        if grid is None:
-            dist, idx = self.tree.query(Q, k=K, workers=-1)
-            return np.reshape(dist, (len(Q), K)), np.reshape(idx, (len(Q), K)).astype(np.int64)
-        lo, width, dims, first, members = grid
         dist, idx = np.empty((len(Q), K)), np.empty((len(Q), K), dtype=np.int64)
+        if grid is None:
+            order = np.arange(len(Q)) if place is None else np.argsort(place, kind="stable")
+            d, i = self.tree.query(Q[order], k=K, workers=-1)
+            dist[order], idx[order] = np.reshape(d, (len(Q), K)), np.reshape(i, (len(Q), K))
+            return dist, idx
+        lo, width, dims, first, members = grid
         order = np.argsort(_keys(Q, lo, 1.0 / width, dims), kind="stable")  # cell by cell
         in_blocks(_grid_nearest, len(Q), order, self.D, Q, K, lo, width, dims, first, members, dist, idx)
         return dist, idx
@@ -187,14 +192,10 @@ def _grid_nearest(start, stop, order, D, Q, K, lo, width, dims, first, members, 
 
 def _nearest(near: Nearest, P: np.ndarray, K: int, centers: np.ndarray, place: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
-    # the K nearest points of P[centers], queried in the order of place (each point's place in
-    # a spatial order: consecutive queries then walk the same nodes, 6% less CPU at 16,000
-    # points and 19% at 100,000), returned in the centres' order: the same neighbours
-    order = np.argsort(place[centers], kind="stable")
-    dist, idx = near.query(P[centers[order]], K)
-    out_i, out_d = np.empty((len(centers), K), dtype=np.int64), np.empty((len(centers), K))
-    out_i[order], out_d[order] = np.reshape(idx, (len(centers), K)), np.reshape(dist, (len(centers), K))
-    return out_i, out_d
+    # the K nearest points of P[centers], in the centres' order (place: each point's place in a
+    # spatial order, Nearest.query)
+    dist, idx = near.query(P[centers], K, place[centers])
+    return idx, dist
 
 
 class _Spread:
