@@ -19,12 +19,14 @@ _MAX_CELLS = 16
 
 class Nearest:
     """The K nearest of ``D``'s points to query points, as ``scipy.spatial.cKDTree.query`` gives
-    them (the same distances, ascending; ties by index).
+    them (the same distances, ascending; ties ordered by index, where the tree's order of ties
+    may differ).
 
     Where the points fill a grid of cubes evenly enough (at most :data:`_MAX_CELLS` cubes per
     point with about K/8 points in each occupied one), compiled code searches the cubes ring by
     ring around each query until no unseen point can be nearer than the K-th: 16,000 points of
-    a sphere, K = 64, in a third of the k-d tree's CPU; else the k-d tree.
+    a sphere, K = 64, in 55-75% of the k-d tree's CPU (0.071-0.09 s against 0.11-0.16 s at a
+    load of 7-8); else the k-d tree.
 
     Examples
     --------
@@ -76,7 +78,8 @@ class Nearest:
         if grid is not None:
             lo, width, dims, cells = grid
             members = np.argsort(cells, kind="stable")
-            first = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
+            # 32-bit offsets where they fit: up to 16 cells a point (1,000,000 sphere points: 8 M)
+            first = np.zeros(int(np.prod(dims)) + 1, dtype=np.int32 if n < 2**31 - 1 else np.int64)
             np.cumsum(np.bincount(cells, minlength=len(first) - 1), out=first[1:])
             grid = (lo, width, dims, first, members)
         self._grids[key] = grid
