@@ -47,6 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from ._jit import in_blocks, jit
 from .corrections.shortcuts import THIN_WIDTHS
 from .errors import MeshWarning
 from .geometry import Geometry
@@ -288,16 +289,60 @@ def _heights(P: np.ndarray, geo: Geometry, edges: np.ndarray) -> tuple[np.ndarra
     # each vertex's height over the mean of its neighbours, and of its two rings, along its normal
     n = len(P)
     A = sp.csr_matrix((np.ones(2 * len(edges)), (edges.ravel(), edges[:, ::-1].ravel())), shape=(n, n))
-    A2 = A @ A + A
-    A2.data[:] = 1.0
-    A2.setdiag(0)
-    A2.eliminate_zeros()
-    N = geo.normals()
-    out = []
-    for B in (A, A2):
-        mean = (B @ P) / np.maximum(np.asarray(B.sum(axis=1)), 1.0)
-        out.append(np.abs(((P - mean) * N).sum(axis=1)))
-    return out[0], out[1]
+    one, two = np.empty(n), np.empty(n)
+    # compiled, the vertices visited in space order (their rings then share the cache): at 400k
+    # random vertices 0.44 s of CPU where scipy's A @ A + A and its products took 1.70 s
+    in_blocks(_ring_heights, n, _space_order(P, 8 * geo.spacing), np.ascontiguousarray(P, dtype=np.float64),
+              np.ascontiguousarray(geo.normals(), dtype=np.float64), A.indptr, A.indices, one, two)
+    return one, two
+
+
+def _space_order(P: np.ndarray, cell: float) -> np.ndarray:
+    # the points sorted by the cell of side ``cell`` (at least 2^-20 of the extent) they lie in
+    lo = P.min(axis=0)
+    extent = P.max(axis=0) - lo
+    cell = max(cell, float(extent.max()) / 2**20, 1e-300)
+    ijk = ((P - lo) / cell).astype(np.int64)
+    dims = ijk.max(axis=0) + 1
+    return np.argsort((ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2], kind="stable")
+
+
+@jit()
+def _ring_heights(start, stop, order, P, N, indptr, nbr, one, two):  # pragma: no cover - compiled
+    # one[v], two[v] for v = order[start:stop]: |(P_v − mean) · N_v| for the mean over v's
+    # neighbours, and over the vertices within two edges of v (v excluded), in R³;
+    # seen[u] == v: u is counted for v
+    seen = np.full(len(P), -1, dtype=np.int64)
+    for i in range(start, stop):
+        v = order[i]
+        seen[v] = v
+        sx = sy = sz = 0.0
+        for e in range(indptr[v], indptr[v + 1]):
+            u = nbr[e]
+            seen[u] = v
+            sx += P[u, 0]
+            sy += P[u, 1]
+            sz += P[u, 2]
+        k = indptr[v + 1] - indptr[v]
+        one[v] = _height(P, N, v, sx, sy, sz, k)
+        for e in range(indptr[v], indptr[v + 1]):
+            u = nbr[e]
+            for f in range(indptr[u], indptr[u + 1]):
+                t = nbr[f]
+                if seen[t] != v:
+                    seen[t] = v
+                    k += 1
+                    sx += P[t, 0]
+                    sy += P[t, 1]
+                    sz += P[t, 2]
+        two[v] = _height(P, N, v, sx, sy, sz, k)
+
+
+@jit(inline="always")
+def _height(P, N, v, sx, sy, sz, k):  # pragma: no cover - compiled
+    # |(P_v − s/k) · N_v|, k counted at least 1
+    k = max(k, 1)
+    return abs((P[v, 0] - sx / k) * N[v, 0] + (P[v, 1] - sy / k) * N[v, 1] + (P[v, 2] - sz / k) * N[v, 2])
 
 
 def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> dict[str, float]:

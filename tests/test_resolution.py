@@ -233,3 +233,24 @@ def test_saved_operator_keeps_the_report(tmp_path):
     plain = meshlap.laplacian(*shapes.sphere(300, seed=0), correction="none")
     assert plain.resolution is None  # the model covers the corrected kernel only
     assert load_operator(save_operator(tmp_path / "plain", plain)).resolution is None
+
+
+def test_ring_heights_match_the_sparse_products():
+    # the compiled pass (vertices in space order) against the heights from scipy's A and
+    # A @ A + A, on a noisy mesh whose vertices are numbered at random
+    from meshlap.resolution import _heights
+
+    V, F = shapes.sphere(3000, kind="random", seed=1)
+    V = V + 0.01 * np.random.default_rng(0).standard_normal(V.shape)
+    geo = meshlap.geometry.from_mesh(V, F)
+    P, edges, N, n = geo.points, geo.edges(), geo.normals(), len(V)
+    import scipy.sparse as sp
+
+    A = sp.csr_matrix((np.ones(2 * len(edges)), (edges.ravel(), edges[:, ::-1].ravel())), shape=(n, n))
+    A2 = A @ A + A
+    A2.data[:] = 1.0
+    A2.setdiag(0)
+    A2.eliminate_zeros()
+    want = [np.abs(((P - (B @ P) / np.maximum(B.sum(axis=1).A, 1.0)) * N).sum(axis=1)) for B in (A, A2)]
+    for got, ref in zip(_heights(P, geo, edges), want, strict=True):
+        assert np.allclose(got, ref, rtol=1e-12, atol=1e-15)

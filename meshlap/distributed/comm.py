@@ -6,10 +6,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import prange
 
 from .. import assembly
-from .._jit import jit
+from .._jit import in_blocks, jit
 from ..errors import MeshError
 from ..geometry.validation import check_faces
 
@@ -138,22 +137,29 @@ def _visit_rank(P: np.ndarray, uid: np.ndarray, lo: np.ndarray, cell: float, dim
     return rank
 
 
-@jit(parallel=True)
-def _canonical_rows(indptr, indices, data, visit, n_rows):  # pragma: no cover - compiled
+def _canonical_rows(indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, visit: np.ndarray,
+                    n_rows: int) -> None:
     # Reorder each row's off-diagonal entries to the serial visiting order and sum the
-    # diagonal in that order, with the serial kernel's own summation.
-    for w in prange(n_rows):
-        start = indptr[w]
-        if indptr[w + 1] == start:  # a row not filled this time
+    # diagonal in that order, with the serial kernel's own summation; on meshlap's threads
+    # (numba's parallel loop left its OpenMP workers spinning after each call)
+    in_blocks(_canonical_block, n_rows, indptr, indices, data, visit)
+
+
+@jit()
+def _canonical_block(start, stop, indptr, indices, data, visit):  # pragma: no cover - compiled
+    # _canonical_rows for rows start..stop
+    for w in range(start, stop):
+        first = indptr[w]
+        if indptr[w + 1] == first:  # a row not filled this time
             continue
-        first = start + 1
+        first += 1
         cnt = indptr[w + 1] - first
         order = np.argsort(visit[indices[first:first + cnt]])
         idx = indices[first:first + cnt][order]
         val = data[first:first + cnt][order]
         indices[first:first + cnt] = idx
         data[first:first + cnt] = val
-        data[start] = -assembly.grid._sum(data, first, cnt)
+        data[first - 1] = -assembly.grid._sum(data, first, cnt)
 
 
 # -- masses from faces spread over the ranks ------------------------------------------------
