@@ -110,8 +110,10 @@ def test_narrow_explicit_width_takes_the_plain_kernel_before_the_rows(monkeypatc
         assert not checks and [k.dog for k in kernels] == [False]
         assert error(op) < 1.1 * error(meshlap.laplacian(V, F, h=f * e2, correction="none"))
     # at 2 ē² the Richardson operator is the more accurate (4.2% against 9.2%): kept, and checked
-    op = meshlap.laplacian(V, F, h=2 * e2)
+    stages = []
+    op = meshlap.laplacian(V, F, h=2 * e2, progress=lambda f, stage: stages.append(stage))
     assert op.correction == "richardson" and checks and op.resolution is op._built.report
+    assert stages[:3] == ["kernel choice", "kernel rows", "kernel rows"]
     # past the model's irregularities (a random plane, 1.41) the check decides, and its fallback's
     # report is the plain kernel's too
     V, F = shapes.plane(2000, seed=0)
