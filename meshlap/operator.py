@@ -117,7 +117,11 @@ class MeshLaplacian(LumpedLaplacian):
         normals, else 0. On a surface's point cloud h_w stays at least half of h
         (:data:`meshlap.widths.CLOUD_CAP_FLOOR`).
     check_psd : bool, default True
-        Check that −S is positive semidefinite (Richardson only).
+        Check that −S is positive semidefinite (Richardson only), else fall back to the plain
+        kernel. With an explicit ``h`` on a surface mesh the build first compares the
+        resolution model's predictions of the two kernels at that h and takes the plain one
+        before any row is made where it is predicted more accurate (``fallback_reason`` says
+        so; :func:`meshlap.pipeline.plain_predicted`). False builds the Richardson operator as is.
     tol : float, optional
         Default 1e-6 for the corrected operators, 1e-8 for the paper's (``correction="none"``)
         and for the Galerkin pencil (of meshes and curves), where 1e-6 costs measurable accuracy.
@@ -247,8 +251,12 @@ class MeshLaplacian(LumpedLaplacian):
         # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
         built = self._built
         fell_back = built.quadrature != "galerkin" and built.correction != self.options.correction
-        self.resolution = resolution.assess(self.geometry, self.widths, self.options.correction,
-                                            built.galerkin_regime, built.shortcuts, built.thin, fell_back)
+        # the report made before the rows, where the build took the kernel it assumed
+        kept = (built.report is not None and built.report.fallback == fell_back
+                and built.quadrature != "galerkin")
+        self.resolution = built.report if kept else resolution.assess(
+            self.geometry, self.widths, self.options.correction, built.galerkin_regime, built.shortcuts,
+            built.thin, fell_back)
         if self.resolution is not None and self.resolution.too_coarse:
             warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
         self._half: pipeline.Built | None = None

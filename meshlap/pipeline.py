@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import assembly, corrections
+from . import assembly, corrections, resolution
 from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshError, MeshWarning
 from .geometry import Geometry
@@ -29,7 +29,7 @@ from .geometry.validation import check_positive, check_tol
 from .widths import CURVATURE_LIMIT, Widths
 
 __all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "POINTWISE", "QUADRATURES", "Built", "Options",
-           "build", "default_tol"]
+           "build", "default_tol", "plain_predicted"]
 
 #: ``correction`` values: the Richardson (difference of Gaussians) kernel, or the paper's.
 CORRECTIONS = ("richardson", "none")
@@ -40,6 +40,11 @@ POINTWISE = (True, False, "fit")
 #: ``quadrature`` values for the symmetric pencil: one point per vertex (the lumped masses),
 #: or the kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`); None chooses.
 QUADRATURES = ("vertex", "galerkin")
+#: Up to this irregularity (spread of the edge lengths) of a surface mesh the build compares the
+#: resolution model's predictions of the two kernels at an explicit width before it builds either:
+#: its sampling term was fitted on 0.12-0.50 (uniform to random spheres) and past that it
+#: extrapolates (a random plane, 1.41: 58% predicted at 2ē², 2.9% measured; benchmarks/RESULTS.md, i19c).
+PREDICT_MAX_IRREGULARITY = 0.55
 #: Kernel tolerance of the paper's operator: Gaussian weights below 1e-8 of the peak are dropped.
 DEFAULT_TOL = 1e-8
 #: Kernel tolerance of the corrected operators when none is given. Against 1e-8 on a 16k-vertex
@@ -196,6 +201,9 @@ class Built:
     #: what computes the fitted rows (L, pointwise_unchanged, pointwise_choice) until
     #: :meth:`fit_rows` has run it; None once they are held
     pending: Callable[[], tuple] | None = field(default=None, repr=False)
+    #: the resolution report of the kernel in effect, from the figures measured before the rows
+    #: (:func:`plain_predicted`; None where none were), for the operator to keep
+    report: Any = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     def fit_rows(self) -> Built:
@@ -216,6 +224,52 @@ class Built:
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state, _lock=threading.Lock())
+
+
+def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
+    """``(report, reason)``: the resolution report of the Richardson kernel at an explicit width on
+    a surface mesh (None elsewhere), and why the plain kernel is built instead (None to build
+    the Richardson one): where the model (:func:`meshlap.resolution.default_terms`) predicts the
+    plain kernel at this width more accurate. Decided before any row: a narrow width costs
+    neither the Richardson rows nor the semidefiniteness check (400,000 random vertices at
+    h = ē²: the check passes after 29 s of CPU, and the operator is 5% off where the plain
+    kernel is 0.9%; benchmarks/RESULTS.md, i19c).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, kind="random", seed=0))
+    >>> report, reason = plain_predicted(g, meshlap.widths.choose(g, 0.5 * g.spacing**2, plain=False))
+    >>> "predicted less accurate" in reason
+    True
+    >>> plain_predicted(g, meshlap.widths.choose(g, 2 * g.spacing**2, plain=False))[1] is None
+    True
+    """
+    if widths.h_auto or geo.faces is None or geo.dim != 2:
+        return None, None
+    report = resolution.assess(geo, widths, "richardson")
+    if report.irregularity > PREDICT_MAX_IRREGULARITY:
+        return report, None
+    rich = sum(resolution.default_terms(report).values())
+    plain = sum(resolution.default_terms(replace(report, fallback=True)).values())
+    if rich <= plain:
+        return report, None
+    return report, (f"at h = {report.width:.2f}² mean edges the Richardson operator is predicted less "
+                    f"accurate than the plain kernel ({rich:.1%} against {plain:.1%} for eigenvalues 1-9): h "
+                    f"is too small for the mesh to resolve the narrow kernel h/2; using the plain kernel "
+                    f"(O(h) bias)")
+
+
+def _as_fallback(report: Any) -> Any:
+    # the report of the plain kernel at the same widths, from the Richardson kernel's figures
+    # (resolution.assess(..., fallback=True) on a surface mesh, without measuring them again:
+    # 2 s of CPU at 400,000 vertices)
+    terms = resolution.default_terms(replace(report, fallback=True))
+    predicted = float(sum(terms.values()))
+    coarse = predicted > resolution.RATIO_LIMIT * report.fem_error
+    return replace(report, fallback=True, predicted_error=predicted, reason=max(terms, key=terms.get),
+                   verdict="too coarse" if coarse else "resolved",
+                   alternative="meshlap.baselines.cotangent(V, F)" if coarse else None)
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -339,7 +393,11 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     True
     """
     radius = cutoff_radius(widths.largest, opts.tol)
-    dog = not opts.plain
+    checked = not opts.plain and opts.check_psd and not opts.matrix_free
+    if checked and report is not None and not widths.h_auto:
+        report(0.0, "kernel choice")  # the resolution report's figures: 1.6-2 s at 400,000 vertices
+    figures, reason = plain_predicted(geo, widths) if checked else (None, None)
+    dog = not opts.plain and reason is None
     kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance else None, tol=opts.tol)
     frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
     band = None if frames is None else frames[0]
@@ -383,7 +441,9 @@ def build(geo: Geometry, widths: Widths, opts: Options,
         return free, L
 
     free, L = stage(kern, "kernel rows")
-    out = Built(L, L, opts.correction, boundary_rows=0 if frames is None or not opts.neumann else len(band))
+    out = Built(L, L, "none" if reason else opts.correction, fallback_reason=reason,
+                report=_as_fallback(figures) if reason else figures,
+                boundary_rows=0 if frames is None or not opts.neumann else len(band))
     if dog and opts.check_psd:
         if report is not None:
             report(0.7, "semidefinite check")
@@ -396,6 +456,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
                                                                     what, known)
         if out.fallback_reason is not None:
             out.correction = "none"
+            out.report = None if out.report is None else _as_fallback(out.report)
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
             out.L_sym = out.L = L

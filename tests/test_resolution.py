@@ -57,8 +57,10 @@ def test_explicit_narrow_widths_are_warned(random_sphere):
     # Here, 16,000 vertices: 6.5% at ē² (predicted 11.6%), 1.0% at 2ē² (1.5%), the cotangent 0.12%
     V, F = random_sphere
     e2 = meshlap.geometry.from_mesh(V, F).spacing ** 2
+    # the Richardson operator itself: the default takes the plain kernel at ē², which the model
+    # predicts more accurate (tests/test_accuracy.py), and whose report is the fallback's
     with pytest.warns(ResolutionWarning, match=r"use meshlap\.baselines\.cotangent\(V, F\)"):
-        op = meshlap.laplacian(V, F, h=e2)
+        op = meshlap.laplacian(V, F, h=e2, check_psd=False)
     r = op.resolution
     assert r.too_coarse and r.alternative == "meshlap.baselines.cotangent(V, F)"
     assert 0.9 < r.width < 1.1 and "against the sampling" in r.reason
