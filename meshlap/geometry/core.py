@@ -153,10 +153,12 @@ class Geometry:
                 return frames.knn_edges(self._pca()[1][:, :9])
             e = np.sort(e, axis=1)
             e = e[e[:, 0] != e[:, 1]].astype(np.int64)
-            # np.unique of one int64 key per edge: its order is the rows' lexicographic order,
-            # and it is 10x faster than np.unique(axis=0) (0.05 s of CPU on 16k vertices)
+            # one int64 key per edge, sorted, each kept once: the rows' lexicographic order. Not
+            # np.unique, whose hash path (numpy 2.4) took 0.94 s of CPU on a 400k-vertex mesh's
+            # 2.4M keys where the sort takes 0.02 s
             n = self.n_points
-            key = np.unique(e[:, 0] * n + e[:, 1])
+            key = np.sort(e[:, 0] * n + e[:, 1])
+            key = key[np.concatenate(([True], key[1:] != key[:-1]))]
             return np.column_stack([key // n, key % n])
 
         return self._cached("edges", make)
