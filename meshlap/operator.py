@@ -252,9 +252,9 @@ class MeshLaplacian(LumpedLaplacian):
         built = self._built
         fell_back = built.quadrature != "galerkin" and built.correction != self.options.correction
         # the report made before the rows, where the build took the kernel it assumed
-        kept = (built.report is not None and built.report.fallback == fell_back
+        kept = (built.resolution is not None and built.resolution.fallback == fell_back
                 and built.quadrature != "galerkin")
-        self.resolution = built.report if kept else resolution.assess(
+        self.resolution = built.resolution if kept else resolution.assess(
             self.geometry, self.widths, self.options.correction, built.galerkin_regime, built.shortcuts,
             built.thin, fell_back)
         if self.resolution is not None and self.resolution.too_coarse:

@@ -203,7 +203,7 @@ class Built:
     pending: Callable[[], tuple] | None = field(default=None, repr=False)
     #: the resolution report of the kernel in effect, from the figures measured before the rows
     #: (:func:`plain_predicted`; None where none were), for the operator to keep
-    report: Any = field(default=None, repr=False)
+    resolution: Any = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     def fit_rows(self) -> Built:
@@ -258,18 +258,6 @@ def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
                     f"accurate than the plain kernel ({rich:.1%} against {plain:.1%} for eigenvalues 1-9): h "
                     f"is too small for the mesh to resolve the narrow kernel h/2; using the plain kernel "
                     f"(O(h) bias)")
-
-
-def _as_fallback(report: Any) -> Any:
-    # the report of the plain kernel at the same widths, from the Richardson kernel's figures
-    # (resolution.assess(..., fallback=True) on a surface mesh, without measuring them again:
-    # 2 s of CPU at 400,000 vertices)
-    terms = resolution.default_terms(replace(report, fallback=True))
-    predicted = float(sum(terms.values()))
-    coarse = predicted > resolution.RATIO_LIMIT * report.fem_error
-    return replace(report, fallback=True, predicted_error=predicted, reason=max(terms, key=terms.get),
-                   verdict="too coarse" if coarse else "resolved",
-                   alternative="meshlap.baselines.cotangent(V, F)" if coarse else None)
 
 
 def _psd_faces(geo: Geometry) -> Any:
@@ -442,7 +430,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
 
     free, L = stage(kern, "kernel rows")
     out = Built(L, L, "none" if reason else opts.correction, fallback_reason=reason,
-                report=_as_fallback(figures) if reason else figures,
+                resolution=resolution.as_fallback(figures, geo) if reason else figures,
                 boundary_rows=0 if frames is None or not opts.neumann else len(band))
     if dog and opts.check_psd:
         if report is not None:
@@ -456,7 +444,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
                                                                     what, known)
         if out.fallback_reason is not None:
             out.correction = "none"
-            out.report = None if out.report is None else _as_fallback(out.report)
+            out.resolution = None if out.resolution is None else resolution.as_fallback(out.resolution, geo)
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
             out.L_sym = out.L = L

