@@ -3,7 +3,7 @@ operator, against the straightforward scipy build and one product with the finis
 
     python benchmarks/bench_assembly.py            # full run, updates benchmarks/RESULTS.md
     python benchmarks/bench_assembly.py --quick    # small meshes only, prints, writes nothing
-    python benchmarks/bench_assembly.py --default-vs-paper   # the default build / the paper's (issue 19)
+    python benchmarks/bench_assembly.py --default-vs-paper   # the default / the paper's, per use (issue 19)
 
 Meshes: the unit sphere with 16,000 vertices at h = 0.01 (47 M entries, 2,945 per row), the
 Stanford bunny at the automatic h = (2·mean edge)², and a 1,000,000-vertex sphere at
@@ -195,38 +195,41 @@ def table(rows: list[dict], mem: dict) -> list[str]:
 
 
 def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = None) -> dict:
-    """The default build against the paper's operator at the same h on a random n-vertex
-    sphere, best of ``repeat`` each by CPU time (wall beside it; the variants alternate, so
-    that a change of load falls on each), with the default's stages (wall and CPU seconds)
-    timed through its progress callback. The default fits its point-wise rows on first use:
-    it is timed alone and with its first ``op @ f``. ``h_edges``: h = h_edges · ē²
-    for both (ē the mean edge) instead of the default's own h; the warm-up is then a
-    2,000-vertex sphere, so that a large n is built only ``repeat`` times each."""
+    """The default against the paper's operator at the same h on a random n-vertex sphere, best
+    of ``repeat`` each by CPU time (wall beside it; the variants alternate, so that a change of
+    load falls on each), with the stages (wall and CPU seconds) timed through the progress
+    callback. Both operators build their parts on first use (i20p): each is timed at
+    construction alone, and with what a use reads: the first ``op @ f`` (the default's fitted
+    rows; the paper's L, its pencil), ``op.L_sym`` (the default's symmetric pencil), or both.
+    ``h_edges``: h = h_edges · ē² for both (ē the mean edge) instead of the default's own h; the
+    warm-up is then a 2,000-vertex sphere, so that a large n is built only ``repeat`` times each."""
     import meshlap
 
     V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
     if h_edges is None:
-        h = meshlap.laplacian(V, F).h  # also the warm-up
-        meshlap.laplacian(V, F, h=h, correction="none")
+        h = meshlap.laplacian(V, F).assemble().fit_rows().h  # also the warm-up
+        meshlap.laplacian(V, F, h=h, correction="none").assemble()
     else:
         h = h_edges * float(igl.edge_lengths(V, F).mean()) ** 2
         small = meshlap.shapes.sphere(2000, kind="random", seed=0)
-        meshlap.laplacian(*small, h=h * n / 2000)  # compiles what the builds below run
-        meshlap.laplacian(*small, h=h * n / 2000, correction="none")
+        meshlap.laplacian(*small, h=h * n / 2000).assemble().fit_rows()  # compiles what the builds below run
+        meshlap.laplacian(*small, h=h * n / 2000, correction="none").assemble()
     out = {"n": n, "h": h, "h_edges": h_edges, "repeat": repeat}
     default_kw = {} if h_edges is None else {"h": h}
+    paper_kw = {"h": h, "correction": "none"}
     # a zonal function g(x) on the unit sphere: Δ g = (1 − x²) g'' − 2x g' (not a polynomial,
     # which the fitted rows would reproduce exactly)
     x = V[:, 0]
     f, lap = np.exp(x), (1 - x**2 - 2 * x) * np.exp(x)
-    variants = (("paper", {"h": h, "correction": "none"}, False), ("default", default_kw, False),
-                # the build and its first op @ f, which fits the point-wise rows
-                ("default + first op @ f", default_kw, True),
+    uses = {"": lambda op: None, " + first op @ f": lambda op: op @ f, " + L_sym": lambda op: op.L_sym,
+            " + both": lambda op: (op @ f, op.L_sym)}
+    variants = [("paper", paper_kw, ""), ("paper + first op @ f", paper_kw, " + first op @ f"),
+                *((f"default{use}", default_kw, use) for use in uses),
                 # the options that trade the fitted rows' accuracy of op @ f for build time
-                ("pointwise=True", {**default_kw, "pointwise": True}, False),
-                ("pointwise=False", {**default_kw, "pointwise": False}, False))
+                ("pointwise=True + first op @ f", {**default_kw, "pointwise": True}, " + first op @ f"),
+                ("pointwise=False + first op @ f", {**default_kw, "pointwise": False}, " + first op @ f")]
     for _ in range(repeat):
-        for name, kw, apply in variants:
+        for name, kw, use in variants:
             marks = []
 
             def note(fraction, stage, marks=marks):
@@ -234,8 +237,7 @@ def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = No
 
             t, c = time.perf_counter(), time.process_time()
             op = meshlap.laplacian(V, F, progress=note, **kw)
-            if apply:
-                op @ f
+            uses[use](op)
             wall, cpu = time.perf_counter() - t, time.process_time() - c
             # the CPU ratio is the steadier figure on a shared machine: the best run by CPU
             if name not in out or cpu < out[name][1]:
@@ -244,6 +246,7 @@ def default_vs_paper(n: int = 16000, repeat: int = 3, h_edges: float | None = No
                 for (stage, a, ca), (_, b, cb) in zip(marks, ends, strict=True):
                     w0, c0 = stages.get(stage, (0.0, 0.0))
                     stages[stage] = (w0 + b - a, c0 + cb - ca)
+                # measured after the timing (builds what the variant did not)
                 err = float(np.linalg.norm(op @ f - lap) / np.linalg.norm(lap))
                 out[name] = (wall, cpu, stages, op.nnz, err)
     return out
@@ -361,23 +364,27 @@ def _kept_notes(title: str) -> list[str]:
 
 
 def write_default_vs_paper(r: dict, no_write: bool) -> None:
-    (pw, pc, _, pnnz, perr), (dw, dc, _, dnnz, derr) = r["paper"], r["default"]
-    fw, fc, stages = r["default + first op @ f"][:3]
-    trade = [(name, *r[name]) for name in ("pointwise=True", "pointwise=False") if name in r]
-    # the build's stages and the fit's at first use ("done" twice: the gaps before the fit and op @ f)
-    parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in stages.items() if k != "done")
+    (pw, pc), (qw, qc) = r["paper"][:2], r["paper + first op @ f"][:2]
+    names = [k for k in r if isinstance(r[k], tuple) and k != "paper"]
+    # the stages of the default's construction and both uses ("done" after each part)
+    parts = ", ".join(f"{k} {w:.3f} s ({c:.2f} s)" for k, (w, c) in r["default + both"][2].items()
+                      if k != "done")
     at = "" if r["h_edges"] is None else f" ({r['h_edges']:g} ē²)"
-    print(f"random sphere {r['n']:,}, h = {r['h']:.4g}{at}, best of {r['repeat']}: "
-          f"paper {pw:.3f} s (CPU {pc:.2f} s, {pnnz:,} entries); "
-          f"default build {dw:.3f} s (CPU {dc:.2f} s, {dnnz:,}): {dw / pw:.2f}x wall, {dc / pc:.2f}x CPU "
-          f"of the paper's; default build + first op @ f (fits the point-wise rows) {fw:.3f} s "
-          f"(CPU {fc:.2f} s): {fw / pw:.2f}x wall, {fc / pc:.2f}x CPU; stages: {parts}", flush=True)
-    print(f"op @ exp(x), relative L2 error: paper {perr:.2e}, default {derr:.2e}; " + "; ".join(
-        f"{name}: {w / pw:.2f}x wall, {c / pc:.2f}x CPU, error {e:.2e}" for name, w, c, _, _, e in trade),
-        flush=True)
+    print(f"random sphere {r['n']:,}, h = {r['h']:.4g}{at}, best of {r['repeat']} by CPU; the paper's "
+          f"construction {pw:.3f} s (CPU {pc:.2f} s), + first op @ f (its pencil) {qw:.3f} s "
+          f"(CPU {qc:.2f} s, {r['paper'][3]:,} entries); against the latter:", flush=True)
+    for name in names:
+        w, c, _, nnz, err = r[name]
+        print(f"  {name}: {w:.3f} s (CPU {c:.2f} s): {w / qw:.2f}x wall, {c / qc:.2f}x CPU; "
+              f"op @ exp(x) error {err:.2e}", flush=True)
+    print(f"  stages of the default + both, wall (CPU): {parts}", flush=True)
     if no_write:
         return
     title = "Default build against the paper's operator"
+    rows = [f"| {name.replace('op @ f', '`op @ f`').replace('L_sym', '`op.L_sym`')} | {w:.3f} s ({c:.2f} s) "
+            f"| {nnz:,} | {'**' if name.startswith('default +') else ''}{w / qw:.2f}×"
+            f"{'**' if name.startswith('default +') else ''} | {c / qc:.2f}× | {err:.2e} |"
+            for name, (w, c, _, nnz, err) in ((k, r[k]) for k in names)]
     write_section(title, [
         "Command: `python benchmarks/bench_assembly.py --default-vs-paper` (written "
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}).",
@@ -385,24 +392,21 @@ def write_default_vs_paper(r: dict, no_write: bool) -> None:
         f"`meshlap.shapes.sphere({r['n']}, kind='random', seed=0)`; the default `meshlap.laplacian(V, F)` "
         f"(h = {r['h']:.4g}) against the paper's `meshlap.laplacian(V, F, h=h, correction='none')`, "
         f"best of {r['repeat']} each (by CPU time) after a warm-up, alternating in the same process; the "
-        "default's stages timed by its progress callback. The default fits its point-wise rows on "
-        "first use (`op @ f`, `op.L`): spectra and heat flow never pay for them, `op @ f` does once. "
-        "The last two rows are the options that trade the "
-        "accuracy of `op @ f` (relative L2 error against the exact Δ eˣ = (1 − x² − 2x) eˣ on the "
-        "unit sphere) for "
-        "build time; the symmetric pencil, and so the spectra, is the same in all three.",
+        "stages timed by the progress callback. Both build their parts on first use: the default its "
+        "fitted rows at the first `op @ f` (`op.L`) and its symmetric pencil at the first `op.L_sym` "
+        "(`op.S`, spectra, heat flow, smoothing; `op.assemble()`); the paper's operator its one matrix "
+        "at either. Each row is the construction and the uses named, against the paper's construction "
+        f"and first `op @ f` ({qw:.3f} s, {qc:.2f} s CPU; its construction alone {pw:.3f} s, {pc:.2f} s). "
+        "The `pointwise` rows are the options that trade the accuracy of `op @ f` (relative L2 error "
+        "against the exact Δ eˣ = (1 − x² − 2x) eˣ on the unit sphere) for time; their rows come with "
+        "the pencil.",
         "",
-        "| build | time (CPU) | entries | / paper's, wall | / paper's, CPU | `op @ f` error, f = eˣ |",
+        "| construction + use | time (CPU) | entries | / paper's, wall | / paper's, CPU "
+        "| `op @ f` error, f = eˣ |",
         "|---|---|---|---|---|---|",
-        f"| paper's operator | {pw:.3f} s ({pc:.2f} s) | {pnnz:,} | 1.00× | 1.00× | {perr:.2e} |",
-        f"| default, build alone (point-wise rows not yet fitted) | {dw:.3f} s ({dc:.2f} s) | {dnnz:,} "
-        f"| **{dw / pw:.2f}×** | {dc / pc:.2f}× | {derr:.2e} |",
-        f"| default, build + first `op @ f` (fits the rows) | {fw:.3f} s ({fc:.2f} s) | {dnnz:,} "
-        f"| **{fw / pw:.2f}×** | {fc / pc:.2f}× | {derr:.2e} |",
-        *(f"| default, `{name}` | {w:.3f} s ({c:.2f} s) | {nnz:,} | {w / pw:.2f}× | {c / pc:.2f}× | {e:.2e} |"
-          for name, w, c, _, nnz, e in trade),
+        *rows,
         "",
-        f"The default's stages with its first `op @ f`, wall (CPU): {parts}.",
+        f"The default's stages, construction + first `op @ f` + `op.L_sym`, wall (CPU): {parts}.",
         *_kept_notes(title),
     ])
 

@@ -1,6 +1,9 @@
 """The two exceptions every stage raises: below every other module, so all can import them."""
 
-__all__ = ["MeshError", "MeshWarning", "OperatorTooLargeError"]
+import os
+import sys
+
+__all__ = ["MeshError", "MeshWarning", "OperatorTooLargeError", "user_stacklevel"]
 
 
 class MeshError(ValueError):
@@ -13,3 +16,20 @@ class MeshWarning(UserWarning):
 
 class OperatorTooLargeError(MemoryError):
     """The assembled matrix would not fit in the memory the caller allows."""
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` that points a warning issued by the caller at the first frame outside
+    meshlap: the user's line, however deep in the package the warning is made (an operator's
+    pencil is built on its first use, from any of its methods).
+
+    Examples
+    --------
+    >>> user_stacklevel() >= 1
+    True
+    """
+    here = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(here + os.sep):
+        frame, level = frame.f_back, level + 1
+    return level

@@ -15,7 +15,6 @@ computes nothing itself.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import replace
 from typing import Any
 
@@ -23,10 +22,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
-from . import pipeline, resolution
+from . import pipeline
 from . import widths as widths_mod
 from .assembly import cutoff_radius, fmt_bytes, normalization
-from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .errors import MeshError, OperatorTooLargeError
 from .geometry import Geometry, from_mesh
 from .geometry.validation import check_function
 from .lumped import LumpedLaplacian
@@ -138,7 +137,8 @@ class MeshLaplacian(LumpedLaplacian):
         on the fly, for meshes whose matrix does not fit in memory.
     max_memory : int, optional
         Bytes the stored matrix may take; default 80% of the memory available now. A build
-        that would exceed it raises :class:`OperatorTooLargeError` before allocating.
+        that would exceed it raises :class:`OperatorTooLargeError` before allocating: at
+        construction where a sample of rows leaves no doubt, else when the pencil is built.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
     quadrature : {"vertex", "galerkin"}, optional
@@ -168,7 +168,8 @@ class MeshLaplacian(LumpedLaplacian):
     L_sym : scipy.sparse.csr_matrix
         The symmetric pencil's L, S = M L_sym: the Richardson kernel with mirror images at the
         boundary (Neumann); ``L`` itself without point-wise rows. Spectra, heat flow and
-        smoothing use it (through ``S`` and ``M``).
+        smoothing use it (through ``S`` and ``M``). Built on first use (:meth:`assemble`), with
+        the facts below that describe it (correction, fallback, margin, scale, resolution).
     M : scipy.sparse.csr_matrix
         Diagonal lumped mass matrix.
     S : scipy.sparse.csr_matrix
@@ -193,7 +194,8 @@ class MeshLaplacian(LumpedLaplacian):
     resolution : meshlap.resolution.Resolution or None
         Whether the kernel resolves the input: the figures, the predicted eigenvalue error
         against linear FEM's, the verdict (a :class:`~meshlap.resolution.ResolutionWarning`
-        when too coarse) and the alternative; None for ``correction="none"``.
+        when too coarse, issued when the pencil is built) and the alternative; None for
+        ``correction="none"``.
 
     Examples
     --------
@@ -237,28 +239,10 @@ class MeshLaplacian(LumpedLaplacian):
             pointwise_degree=pointwise_degree, quadrature=quadrature, feature_width=feature_width)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
-        self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress))
-        level = 2 if type(self) is MeshLaplacian else 3
-        # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
-        # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own)
-        if self._built.fallback_reason is not None and (self._built.quadrature != "galerkin"
-                                                        or self.options.pointwise is True):
-            warnings.warn(self._built.fallback_reason + "; pass a larger h to keep the correction",
-                          MeshWarning, stacklevel=level)
-        #: Whether the kernel resolves the input, and the predicted eigenvalue error (None for
-        #: the paper's operator): :class:`meshlap.resolution.Resolution`.
-        # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to;
-        # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
-        built = self._built
-        fell_back = built.quadrature != "galerkin" and built.correction != self.options.correction
-        # the report made before the rows, where the build took the kernel it assumed
-        kept = (built.resolution is not None and built.resolution.fallback == fell_back
-                and built.quadrature != "galerkin")
-        self.resolution = built.resolution if kept else resolution.assess(
-            self.geometry, self.widths, self.options.correction, built.galerkin_regime, built.shortcuts,
-            built.thin, fell_back)
-        if self.resolution is not None and self.resolution.too_coarse:
-            warnings.warn(self.resolution.message(), resolution.ResolutionWarning, stacklevel=level)
+        # the symmetric pencil and the fitted rows are made on first use, each once (assemble,
+        # fit_rows); the pencil's warnings come then, pointed at the line that asked for it
+        self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress),
+                                     review=True)
         self._half: pipeline.Built | None = None
         self._S = None
 
@@ -278,34 +262,39 @@ class MeshLaplacian(LumpedLaplacian):
     max_memory = property(lambda self: self.options.max_memory)
     arc_distance = property(lambda self: self.options.arc_distance)
     neumann = property(lambda self: self.options.neumann)
-    correction = property(lambda self: self._built.correction, doc="The correction in effect.")
-    fallback_reason = property(lambda self: self._built.fallback_reason)
-    psd_margin = property(lambda self: self._built.psd_margin)
-    moment_scale = property(lambda self: self._built.moment_scale)
-    boundary_rows = property(lambda self: self._built.boundary_rows)
-    pointwise_unchanged = property(lambda self: self._built.fit_rows().pointwise_unchanged)
-    quadrature = property(lambda self: self._built.quadrature,
+    # the symmetric pencil's facts (built on first read: assemble)
+    correction = property(lambda self: self._built.assemble().correction, doc="The correction in effect.")
+    fallback_reason = property(lambda self: self._built.assemble().fallback_reason)
+    psd_margin = property(lambda self: self._built.assemble().psd_margin)
+    moment_scale = property(lambda self: self._built.assemble().moment_scale)
+    boundary_rows = property(lambda self: self._built.assemble().boundary_rows)
+    quadrature = property(lambda self: self._built.assemble().quadrature,
                           doc="The symmetric pencil's quadrature in effect: 'vertex' or 'galerkin'.")
-    quadrature_h = property(lambda self: self._built.quadrature_h, doc="The Galerkin pencil's h, else None.")
-    pointwise_choice = property(lambda self: self._built.fit_rows().pointwise_choice,
+    quadrature_h = property(lambda self: self._built.assemble().quadrature_h,
+                            doc="The Galerkin pencil's h, else None.")
+    resolution = property(lambda self: self._built.assemble().report, doc=(
+        "Whether the kernel resolves the input, and the predicted eigenvalue error (None for the paper's "
+        "operator): :class:`meshlap.resolution.Resolution`, made with the symmetric pencil."))
+    # the rows op @ f applies (made on first read: fit_rows)
+    pointwise_unchanged = property(lambda self: self._built.fit_rows().unchanged)
+    pointwise_choice = property(lambda self: self._built.fit_rows().choice,
                                 doc="Per-point width and degree of the fitted rows (the default), else None.")
-
-    @property
-    def pointwise(self) -> bool:
-        """Whether ``L`` holds point-wise rows distinct from ``L_sym`` (fitted or not yet)."""
-        b = self._built
-        return b.pending is not None or (b.L is not None and b.L is not b.L_sym)
+    pointwise = property(lambda self: bool(self.options.pointwise),
+                         doc="Whether ``L`` holds point-wise rows distinct from ``L_sym`` (made or not yet).")
 
     def fit_rows(self) -> MeshLaplacian:
-        """Compute the fitted point-wise rows now; returns the operator.
+        """Compute the rows ``op @ f`` applies now; returns the operator.
 
-        The default's rows (``pointwise="fit"``) are fitted on first use: the first ``op @ f``,
-        ``op.L``, :meth:`matvec`, :meth:`as_linear_operator`, :meth:`error_estimate`,
-        ``op.pointwise_choice``, curvature or saving fits them, once (under a lock, whichever
-        thread comes first), with the same bits a fit at build time gives. Spectra, heat flow
-        and smoothing use the symmetric pencil and never fit them. Call this to pay for them
-        at a time of your choosing (e.g. before timing ``op @ f``, or before threads share
-        the operator); it does nothing when they are held or the operator has none.
+        The default's rows (``pointwise="fit"``) read the points alone and are fitted on first
+        use: the first ``op @ f``, ``op.L``, :meth:`matvec`, :meth:`as_linear_operator`,
+        :meth:`error_estimate`, ``op.pointwise_choice``, curvature or saving fits them, once
+        (under a lock, whichever thread comes first), with the same bits a fit at build time
+        gives. Spectra, heat flow and smoothing use the symmetric pencil (:meth:`assemble`) and
+        never fit them. Rows on the kernel's own stencil (``pointwise=True``,
+        ``pointwise_degree``), the paper's operator (whose ``L`` is ``L_sym``) and a matrix-free
+        operator come with the pencil: for them this builds the pencil. Call this to pay for
+        the rows at a time of your choosing (e.g. before timing ``op @ f``, or before threads
+        share the operator); it does nothing when they are held.
 
         Examples
         --------
@@ -315,6 +304,34 @@ class MeshLaplacian(LumpedLaplacian):
         (True, False)
         """
         self._built.fit_rows()
+        return self
+
+    def assemble(self) -> MeshLaplacian:
+        """Build the symmetric pencil now; returns the operator.
+
+        The pencil (``L_sym``, ``S``: what spectra, heat flow and smoothing read; with it the
+        kernel choice at an explicit h, the semidefiniteness check and its fallback, the moment
+        scale, the Galerkin pencil, :attr:`resolution`) is built on first use: the first
+        ``op.L_sym``, ``op.S``, :func:`~meshlap.spectral.eigs`, heat flow, smoothing, a fact of
+        the pencil (``op.correction``, ``op.fallback_reason``, ``op.psd_margin``,
+        ``op.quadrature``, ...) or saving builds it, once (under a lock, whichever thread comes
+        first), with the same bits as a build at construction; its warnings (the fallback, a
+        :class:`~meshlap.resolution.ResolutionWarning`) come then. ``op @ f`` of the default
+        (the fitted rows, :meth:`fit_rows`) never builds it. Call this to pay for it at a time of
+        your choosing (e.g. before timing eigs, or to see the warnings at construction); it does
+        nothing when it is held. The memory guard still refuses at construction a pencil over
+        ``max_memory``.
+
+        Examples
+        --------
+        >>> import meshlap
+        >>> op = meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0))
+        >>> "pencil=on first use" in repr(op), "pencil=on first use" in repr(op.assemble())
+        (True, False)
+        >>> op.correction
+        'richardson'
+        """
+        self._built.assemble()
         return self
 
     @property
@@ -343,8 +360,9 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def L_sym(self) -> sp.csr_matrix:
-        """The symmetric pencil's L: ``S = M @ L_sym`` (spectra, heat flow, smoothing)."""
-        return self._stored(self._built.L_sym)
+        """The symmetric pencil's L: ``S = M @ L_sym`` (spectra, heat flow, smoothing; built on
+        first use: :meth:`assemble`)."""
+        return self._stored(self._built.assemble().L_sym)
 
     @property
     def M(self) -> sp.csr_matrix:
@@ -353,21 +371,22 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def nnz(self) -> int:
-        """Stored entries of L (0 when matrix-free)."""
-        return 0 if self._built.L_sym is None else int(self._built.L_sym.nnz)
+        """Stored entries of L_sym (0 when matrix-free; builds the pencil)."""
+        return 0 if self.matrix_free else int(self.L_sym.nnz)
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L_sym and the point-wise values (0 when matrix-free);
-        the fitted rows count once fitted (:meth:`fit_rows`)."""
-        L = self._built.L_sym
-        if L is None:
-            return 0
-        P = L if self._built.L is None else self._built.L  # the fitted rows: none held yet
-        # the moment rows share L_sym's indices; the fitted rows and a Galerkin pencil have their own
-        shared = P is L or P.indices is L.indices
-        extra = (0 if P is L else P.data.nbytes) + (0 if shared else P.indices.nbytes + P.indptr.nbytes)
-        return int(L.data.nbytes + L.indices.nbytes + L.indptr.nbytes + extra)
+        """Bytes held by the CSR arrays of L_sym and the point-wise values (0 when matrix-free):
+        the pencil once built (:meth:`assemble`), the fitted rows once fitted (:meth:`fit_rows`)."""
+        pencil, rows = self._built.held_pencil, self._built.held_rows
+        L = None if pencil is None else pencil.L_sym
+        P = None if rows is None else rows.L
+        total = 0 if L is None else L.data.nbytes + L.indices.nbytes + L.indptr.nbytes
+        if P is not None and P is not L:
+            # the moment rows share L_sym's indices; the fitted rows and a Galerkin pencil have their own
+            shared = L is not None and P.indices is L.indices
+            total += P.data.nbytes + (0 if shared else P.indices.nbytes + P.indptr.nbytes)
+        return int(total)
 
     def estimate_nnz(self, sample: int = 512, seed: int = 0) -> int:
         """Estimated stored entries from the neighbour counts of a random row sample.
@@ -385,14 +404,15 @@ class MeshLaplacian(LumpedLaplacian):
         >>> abs(est - exact) < 0.05 * exact
         True
         """
-        free = self._built.matrix_free
-        return self.nnz if free is None else int(round(free.count_entries(sample, seed)))
+        if not self.matrix_free:
+            return self.nnz
+        return int(round(self._built.assemble().matrix_free.count_entries(sample, seed)))
 
     # -- application --------------------------------------------------------------------
     def __matmul__(self, f: Any) -> np.ndarray:
         f = check_function(f, self.n_vertices)
-        if self._built.matrix_free is not None:
-            return self._built.matrix_free(f)
+        if self.matrix_free:
+            return self._built.assemble().matrix_free(f)
         return np.asarray(self.L @ f)
 
     def matvec(self, f: Any) -> np.ndarray:
@@ -401,9 +421,9 @@ class MeshLaplacian(LumpedLaplacian):
 
     def as_linear_operator(self) -> LinearOperator:
         """L as a :class:`scipy.sparse.linalg.LinearOperator` (matrix-free when not stored)."""
-        free = self._built.matrix_free
-        if free is None:
+        if not self.matrix_free:
             return sp.linalg.aslinearoperator(self.L)
+        free = self._built.assemble().matrix_free
         return LinearOperator(self.shape, matvec=lambda x: free(np.asarray(x, np.float64).reshape(-1)),
                               matmat=lambda X: free(np.asarray(X, np.float64)), dtype=np.float64)
 
@@ -451,7 +471,8 @@ class MeshLaplacian(LumpedLaplacian):
             half = replace(w, h=0.5 * w.h, h_vertex=None if w.h_vertex is None else 0.5 * w.h_vertex)
             opts = replace(self.options, correction=self.correction, check_psd=False, quadrature="vertex")
             self._half = pipeline.build(self.geometry, half, opts)
-        half_f = self._half.matrix_free(f) if self._half.matrix_free is not None else self._half.L @ f
+        half = self._half.assemble()
+        half_f = half.matrix_free(f) if half.matrix_free is not None else half.L @ f
         diff = np.abs(self @ f - np.asarray(half_f))
         return 2.0 * diff if self.correction == "none" else diff
 
@@ -474,33 +495,44 @@ class MeshLaplacian(LumpedLaplacian):
         else:
             note = f" ({geo.notes})" if geo.notes else ""
             rows.append(("geometry", f"{geo.source}, k={geo.dim} in R^{geo.ambient_dim}{note}"))
+        # read without building: a repr must not cost the pencil nor the fit
+        pencil = self._built.held_pencil
         rows += [
             ("h", f"{self.h:.6g}{h_note}"),
-            ("correction", self.correction + self._pointwise_note()),
+            ("correction", (self.options.correction if pencil is None else pencil.correction)
+             + self._pointwise_note()),
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
         ]
-        if self.quadrature == "galerkin":
-            narrow = self._built.narrowed
-            rows.append(("pencil", f"Galerkin over the cells, h={self.quadrature_h:.4g}"
+        if pencil is None:
+            rows.append(("pencil", "on first use"))
+        elif pencil.quadrature == "galerkin":
+            narrow = pencil.narrowed
+            rows.append(("pencil", f"Galerkin over the cells, h={pencil.quadrature_h:.4g}"
                          + (f", narrower on {narrow:.1%} of the area (feature size)" if narrow else "")))
         if self.matrix_free:
             rows.append(("storage", "matrix-free"))
         else:
-            rows += [("nnz", f"{self.nnz:,} ({self.nnz / self.n_vertices:.1f} per row)"),
-                     ("memory", f"{fmt_bytes(self.nbytes)} ({self.dtype.name}"
-                      + ("; the fitted rows not yet)" if self._built.pending is not None else ")"))]
+            if pencil is not None:
+                rows.append(("nnz", f"{self.nnz:,} ({self.nnz / self.n_vertices:.1f} per row)"))
+            later = [what for what, pending in (("the pencil", pencil is None),
+                                                ("the fitted rows", self._fit_pending())) if pending]
+            rows.append(("memory", f"{fmt_bytes(self.nbytes)} ({self.dtype.name}"
+                         + (f"; {' and '.join(later)} not yet)" if later else ")")))
         return rows
 
+    def _fit_pending(self) -> bool:
+        return self.options.pointwise == "fit" and self._built.rows_pending
+
     def _pointwise_note(self) -> str:
-        # read without fitting: a repr must not cost the fit (0.5 s at 16k vertices)
         if not self.pointwise:
             return ""
-        if self._built.pending is not None:
+        if self._fit_pending():
             return " + fitted rows (fitted on first use)"
-        if self._built.pointwise_choice is not None:
-            per_row = self._built.L.nnz / max(self.n_vertices, 1)
-            return f" + fitted rows ({per_row:.0f} entries per row; {self._built.pointwise_choice.summary()})"
+        rows = self._built.held_rows
+        if rows is not None and rows.choice is not None:
+            per_row = rows.L.nnz / max(self.n_vertices, 1)
+            return f" + fitted rows ({per_row:.0f} entries per row; {rows.choice.summary()})"
         if self.options.pointwise_degree is not None:
             return f" + fitted rows of degree {self.options.pointwise_degree}"
         return " + point-wise moments"

@@ -103,7 +103,7 @@ def test_narrow_explicit_width_takes_the_plain_kernel_before_the_rows(monkeypatc
     for f in (0.3, 0.5):
         kernels.clear()
         with pytest.warns(meshlap.MeshWarning, match="predicted less accurate than the plain kernel"):
-            op = meshlap.laplacian(V, F, h=f * e2)
+            op = meshlap.laplacian(V, F, h=f * e2).assemble()
         assert op.correction == "none" and op.psd_margin is None
         # the report of the plain kernel, made from the figures measured before the rows
         assert op.resolution == meshlap.resolution.assess(op.geometry, op.widths, "richardson", fallback=True)
@@ -112,13 +112,15 @@ def test_narrow_explicit_width_takes_the_plain_kernel_before_the_rows(monkeypatc
     # at 2 ē² the Richardson operator is the more accurate (4.2% against 9.2%): kept, and checked
     stages = []
     op = meshlap.laplacian(V, F, h=2 * e2, progress=lambda f, stage: stages.append(stage))
-    assert op.correction == "richardson" and checks and op.resolution is op._built.resolution
+    assert stages == ["done"] and not checks  # the pencil, and its kernel choice, on first use
+    stages.clear()
+    assert op.correction == "richardson" and checks and op.resolution is op._built.assemble().resolution
     assert stages[:3] == ["kernel choice", "kernel rows", "kernel rows"]
     # past the model's irregularities (a random plane, 1.41) the check decides, and its fallback's
     # report is the plain kernel's too
     V, F = shapes.plane(2000, seed=0)
     with pytest.warns(meshlap.MeshWarning, match="not negative semidefinite"):
-        op = meshlap.laplacian(V, F, h=0.3 * meshlap.geometry.from_mesh(V, F).spacing ** 2)
+        op = meshlap.laplacian(V, F, h=0.3 * meshlap.geometry.from_mesh(V, F).spacing ** 2).assemble()
     assert op.correction == "none" and op.resolution.fallback
     assert op.resolution == meshlap.resolution.assess(op.geometry, op.widths, "richardson", fallback=True)
 
@@ -141,12 +143,12 @@ def test_loss_of_semidefiniteness_falls_back_with_the_reason(monkeypatch):
     # the prediction that decides this case before the rows (next test) is left out here
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
     h = meshlap.default_h(V, F) / 32
-    monkeypatch.setattr(meshlap.pipeline, "plain_predicted", lambda geo, widths: (None, None))
+    monkeypatch.setattr(meshlap.pencil, "plain_predicted", lambda geo, widths: (None, None))
     built = []
     assemble = meshlap.assembly.assemble
     monkeypatch.setattr(meshlap.assembly, "assemble", lambda *a, **k: built.append(a[3]) or assemble(*a, **k))
     with pytest.warns(meshlap.MeshWarning, match="not negative semidefinite"):
-        op = meshlap.laplacian(V, F, h=h)
+        op = meshlap.laplacian(V, F, h=h).assemble()
     assert op.correction == "none" and "narrow kernel" in op.fallback_reason
     # the plain kernel's weights were given to the Richardson rows in place (the same pairs):
     # one neighbour search, and to the bit the rows a build of the plain kernel gives

@@ -304,7 +304,7 @@ def test_feature_width_pencil_symmetric_rows_sum_to_zero_semidefinite():
     # the default narrows next to concave creases only: the cube's are convex (across them
     # the unfolded distance is exact), it has no thin part, and keeps one width
     assert galerkin.creases(V, F, concave=True).shape == (0, 2)
-    assert meshlap.laplacian(V, F)._built.narrowed == 0
+    assert meshlap.laplacian(V, F)._built.assemble().narrowed == 0
 
 
 def test_feature_width_narrows_next_to_grooves_not_on_noise():
@@ -327,15 +327,16 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
     fake = features.feature_widths(noisy, gn.normals(), galerkin.creases(noisy, F, concave=True), hn)
     assert (fake < hn).mean() > 0.2
     op = meshlap.laplacian(noisy, F, quadrature="galerkin")
-    assert op.quadrature == "galerkin" and op._built.narrowed == 0 and "feature size" not in repr(op)
+    assert op.quadrature == "galerkin" and op._built.assemble().narrowed == 0
+    assert "feature size" not in repr(op)
     off = meshlap.laplacian(noisy, F, quadrature="galerkin", feature_width=False)
     assert (op.L_sym != off.L_sym).nnz == 0
     # an explicit h (the smoothing flow's) keeps one width unless asked
     Vt, Ft = shapes.torus(300, seed=0)  # its tube is 2.5 kernel widths across at h = 0.5 ē²
     ht = galerkin.H_SCALE * meshlap.geometry.from_mesh(Vt, Ft).spacing**2
-    assert meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin")._built.narrowed == 0
+    assert meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin")._built.assemble().narrowed == 0
     narrowed = meshlap.laplacian(Vt, Ft, h=ht, quadrature="galerkin", feature_width=True)
-    assert narrowed._built.narrowed > 0.5 and "(feature size)" in repr(narrowed)
+    assert narrowed._built.assemble().narrowed > 0.5 and "(feature size)" in repr(narrowed)
     # the build's semidefinite check ran on the narrowed pencil, and passed
     assert narrowed.quadrature == "galerkin" and narrowed.psd_margin > -1e-6
     with pytest.raises(MeshError, match="feature_width must be"):

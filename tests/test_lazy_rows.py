@@ -42,12 +42,12 @@ def test_spectra_and_heat_flow_do_not_fit_the_rows(sphere, counted):
     op = meshlap.laplacian(V, F)
     lam, _ = spectral.eigs(op, 6)
     u = heat.heat_flow(op, V[:, 0], 1e-3)
-    assert not counted and op._built.pending is not None and np.isfinite(u).all()
+    assert not counted and op._built.rows_pending and np.isfinite(u).all()
     assert abs(lam[1] - 2) < 0.01  # the pencil alone gave the spectrum
     # the first product fits them; what needs them later reuses them
     f = np.exp(V[:, 0])
     Lf = op @ f
-    assert len(counted) == 1 and op._built.pending is None
+    assert len(counted) == 1 and not op._built.rows_pending
     assert op.pointwise_choice is not None and op.L.nnz < 0.1 * op.L_sym.nnz
     assert np.array_equal(op.matvec(f), Lf) and np.array_equal(op.as_linear_operator() @ f, Lf)
     assert len(counted) == 1
@@ -100,7 +100,9 @@ def test_repr_does_not_fit_and_says_so(sphere, counted):
     # the paper's operator and the moment rows have nothing to fit
     for kw in ({"h": op.h, "correction": "none"}, {"pointwise": True}):
         other = meshlap.laplacian(V, F, **kw)
-        assert other._built.pending is None and "first use" not in repr(other.fit_rows())
+        assert "fitted" not in repr(other) and "pencil=on first use" in repr(other)
+        # their rows come with the pencil: asking for them builds it
+        assert "first use" not in repr(other.fit_rows()) and not other._built.pencil_pending
     assert len(counted) == 1
 
 
@@ -114,8 +116,8 @@ def test_saving_and_pickling_fit_the_rows(sphere, counted, tmp_path):
     # a pickle, too, holds the rows (fitted before it is written), and the copy its own lock
     fresh = meshlap.laplacian(V, F)
     again = pickle.loads(pickle.dumps(fresh))
-    assert len(counted) == 2 and same(again.L, op.L) and again._built.pending is None
-    assert again._built._lock is not fresh._built._lock and np.array_equal(again @ f, op @ f)
+    assert len(counted) == 2 and same(again.L, op.L) and not again._built.rows_pending
+    assert again._built._rows._lock is not fresh._built._rows._lock and np.array_equal(again @ f, op @ f)
 
 
 def test_progress_reports_the_fit_at_first_use(sphere):

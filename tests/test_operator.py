@@ -237,8 +237,11 @@ def test_deterministic_whatever_thread_count():
 def test_progress_callback():
     V, F = shapes.sphere(6000, seed=0)
     seen = []
-    meshlap.laplacian(V, F, h=0.002, progress=lambda frac, stage: seen.append((frac, stage)),
-            correction="none")
+    op = meshlap.laplacian(V, F, h=0.002, progress=lambda frac, stage: seen.append((frac, stage)),
+                           correction="none")
+    assert seen == [(1.0, "done")]  # construction builds nothing: the pencil comes on first use
+    seen.clear()
+    op @ V  # the paper's L is its pencil's
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and fracs[-1] == 1.0
     assert {"count", "fill", "done"} <= {s for _, s in seen}
@@ -247,6 +250,9 @@ def test_progress_callback():
     V, F = shapes.plane(1500, seed=0, kind="stratified")
     seen.clear()
     op = meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
+    assert seen == [(1.0, "done")]
+    seen.clear()
+    op.assemble()  # the pencil: on first use
     assert list(dict.fromkeys(s for _, s in seen)) == [
         "kernel rows", "boundary images", "semidefinite check", "moment scale", "Galerkin pencil", "done"]
     assert [f for f, _ in seen] == sorted(f for f, _ in seen)

@@ -25,13 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import OperatorTooLargeError
+from ..errors import OperatorTooLargeError, user_stacklevel
 from ..widths import Widths
 from . import grid, pairs, variable
 from .grid import cutoff_radius, normalization
 
 __all__ = ["Kernel", "MatrixFree", "MemoryGuard", "assemble", "available_memory", "csr", "cutoff_radius",
-           "fmt_bytes", "grid", "normalization", "pairs", "reweigh", "variable"]
+           "fmt_bytes", "grid", "normalization", "pairs", "refuse_early", "reweigh", "variable"]
 
 _INT32_MAX = np.iinfo(np.int32).max
 
@@ -163,6 +163,46 @@ def pad3(P: np.ndarray) -> np.ndarray:
     return P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
 
 
+def _sampled(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel,
+             guard: MemoryGuard | None) -> tuple:
+    # the cell grid and the sampled entry count of one build (d <= 3), checked by the guard
+    P = pad3(points)
+    g = grid.build_grid(P, mass, cutoff_radius(widths.largest, kernel.tol))
+    normals = None if kernel.normals is None else pad3(kernel.normals)
+    hv = None if kernel.plain and widths.h_vertex is None else widths.per_point(len(points))
+    # the sample is counted by the kernel that then builds (one fewer to compile)
+    mean, err = sample_counts(P, g, count=None if hv is None else (
+        lambda rows: variable.count_entries(P, g, hv, kernel.tol, normals, kernel.dim, rows)))
+    if guard is not None:
+        # fail fast only when the sample leaves no doubt; the exact count decides otherwise
+        guard(max(mean - 4.0 * err, 0.0), estimated=True)
+    return P, g, normals, hv, mean
+
+
+def refuse_early(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel,
+                 guard: MemoryGuard) -> None:
+    """Raise :class:`OperatorTooLargeError` now where the rows of ``kernel`` would not fit the
+    guard's budget, from the same sample of rows :func:`assemble` counts first (in more than 3
+    dimensions its exact count, which the k-d tree makes without listing the pairs): an
+    operator refuses at construction what its pencil, built on first use, could not hold.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> from meshlap.widths import Widths
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(500, seed=0))
+    >>> guard = MemoryGuard.for_build(500, np.dtype(np.float64), 1000, 0.01, images=False, pointwise=False)
+    >>> refuse_early(g.points, g.mass, Widths(0.01, None, False), Kernel(dim=2), guard)
+    Traceback (most recent call last):
+    ...
+    meshlap.errors.OperatorTooLargeError: the operator would hold at least about ...
+    """
+    if points.shape[1] > 3:
+        guard(pairs.count_entries(points, cutoff_radius(widths.largest, kernel.tol)))
+    else:
+        _sampled(points, mass, widths, kernel, guard)
+
+
 def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel, *,
              dtype=np.float64, guard: MemoryGuard | None = None,
              progress: Callable[[float, str], None] | None = None,
@@ -220,16 +260,7 @@ def assemble(points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kerne
             return pairs.assemble(points, mass, widths.h, radius, kernel.dim, dtype)
         return pairs.assemble_variable(points, mass, widths.per_point(n), kernel.tol, kernel.dim,
                                        kernel.dog, kernel.normals, dtype)
-    P = pad3(points)
-    g = grid.build_grid(P, mass, radius)
-    normals = None if kernel.normals is None else pad3(kernel.normals)
-    hv = None if one_h else widths.per_point(n)
-    # the sample is counted by the kernel that then builds (one fewer to compile)
-    mean, err = sample_counts(P, g, count=None if one_h else (
-        lambda rows: variable.count_entries(P, g, hv, kernel.tol, normals, kernel.dim, rows)))
-    if guard is not None:
-        # fail fast only when the sample leaves no doubt; the exact count decides otherwise
-        guard(max(mean - 4.0 * err, 0.0), estimated=True)
+    P, g, normals, hv, mean = _sampled(points, mass, widths, kernel, guard)
     index_dtype = np.int32 if n <= _INT32_MAX else np.int64
     if one_h:
         count_cb = None if progress is None else (lambda f: progress(0.3 * f, "count"))
@@ -333,4 +364,4 @@ def _warn_lonely(counts: np.ndarray, mass: np.ndarray, radius: float, h: float) 
     if len(lonely):
         warnings.warn(f"{len(lonely)} of {len(counts)} vertices have no neighbour within the cut-off "
                       f"radius {radius:.3g} (h={h:.3g}); L is 0 there. Use a larger h.", RuntimeWarning,
-                      stacklevel=4)
+                      stacklevel=user_stacklevel())

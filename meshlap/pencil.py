@@ -1,0 +1,321 @@
+"""The symmetric pencil: what spectra, heat flow and smoothing read (``S = M L_sym``).
+
+    kernel choice ─▶ Kernel ─▶ assembly.assemble ─▶ semidefinite check ─▶ moment scale ─▶ Galerkin
+
+:func:`assemble` runs these stages for one geometry, its widths and options, and returns
+:class:`Pencil`; :func:`meshlap.pipeline.build` calls it on the pencil's first use, not at
+construction, so an operator that only applies ``op @ f`` (the fitted rows, which read the
+points alone) never pays for it. Rows built on the kernel's own stencil (``pointwise=True``,
+``pointwise_degree``), the paper's operator (whose ``L`` is ``L_sym``) and a matrix-free
+operator come with the pencil. :func:`review` adds the operator's resolution report and its
+warnings, which come when the pencil is built.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import assembly, corrections, resolution
+from .assembly import Kernel, MemoryGuard, cutoff_radius
+from .errors import MeshWarning, user_stacklevel
+from .geometry import Geometry
+from .options import Options
+from .widths import Widths
+
+__all__ = ["PREDICT_MAX_IRREGULARITY", "Pencil", "assemble", "guard_for", "plain_predicted", "review"]
+
+#: Up to this irregularity (spread of the edge lengths) of a surface mesh the build compares the
+#: resolution model's predictions of the two kernels at an explicit width before it builds either:
+#: its sampling term was fitted on 0.12-0.50 (uniform to random spheres) and past that it
+#: extrapolates (a random plane, 1.41: 58% predicted at 2ē², 2.9% measured; benchmarks/RESULTS.md, i19c).
+PREDICT_MAX_IRREGULARITY = 0.55
+
+
+@dataclass
+class Pencil:
+    """The symmetric pencil's matrix ``L_sym`` (None when matrix-free), the correction in effect
+    and what the corrections measured; ``L`` the rows ``op @ f`` applies where they come with the
+    pencil (``L_sym`` itself, the moment rows, the rows on the kernel's stencil; None for the
+    fitted rows and matrix-free)."""
+
+    L_sym: sp.csr_matrix | None
+    L: sp.csr_matrix | None
+    correction: str
+    moment_scale: float = 1.0
+    psd_margin: float | None = None
+    fallback_reason: str | None = None
+    pointwise_unchanged: np.ndarray | None = None
+    boundary_rows: int = 0
+    matrix_free: assembly.MatrixFree | None = None
+    quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
+    quadrature_h: float | None = None  # the Galerkin pencil's width
+    galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
+    shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
+    thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
+    narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
+    #: the resolution report of the kernel in effect, from the figures measured before the rows
+    #: (:func:`plain_predicted`; None where none were)
+    resolution: Any = field(default=None, repr=False)
+    #: the operator's report (:func:`review`): ``resolution`` where it holds, else assessed anew
+    report: Any = field(default=None, repr=False)
+
+
+def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
+    """``(report, reason)``: the resolution report of the Richardson kernel at an explicit width on
+    a surface mesh (None elsewhere), and why the plain kernel is built instead (None to build
+    the Richardson one): where the model (:func:`meshlap.resolution.default_terms`) predicts the
+    plain kernel at this width more accurate. Decided before any row: a narrow width costs
+    neither the Richardson rows nor the semidefiniteness check (400,000 random vertices at
+    h = ē²: the check passes after 29 s of CPU, and the operator is 5% off where the plain
+    kernel is 0.9%; benchmarks/RESULTS.md, i19c). Part of the pencil: ``op @ f`` of the default
+    (the fitted rows) does not pay for it.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, kind="random", seed=0))
+    >>> report, reason = plain_predicted(g, meshlap.widths.choose(g, 0.5 * g.spacing**2, plain=False))
+    >>> "predicted less accurate" in reason
+    True
+    >>> plain_predicted(g, meshlap.widths.choose(g, 2 * g.spacing**2, plain=False))[1] is None
+    True
+    """
+    if widths.h_auto or geo.faces is None or geo.dim != 2:
+        return None, None
+    report = resolution.assess(geo, widths, "richardson")
+    if report.irregularity > PREDICT_MAX_IRREGULARITY:
+        return report, None
+    rich = sum(resolution.default_terms(report).values())
+    plain = sum(resolution.default_terms(replace(report, fallback=True)).values())
+    if rich <= plain:
+        return report, None
+    return report, (f"at h = {report.width:.2f}² mean edges the Richardson operator is predicted less "
+                    f"accurate than the plain kernel ({rich:.1%} against {plain:.1%} for eigenvalues 1-9): h "
+                    f"is too small for the mesh to resolve the narrow kernel h/2; using the plain kernel "
+                    f"(O(h) bias)")
+
+
+def guard_for(geo: Geometry, opts: Options, h: float, images: bool) -> MemoryGuard:
+    """The memory guard of the kernel's rows and what the build keeps beside them."""
+    return MemoryGuard.for_build(geo.n_points, opts.dtype, opts.max_memory, h, images=images,
+                                 pointwise=opts.pointwise, own_pattern=opts.pointwise_degree is not None)
+
+
+def _psd_faces(geo: Geometry) -> Any:
+    # triangles in R³ precondition the check's eigensolver: a mesh's faces, a cloud's local
+    # Delaunay triangles
+    if geo.ambient_dim != 3:
+        return None
+    if geo.faces is not None:
+        return geo.faces
+    if geo.cells is not None and geo.cells.shape[1] == 3:
+        return geo.cells
+    return None
+
+
+def pointwise_rows(geo: Geometry, free: sp.csr_matrix | None, hv: np.ndarray | None, opts: Options,
+                   report: Callable[[float, str], None] | None) -> tuple:
+    """``(L, unchanged, choice)``: the rows ``op @ f`` applies: width and degree chosen per point
+    ("fit", the default; ``free`` unused), fitted rows of a fixed degree on the kernel's stencil
+    ``free``, or degree-2 moments of the kernel's rows."""
+    if opts.pointwise == "fit":
+        # the positions f was sampled at: a denoised cloud's input points, whose noise the rows
+        # must average out (the projected points would hide it)
+        P = geo._cache.get("input_points", geo.points)
+        tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
+        L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim, progress=tick)
+        if L.dtype != opts.dtype:
+            L.data = L.data.astype(opts.dtype)
+        return L, None, choice
+    # the rows below share free's index arrays: canonical first, or scipy's in-place sort of
+    # one matrix would reorder the other's columns under its values
+    if not free.has_sorted_indices:
+        assembly.variable.sort_rows(free.indptr, free.indices, free.data)
+        free.has_sorted_indices = True
+    if opts.pointwise_degree is not None:
+        L = corrections.highorder.pointwise_rows(geo.points, free.indptr, free.indices, hv,
+                                                 opts.pointwise_degree, k=geo.dim)
+        return L, None, None
+    # from the operator without mirror images: f need not satisfy Neumann conditions, and the
+    # moment correction handles the one-sided rows
+    L, unchanged = corrections.moment_correction(free, geo.points, geo.dim)
+    return L, unchanged, None
+
+
+def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
+              report: Callable[[float, str], None] | None) -> None:
+    # the symmetric pencil from the kernel integrated over the cells, where asked for or where
+    # the automatic choice measures it ahead; op.L keeps the vertex rows
+    gal = corrections.galerkin
+    if opts.quadrature == "vertex" or (opts.quadrature is None and not widths.h_auto):
+        return
+    regime = gal.wins(geo)  # where it was measured ahead; the resolution report reads it too
+    if opts.quadrature is None and not regime:
+        return
+    if report is not None:
+        report(0.95, "Galerkin pencil")
+    tri = gal.simplices(geo)
+    h = gal.H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
+    dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
+    # the vertex pencil's boundary samples (one sampling per build), reflected across for the
+    # quadrature points within the Galerkin kernel's cut-off
+    boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
+    guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
+    surface = geo.faces is not None and geo.ambient_dim == 3
+    folds = gal.creases(geo.points, tri) if surface else None
+    hv = None
+    # the feature width where the width is automatic (an explicit h, as the smoothing flow's, is
+    # kept), never on noise: its fake creases and opposite sides would narrow it
+    if surface and opts.feature_width is not False and (widths.h_auto or opts.feature_width) \
+            and gal.shape_measures(geo.points, tri)[1] <= gal.AUTO_MAX_ROUGHNESS:
+        grooves = gal.creases(geo.points, tri, concave=True)
+        hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
+    info: dict = {}
+    S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
+                               tol=opts.pencil_tol, guard=guard, info=info, h_vertex=hv)
+    inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+    L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
+    if dog and opts.check_psd:
+        margin, reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo), "Galerkin pencil")
+        if reason is not None:
+            if opts.quadrature == "galerkin":  # asked for: say why it is not in effect
+                warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
+                              f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning,
+                              stacklevel=user_stacklevel())
+            return  # the vertex pencil stays
+        out.psd_margin = margin
+    out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
+    out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
+    out.shortcuts = info.get("shortcuts", 0.0)
+    if surface:
+        out.thin = corrections.shortcuts.thin_fraction(geo.points, geo.normals(), geo.mass,
+                                                       float(np.sqrt(2 * h)), info.get("shortcut_vertices"))
+    if not opts.pointwise:
+        out.L = L
+
+
+def assemble(geo: Geometry, widths: Widths, opts: Options,
+             report: Callable[[float, str], None] | None = None) -> Pencil:
+    """The symmetric pencil of one geometry at its widths: kernel choice, kernel rows, the
+    semidefinite check, the moment scale, the Galerkin pencil (and the rows that come with it).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> from meshlap import pipeline, widths
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(800, seed=0))
+    >>> opts = pipeline.Options.resolve(g, None)
+    >>> p = assemble(g, widths.choose(g, None, plain=False, curvature_limit=opts.curvature_limit), opts)
+    >>> p.correction, p.quadrature, p.L is None  # the fitted rows are not the pencil's
+    ('richardson', 'galerkin', True)
+    """
+    radius = cutoff_radius(widths.largest, opts.tol)
+    checked = not opts.plain and opts.check_psd and not opts.matrix_free
+    if checked and report is not None and not widths.h_auto:
+        report(0.0, "kernel choice")  # the resolution report's figures: 1.6-2 s at 400,000 vertices
+    figures, reason = plain_predicted(geo, widths) if checked else (None, None)
+    dog = not opts.plain and reason is None
+    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance else None, tol=opts.tol)
+    frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
+    band = None if frames is None else frames[0]
+    if opts.matrix_free:
+        apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern)
+        if dog:
+            apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
+        return Pencil(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply)
+    guard = guard_for(geo, opts, widths.h, opts.neumann and frames is not None)
+    hv = widths.per_point(geo.n_points)
+
+    moments: list = []  # the moment scale's product with the rows, where the fill made it
+
+    def stage(k: Kernel, what: str, held: list | None = None) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        # held: [the rows of another kernel], given the weights of k in place where
+        # assembly.reweigh can (the same pairs: no neighbour search, no new arrays), else
+        # let go before the new ones are built
+        if report is not None:
+            report(0.0, what)
+        free = held.pop() if held else None
+        if free is None or not assembly.reweigh(free, geo.points, geo.mass, widths, k):
+            free = None
+            # the Richardson rows also give, while each row is in cache, the moment scale's
+            # product and the check's with the constant and its start's random vectors (on a
+            # 16k sphere the moment scale 0.05 -> 0.00 s and the check 0.105 -> 0.03 s)
+            times = np.column_stack([corrections.moments.moment_block(geo.points)]
+                                    + ([corrections.psd.fill_columns(geo.points, geo.mass)] if opts.check_psd
+                                       else [])) if k.dog else None
+            free = assembly.assemble(geo.points, geo.mass, widths, k, dtype=opts.dtype, guard=guard,
+                                     progress=None if report is None else (lambda f, s: report(0.6 * f, s)),
+                                     times=times)
+            if k.dog:
+                free, product = free
+                moments.append(product)
+        if report is not None and opts.neumann:
+            report(0.6, "boundary images")
+        L = (corrections.neumann_images(free, geo.points, frames, geo.mass, hv, k.dog, geo.dim)
+             if opts.neumann else free)
+        return free, L
+
+    free, L = stage(kern, "kernel rows")
+    out = Pencil(L, None if opts.pointwise == "fit" else L, "none" if reason else opts.correction,
+                 fallback_reason=reason, boundary_rows=0 if frames is None or not opts.neumann else len(band),
+                 resolution=resolution.as_fallback(figures, geo) if reason else figures)
+    if dog and opts.check_psd:
+        if report is not None:
+            report(0.7, "semidefinite check")
+        what = "mesh" if geo.faces is not None else geo.source
+        # what the fill made, where the checked rows are the filled ones (no mirror images):
+        # their diagonal (each row's first entry) and product with [x, fill_columns]
+        fused = L is free and moments[0] is not None
+        known = (free.data[free.indptr[:-1]], moments[0][:, 1:]) if fused else None
+        out.psd_margin, out.fallback_reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo),
+                                                                    what, known)
+        if out.fallback_reason is not None:
+            out.correction = "none"
+            out.resolution = None if out.resolution is None else resolution.as_fallback(out.resolution, geo)
+            held, out.L_sym, out.L, L, free = [free], None, None, None, None
+            free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
+            out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
+    if out.correction != "none":
+        if report is not None:
+            report(0.8, "moment scale")
+        out.moment_scale = corrections.second_moment_scale(
+            lambda X: free @ X, geo.points, geo.mass, band, geo.dim,
+            None if moments[0] is None else moments[0][:, :1 + geo.points.shape[1]])
+        L.data *= out.moment_scale
+    if opts.pointwise is True:
+        if report is not None:
+            report(0.9, "point-wise rows")
+        out.L, out.pointwise_unchanged, _ = pointwise_rows(geo, free, hv, opts, report)
+    if not opts.plain or opts.quadrature == "galerkin":
+        _galerkin(geo, widths, opts, out, report)
+    if report is not None:
+        report(1.0, "done")
+    return out
+
+
+def review(geo: Geometry, widths: Widths, opts: Options, p: Pencil) -> Pencil:
+    """The operator's resolution report of pencil ``p`` (``p.report``) and its warnings: the
+    fallback to the plain kernel where that pencil is used, and the resolution's "too coarse";
+    pointed at the user's line that asked for the pencil. Returns ``p``."""
+    level = user_stacklevel()
+    # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
+    # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own)
+    if p.fallback_reason is not None and (p.quadrature != "galerkin" or opts.pointwise is True):
+        warnings.warn(p.fallback_reason + "; pass a larger h to keep the correction", MeshWarning,
+                      stacklevel=level)
+    # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to;
+    # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
+    fell_back = p.quadrature != "galerkin" and p.correction != opts.correction
+    # the report made before the rows, where the build took the kernel it assumed
+    kept = p.resolution is not None and p.resolution.fallback == fell_back and p.quadrature != "galerkin"
+    p.report = p.resolution if kept else resolution.assess(geo, widths, opts.correction, p.galerkin_regime,
+                                                           p.shortcuts, p.thin, fell_back)
+    if p.report is not None and p.report.too_coarse:
+        warnings.warn(p.report.message(), resolution.ResolutionWarning, stacklevel=level)
+    return p
