@@ -45,7 +45,7 @@ def child(n: int, which: str, k: int, h_edges: float) -> dict:
         M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
         op = None
     else:
-        op = meshlap.laplacian(V, F, **kw)
+        op = meshlap.laplacian(V, F, **kw).assemble()  # the pencil eigs reads: on first use
     build = (time.perf_counter() - t, time.process_time() - c)
     t, c = time.perf_counter(), time.process_time()
     if op is None:
