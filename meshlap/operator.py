@@ -276,7 +276,8 @@ class MeshLaplacian(LumpedLaplacian):
     dtype = property(lambda self: self.options.dtype)
     matrix_free = property(lambda self: self.options.matrix_free)
     max_memory = property(lambda self: self.options.max_memory)
-    arc_distance = property(lambda self: self.options.arc_distance)
+    arc_distance = property(lambda self: self.options.arc_distance and not self._built.chords,
+                            doc="Whether the kernel measures arcs (not the chords of pipeline.plain_arcs).")
     neumann = property(lambda self: self.options.neumann)
     correction = property(lambda self: self._built.correction, doc="The correction in effect.")
     fallback_reason = property(lambda self: self._built.fallback_reason)
