@@ -172,8 +172,9 @@ class Resolution:
         shortcuts.THIN_WIDTHS` of its kernel widths, not next to a short cut (0 for the vertex
         pencil).
     fallback : bool
-        Whether the corrected kernel's -S was not semidefinite at these widths and the build
-        fell back to the plain kernel (which the prediction then models).
+        Whether the build took the plain kernel (which the prediction then models): the
+        corrected kernel's -S not semidefinite at these widths, or predicted less accurate at an
+        explicit width (:func:`meshlap.pipeline.plain_predicted`).
     cloud : bool
         Whether the input is a surface's point cloud (its sampling term and its peer differ).
     cloud_noise : float
