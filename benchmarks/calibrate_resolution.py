@@ -28,6 +28,7 @@ import json
 import math
 import sys
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -157,6 +158,132 @@ def explicit_inputs():
     return out
 
 
+#: Explicit widths h/ē² at which a build chooses between the Richardson and the plain kernel
+#: (:func:`meshlap.pipeline.plain_predicted`), for ``kernel_inputs``.
+KERNEL_WIDTHS = (0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 4.0)
+
+
+def kernel_inputs(large=True):
+    """(name, (V, F), exact or reference, widths h/ē²): surface meshes of 1,000 to 100,000 vertices
+    where a narrow explicit width may take the plain kernel (seed 0; benchmarks/bench_fallback.py's
+    rows, seed 1 and tori of 2,000, are held out): random and uniform spheres, a nonuniform one
+    (irregularity 0.77, past the model's range), tori, spot, a stratified square and a disc."""
+    torus = _torus_exact()
+    out = [(f"sphere, {n:,} random", shapes.sphere(n, kind="random", seed=0), B._sphere_exact(),
+            KERNEL_WIDTHS) for n in (2000, 5000, 20000)]
+    out += [(f"sphere, {n:,} uniform", shapes.sphere(n, seed=0), B._sphere_exact(), KERNEL_WIDTHS)
+            for n in (2000, 20000)]
+    out.append(("sphere, 2,000 nonuniform", shapes.sphere(2000, kind="nonuniform", seed=0), B._sphere_exact(),
+                KERNEL_WIDTHS))
+    out += [(f"torus, {n:,}", shapes.torus(n, seed=0), torus, KERNEL_WIDTHS) for n in (1000, 5000, 20000)]
+    V, F = igl.read_triangle_mesh(str(B.DATA / "spot.obj"))
+    out.append(("spot", (V, F), B.cot(*B._refined(V, F)), KERNEL_WIDTHS))
+    out.append(("square, 2,025 stratified", shapes.plane(2000, seed=0, kind="stratified"), B._square_exact(),
+                KERNEL_WIDTHS))
+    Vd, Fd = B._disc(4000)
+    out.append((f"disc, {len(Vd):,}", (Vd, Fd), B._disc_exact(), KERNEL_WIDTHS))
+    if large:
+        out.append(("sphere, 100,000 random", shapes.sphere(100000, kind="random", seed=0), B._sphere_exact(),
+                    (0.5, 1.0, 2.0)))
+    return out
+
+
+def measure_kernels(todo):
+    """Per input and width h/ē²: the Richardson kernel's resolution report at that width (JSON;
+    the plain kernel's is the same with ``fallback``), and the measured errors of the Richardson
+    operator (unchecked), of the plain kernel as the build makes it (arc distances and mirror
+    images, the corrected default's tolerance), of the same with chords, and of the paper's
+    operator (chords, no images)."""
+    rows = []
+    for name, (V, F), ref, fractions in todo:
+        geo = meshlap.geometry.from_mesh(V, F)
+        for f in fractions:
+            h = f * geo.spacing**2
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", meshlap.MeshWarning)
+                rich = meshlap.laplacian(geo, h=h, check_psd=False, pointwise=False)
+                fig = resolution.assess(geo, meshlap.widths.choose(geo, h, plain=False), "richardson")
+                plain = {arc: meshlap.laplacian(geo, h=h, correction="none", arc_distance=arc,
+                                                neumann=rich.neumann, tol=meshlap.CORRECTED_TOL)
+                         for arc in (True, False)}
+                paper = meshlap.laplacian(geo, h=h, correction="none") if rich.neumann else plain[False]
+            err = {k: _error(np.sort(spectral.eigs(op, B.K, tol=1e-6)[0]), ref)
+                   for k, op in (("richardson", rich), ("plain", plain[True]), ("chord", plain[False]),
+                                 ("paper", paper))}
+            rows.append({"name": name, "fraction": f, "report": fig.to_json(), **err})
+            print(f"measured {name} at {f:g} ē²: Richardson {err['richardson']:.2%}, "
+                  f"plain {err['plain']:.2%}, chords {err['chord']:.2%}, paper's {err['paper']:.2%}",
+                  flush=True)
+    return rows
+
+
+#: The plain kernel's constants on surface meshes, fitted by ``--kernels`` alone (kept in the others' fit).
+PLAIN_KEYS = ("S_F", "S_Q", "S_E", "S_PF", "S_P", "S_PB", "S_PC")
+#: The plain kernel's model is fitted up to this irregularity (the random spheres' 0.50); the
+#: nonuniform sphere (0.77) checks it past that.
+FIT_MAX_IRREGULARITY = 0.55
+
+
+def _kernel_predictions(fig, md):
+    """The (Richardson, plain) errors the model ``md`` predicts at the figures ``fig``."""
+    return (sum(resolution.default_terms(fig, md).values()),
+            sum(resolution.default_terms(replace(fig, fallback=True), md).values()))
+
+
+def fit_plain(rows):
+    """The default model with the plain kernel's constants (``PLAIN_KEYS``) fitted on the
+    measured errors of ``measure_kernels``'s rows up to ``FIT_MAX_IRREGULARITY``."""
+    figs = [resolution.Resolution.from_json(r["report"]) for r in rows]
+    use = [(fig, r["plain"]) for r, fig in zip(rows, figs, strict=True)
+           if fig.irregularity <= FIT_MAX_IRREGULARITY]
+
+    def model(p):
+        return {**resolution.DEFAULT_MODEL, **dict(zip(PLAIN_KEYS, p, strict=True))}
+
+    def residuals(p):
+        md = model(p)
+        return [math.log(_kernel_predictions(fig, md)[1] / measured) for fig, measured in use]
+
+    p0 = [resolution.DEFAULT_MODEL[k] for k in PLAIN_KEYS]
+    return model(least_squares(residuals, p0, bounds=(0.0, 50.0)).x)
+
+
+def report_kernels(rows, md):
+    """Per row the measured and predicted errors of both kernels and the build's choice
+    (:data:`meshlap.pipeline.PLAIN_MARGIN`), then the spread of the predictions and the
+    predicted ratios that bound the margin."""
+    margin, spread = meshlap.pipeline.PLAIN_MARGIN, {"richardson": [], "plain": []}
+    ratios = {"R": [], "P": []}
+    print("| input | h / ē² | irregularity | Richardson measured / predicted | plain measured / predicted | "
+          "chords measured | kernel built (better one) |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        fig = resolution.Resolution.from_json(r["report"])
+        pr, pp = _kernel_predictions(fig, md)
+        inside = fig.irregularity <= FIT_MAX_IRREGULARITY
+        for k, pred in (("richardson", pr), ("plain", pp)):
+            if inside and r[k] < 0.5:  # a broken operator (its -S indefinite, 65-10⁶%) only predicted broken
+                spread[k].append(pred / r[k])
+        better = "plain" if r["plain"] < r["richardson"] else "Richardson"
+        if inside and r["richardson"] < r["plain"]:
+            ratios["R"].append((pr / pp, r["name"], r["fraction"]))
+        elif inside and r["plain"] < r["richardson"] / 1.1:
+            ratios["P"].append((pr / pp, r["name"], r["fraction"]))
+        switch = fig.irregularity <= meshlap.pipeline.PREDICT_MAX_IRREGULARITY and pr > margin * pp
+        built = "plain" if switch else "Richardson"
+        print(f"| {r['name']} | {r['fraction']:g} | {fig.irregularity:.2f} | {r['richardson']:.2%} / "
+              f"{pr:.2%} | {r['plain']:.2%} / {pp:.2%} | {r['chord']:.2%} | {built} ({better}) |")
+    for k, v in spread.items():
+        print(f"{k}: predicted / measured {min(v):.2f}-{max(v):.2f} on the {len(v)} rows up to "
+              f"irregularity {FIT_MAX_IRREGULARITY} where it is below 50%")
+    ratio, name, f = max(ratios["R"])
+    print(f"predicted Richardson / plain, largest where the Richardson kernel is measured better: "
+          f"{ratio:.2f} ({name} at {f:g} ē²)")
+    ratio, name, f = min(ratios["P"])
+    print(f"smallest where the plain kernel is measured better by more than 10%: {ratio:.2f} "
+          f"({name} at {f:g} ē²)")
+
+
 def _error(lam, ref):
     return float(np.abs(lam[1:B.K] / ref[1:B.K] - 1).max())
 
@@ -236,7 +363,8 @@ def fit(rows, clouds_only=False):
     """The fitted (default model, FEM model, cloud peer's model); ``clouds_only``: the default's
     constants for clouds (``CLOUD_KEYS``) and the peer's, the others kept."""
     mc = fit_peer(rows)
-    keys_d = [k for k in resolution.DEFAULT_MODEL if k not in FROZEN and (k in CLOUD_KEYS or not clouds_only)]
+    keys_d = [k for k in resolution.DEFAULT_MODEL
+              if k not in FROZEN + PLAIN_KEYS and (k in CLOUD_KEYS or not clouds_only)]
     keys_f = [] if clouds_only else list(resolution.FEM_MODEL)
     figs = [resolution.Resolution.from_json(r["report"]) for r in rows]
 
@@ -298,7 +426,20 @@ def main(argv=None) -> int:
     ap.add_argument("--cache", type=Path, help="JSON file of measurements: read if it exists, else written")
     ap.add_argument("--clouds", action="store_true",
                     help="the point clouds' rows only (cloud_inputs); fit their constants alone")
+    ap.add_argument("--kernels", action="store_true",
+                    help="both kernels at explicit widths (kernel_inputs): fit the plain kernel's constants")
     args = ap.parse_args(argv)
+    if args.kernels:
+        if args.cache is not None and args.cache.exists():
+            rows = json.loads(args.cache.read_text())
+        else:
+            rows = measure_kernels(kernel_inputs())
+            if args.cache is not None:
+                args.cache.write_text(json.dumps(rows))
+        md = fit_plain(rows)
+        print("DEFAULT_MODEL plain kernel =", {k: float(f"{md[k]:.3g}") for k in PLAIN_KEYS})
+        report_kernels(rows, md)
+        return 0
     if args.cache is not None and args.cache.exists():
         rows = json.loads(args.cache.read_text())
     else:

@@ -260,9 +260,10 @@ class MeshLaplacian(LumpedLaplacian):
     dtype = property(lambda self: self.options.dtype)
     matrix_free = property(lambda self: self.options.matrix_free)
     max_memory = property(lambda self: self.options.max_memory)
-    arc_distance = property(lambda self: self.options.arc_distance)
     neumann = property(lambda self: self.options.neumann)
     # the symmetric pencil's facts (built on first read: assemble)
+    arc_distance = property(lambda self: self.options.arc_distance and not self._built.assemble().chords,
+                            doc="Whether the kernel measures arcs (not the chords of pencil.plain_arcs).")
     correction = property(lambda self: self._built.assemble().correction, doc="The correction in effect.")
     fallback_reason = property(lambda self: self._built.assemble().fallback_reason)
     psd_margin = property(lambda self: self._built.assemble().psd_margin)

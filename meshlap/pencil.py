@@ -28,13 +28,25 @@ from .geometry import Geometry
 from .options import Options
 from .widths import Widths
 
-__all__ = ["PREDICT_MAX_IRREGULARITY", "Pencil", "assemble", "guard_for", "plain_predicted", "review"]
+__all__ = ["PLAIN_MARGIN", "PREDICT_MAX_IRREGULARITY", "THIN_SAMPLE", "Pencil", "assemble", "guard_for",
+           "plain_arcs", "plain_predicted", "review"]
 
 #: Up to this irregularity (spread of the edge lengths) of a surface mesh the build compares the
 #: resolution model's predictions of the two kernels at an explicit width before it builds either:
-#: its sampling term was fitted on 0.12-0.50 (uniform to random spheres) and past that it
-#: extrapolates (a random plane, 1.41: 58% predicted at 2ē², 2.9% measured; benchmarks/RESULTS.md, i19c).
-PREDICT_MAX_IRREGULARITY = 0.55
+#: both were fitted on 0.12-0.50 (uniform to random spheres) and checked on a nonuniform sphere
+#: (0.77: the plain kernel more accurate at every width from 0.3 to 4 ē², taken up to 2 ē²); past
+#: that they extrapolate (a random plane, 1.41: 58% predicted at 2ē², 2.9% measured;
+#: benchmarks/RESULTS.md, i19c and i20r).
+PREDICT_MAX_IRREGULARITY = 0.8
+#: The plain kernel is built where the Richardson kernel's predicted error is more than this times
+#: its own: each prediction is off by up to 2-4×, and of the 99 rows of
+#: ``calibrate_resolution.py --kernels`` those the Richardson kernel wins reach 1.45 (a 20,000-vertex
+#: torus at ē², 0.55% against 0.69%), those the plain kernel wins by more than 10% start at 1.85.
+PLAIN_MARGIN = 1.6
+#: The plain kernel that :func:`plain_predicted` takes measures chords, as the paper's does, where
+#: no vertex of at most this many (a sample of a larger mesh) has the surface's other side within
+#: its reach (:func:`plain_arcs`); the thickness of all 400,000 would cost 3 s of CPU at h = ē².
+THIN_SAMPLE = 20000
 
 
 @dataclass
@@ -59,6 +71,7 @@ class Pencil:
     shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
     thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
+    chords: bool = False  # the plain kernel taken before the rows measures chords (plain_arcs)
     #: the resolution report of the kernel in effect, from the figures measured before the rows
     #: (:func:`plain_predicted`; None where none were)
     resolution: Any = field(default=None, repr=False)
@@ -70,8 +83,8 @@ def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
     """``(report, reason)``: the resolution report of the Richardson kernel at an explicit width on
     a surface mesh (None elsewhere), and why the plain kernel is built instead (None to build
     the Richardson one): where the model (:func:`meshlap.resolution.default_terms`) predicts the
-    plain kernel at this width more accurate. Decided before any row: a narrow width costs
-    neither the Richardson rows nor the semidefiniteness check (400,000 random vertices at
+    plain kernel at this width more accurate by :data:`PLAIN_MARGIN`. Decided before any row: a
+    narrow width costs neither the Richardson rows nor the semidefiniteness check (400,000 random vertices at
     h = ē²: the check passes after 29 s of CPU, and the operator is 5% off where the plain
     kernel is 0.9%; benchmarks/RESULTS.md, i19c). Part of the pencil: ``op @ f`` of the default
     (the fitted rows) does not pay for it.
@@ -93,12 +106,33 @@ def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
         return report, None
     rich = sum(resolution.default_terms(report).values())
     plain = sum(resolution.default_terms(replace(report, fallback=True)).values())
-    if rich <= plain:
+    if rich <= PLAIN_MARGIN * plain:
         return report, None
     return report, (f"at h = {report.width:.2f}² mean edges the Richardson operator is predicted less "
                     f"accurate than the plain kernel ({rich:.1%} against {plain:.1%} for eigenvalues 1-9): h "
                     f"is too small for the mesh to resolve the narrow kernel h/2; using the plain kernel "
                     f"(O(h) bias)")
+
+
+def plain_arcs(geo: Geometry, widths: Widths) -> bool:
+    """Whether the plain kernel that :func:`plain_predicted` takes keeps the default's arc
+    distances: where part of the surface is thinner than
+    :data:`~meshlap.corrections.shortcuts.THIN_WIDTHS` of its widths √(2h), whose chords would
+    cross to the other side (spot at h = ē²/2: 4.4% of its area, 12.8% off with chords against
+    2.0% with arcs); elsewhere chords (spheres 1.0-1.3×, tori 1.1-2.2× more accurate than arcs
+    where the plain kernel is taken; benchmarks/RESULTS.md, i20r).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, kind="random", seed=0))
+    >>> plain_arcs(g, meshlap.widths.choose(g, g.spacing**2, plain=False))
+    False
+    """
+    n = geo.n_points
+    rows = None if n <= THIN_SAMPLE else np.arange(0, n, -(-n // THIN_SAMPLE))
+    width = float(np.sqrt(2 * widths.largest))
+    return corrections.shortcuts.thin_fraction(geo.points, geo.normals(), geo.mass, width, rows=rows) > 0
 
 
 def guard_for(geo: Geometry, opts: Options, h: float, images: bool) -> MemoryGuard:
@@ -221,7 +255,9 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         report(0.0, "kernel choice")  # the resolution report's figures: 1.6-2 s at 400,000 vertices
     figures, reason = plain_predicted(geo, widths) if checked else (None, None)
     dog = not opts.plain and reason is None
-    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance else None, tol=opts.tol)
+    chords = reason is not None and opts.arc_distance and not plain_arcs(geo, widths)
+    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance and not chords else None,
+                  tol=opts.tol)
     frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
     band = None if frames is None else frames[0]
     if opts.matrix_free:
@@ -263,7 +299,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
 
     free, L = stage(kern, "kernel rows")
     out = Pencil(L, None if opts.pointwise == "fit" else L, "none" if reason else opts.correction,
-                 fallback_reason=reason, boundary_rows=0 if frames is None or not opts.neumann else len(band),
+                 fallback_reason=reason, chords=chords,
+                 boundary_rows=0 if frames is None or not opts.neumann else len(band),
                  resolution=resolution.as_fallback(figures, geo) if reason else figures)
     if dog and opts.check_psd:
         if report is not None:

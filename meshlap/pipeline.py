@@ -27,11 +27,12 @@ from . import assembly, pencil
 from .assembly import Kernel
 from .geometry import Geometry
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
-from .pencil import PREDICT_MAX_IRREGULARITY, Pencil, plain_predicted
+from .pencil import PLAIN_MARGIN, PREDICT_MAX_IRREGULARITY, THIN_SAMPLE, Pencil, plain_arcs, plain_predicted
 from .widths import Widths
 
-__all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "POINTWISE", "PREDICT_MAX_IRREGULARITY",
-           "QUADRATURES", "Built", "Once", "Options", "Rows", "build", "default_tol", "plain_predicted"]
+__all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "PLAIN_MARGIN", "POINTWISE",
+           "PREDICT_MAX_IRREGULARITY", "QUADRATURES", "THIN_SAMPLE", "Built", "Once", "Options", "Rows",
+           "build", "default_tol", "plain_arcs", "plain_predicted"]
 
 
 class Once:

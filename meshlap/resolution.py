@@ -17,9 +17,11 @@ for its peer (linear FEM; on a surface's point cloud, robust-laplacian):
   whose nearest-neighbour edges spread more than a mesh's, it is ``C_W·(max(q − Q_C, 0)/0.1)^P_C
   ·max(1/ρ − 1/R_W, 0)^P_W·(1 + C_E·ē²λ)``), β the mass within
   √(2h) of the boundary, κ_b the boundary's curvature times √(2h), c the mass within √(2h) of
-  a crease and ν the noise in mean edges; where the corrected kernel's -S was not semidefinite
-  and the build fell back to the plain kernel, ``A_F·w^-P_F + A_P·b·hλ``, w the width in mean
-  edges (on a point cloud ``C_F·(1 + C_FE·ē²λ)`` in place of ``A_F``);
+  a crease and ν the noise in mean edges; where the build took the plain kernel (the
+  corrected kernel's -S not semidefinite, or predicted less accurate at an explicit width), on a
+  surface mesh ``S_F·(q/0.3)^S_Q·(1 + S_E·ē²λ)·w^-S_PF + (S_P + S_PB·b + S_PC·c)·hλ``, w the width in
+  mean edges (its quadrature, and its O(h) bias, larger on curved surfaces and near creases),
+  elsewhere ``A_F·w^-P_F + A_P·b·hλ`` (on a point cloud ``C_F·(1 + C_FE·ē²λ)`` in place of ``A_F``);
 * linear FEM: ``(F_E + F_Q·q²)·ē²λ·(1 + ē²λ) + F_N·ν²``, ē the mean edge (``F_T·ē²λ`` on
   tetrahedra, ``(F_S + F_SQ·q²)·ē²λ`` on a polyline's segments);
 * a surface's point cloud has no cells and no FEM: its peer is robust-laplacian's
@@ -70,11 +72,16 @@ CREASE_HEIGHT = 0.1
 #: The constants of the default's error model (module docstring), fitted on 71 rows (inputs,
 #: explicit widths, pencils) by ``benchmarks/calibrate_resolution.py``, which prints new ones
 #: after a change of the numerics; A_K and A_C are kept from the fit on the vertex pencil's
-#: inputs (no input there constrains them now).
+#: inputs (no input there constrains them now). The plain kernel's on surface meshes (``S_*``)
+#: are fitted by its ``--kernels`` on 91 rows, both kernels measured at h = 0.3-4 ē² (spheres,
+#: tori, spot, a square and a disc of 1,000-100,000 vertices; 0.73-2.4× the measured error).
 DEFAULT_MODEL = {"A_H": 0.0131, "A_2": 0.142, "A_Q": 0.00366, "P_Q": 0.571, "R_0": 0.992,
                  "A_B": 0.0789, "A_K": 0.25, "A_C": 0.18, "A_N": 1.24,
                  "A_W": 0.000641, "Q_W": 3.76, "P_W": 2.19, "R_W": 1.0,
                  "A_F": 0.0374, "P_F": 0.548, "A_P": 3.54,
+                 # the plain kernel's on surface meshes (``--kernels``)
+                 "S_F": 0.0013, "S_Q": 4.09, "S_E": 4.01, "S_PF": 4.68, "S_P": 0.45, "S_PB": 0.317,
+                 "S_PC": 8.13,
                  # point clouds' sampling and fallback terms, fitted on their rows alone (``--clouds``)
                  "C_W": 6.23e-05, "Q_C": 0.156, "P_C": 4.24, "C_E": 14.2, "C_F": 0.0417, "C_FE": 7.95}
 #: The Galerkin pencil's error over linear FEM's: at most 0.52 on the seven inputs of
@@ -165,8 +172,9 @@ class Resolution:
         shortcuts.THIN_WIDTHS` of its kernel widths, not next to a short cut (0 for the vertex
         pencil).
     fallback : bool
-        Whether the corrected kernel's -S was not semidefinite at these widths and the build
-        fell back to the plain kernel (which the prediction then models).
+        Whether the build took the plain kernel (which the prediction then models): the
+        corrected kernel's -S not semidefinite at these widths, or predicted less accurate at an
+        explicit width (:func:`meshlap.pipeline.plain_predicted`).
     cloud : bool
         Whether the input is a surface's point cloud (its sampling term and its peer differ).
     cloud_noise : float
@@ -174,6 +182,9 @@ class Resolution:
         default's projection; :func:`meshlap.geometry.pointcloud.noise_ratio`), 0 for meshes.
     peer_error : float or None
         The predicted error of :data:`CLOUD_PEER` on a surface's point cloud (None otherwise).
+    surface : bool
+        Whether the input is a surface mesh, whose plain kernel has its own model (False in
+        reports stored before it had one: they keep the former).
 
     Examples
     --------
@@ -204,6 +215,7 @@ class Resolution:
     cloud: bool = False
     cloud_noise: float = 0.0
     peer_error: float | None = None
+    surface: bool = False
 
     @property
     def too_coarse(self) -> bool:
@@ -349,10 +361,17 @@ def default_terms(fig: Resolution, model: dict[str, float] = DEFAULT_MODEL) -> d
     """
     c, hl = model, fig.wavelength
     narrowed = min(fig.narrowed / c["R_0"], 1.0) ** -c["P_Q"]
-    if fig.fallback:  # the plain kernel at these widths, its -S semidefinite where the corrected was not
-        # fitted on two rows (20,000 random vertices at ē²/2, a 13³ cube of tetrahedra at ē²/16);
-        # 400,000 random vertices at ē² (benchmarks/RESULTS.md, at scale): 3.9% against 5.4% measured.
-        # A cloud's point masses are a coarser quadrature than a mesh's, and more so the fewer
+    if fig.fallback and fig.surface:  # the plain kernel at these widths: its quadrature and its O(h) bias
+        # (fitted by calibrate_resolution.py --kernels; 2,000 random vertices at h = ē²: 6.9% for 7.8%)
+        e2l = hl / max(fig.width, 1e-3) ** 2
+        return {f"the plain kernel's quadrature at {fig.width:.2f} mean edges":
+                    c["S_F"] * (fig.irregularity / 0.3) ** c["S_Q"] * (1 + c["S_E"] * e2l)
+                    * max(fig.width, 1e-3) ** -c["S_PF"],
+                "the plain kernel's O(h) bias":
+                    (c["S_P"] + c["S_PB"] * fig.bend + c["S_PC"] * fig.creases) * hl}
+    if fig.fallback:  # elsewhere (tetrahedra, curves, clouds): fitted on a 13³ cube of tetrahedra at
+        # ē²/16 and a 20,000-vertex random sphere at ē²/2 (which the surfaces' model now covers). A
+        # cloud's point masses are a coarser quadrature than a mesh's, and more so the fewer
         # points a wavelength holds (random squares at ē²/2: 15% at 1,000 points, 8.7% at 4,000)
         quad = (c["C_F"] * (1 + c["C_FE"] * hl / max(fig.width, 1e-3) ** 2) if fig.cloud else c["A_F"])
         return {f"the correction fell back to the plain kernel: its quadrature at {fig.width:.2f} mean edges":
@@ -473,7 +492,8 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
             raw = geo._cache.get("input_points")
             cloud_noise = noise_ratio(P, 2, geo._cache.get("pca")) if raw is None else noise_ratio(raw, 2)
     fig = Resolution(geo.spacing, math.sqrt(h_mean) / geo.spacing, rho, hl, q, bend, noise, band, curv,
-                     crease, 0.0, None, "", None, "", shortcuts, thin, fallback, surface_cloud, cloud_noise)
+                     crease, 0.0, None, "", None, "", shortcuts, thin, fallback, surface_cloud, cloud_noise,
+                     surface=geo.faces is not None and geo.dim == 2)
     terms = default_terms(fig)
     fem = fem_error(fig, geo.source, geo.faces is not None)
     peer = peer_error(fig) if surface_cloud else None

@@ -86,8 +86,8 @@ def test_narrow_explicit_width_takes_the_plain_kernel_before_the_rows(monkeypatc
     # (bench_psd) and, at 0.5 ē², semidefinite but 96% off: the resolution model predicts the plain
     # kernel more accurate, so neither the Richardson rows nor the check are made, and the default
     # is within 10% of the paper's operator's error at the same h (benchmarks/bench_fallback.py:
-    # 26.1% and 13.5% against 25.7% and 12.7%, its arc distances against the paper's chords; the
-    # Richardson operator 1475% and 96%)
+    # 25.7% and 12.7%, its chords as the paper's where no part of the surface is thin, 26.1% and
+    # 13.5% with arc distances; the Richardson operator 1475% and 96%)
     V, F = shapes.sphere(2000, kind="random", seed=1)
     e2 = meshlap.geometry.from_mesh(V, F).spacing ** 2
     checks, kernels = [], []

@@ -72,32 +72,45 @@ def crease_distance(P: np.ndarray, crease_edges: np.ndarray, limit: float) -> np
     return out
 
 
-def thickness(P: np.ndarray, normals: np.ndarray, limit: float) -> np.ndarray:
+def thickness(P: np.ndarray, normals: np.ndarray, limit: float, rows: np.ndarray | None = None) -> np.ndarray:
     """Each vertex's distance to the surface's other side, ``inf`` beyond ``limit``: the nearest
     vertex whose normal points the opposite way (more than 120° apart) and which lies along
     both normals (within 45°), as in :func:`~meshlap.corrections.shortcuts.thin_fraction`.
+    ``rows``: only those vertices' (in that order), against all of ``P``.
 
     Examples
     --------
     >>> import numpy as np
     >>> P = np.array([[0.0, 0, 0], [0, 0, 0.1], [1, 0, 0]])      # a slab 0.1 thick
     >>> N = np.array([[0.0, 0, -1], [0, 0, 1], [0, 0, -1]])
-    >>> thickness(P, N, 0.5).tolist()
-    [0.1, 0.1, inf]
+    >>> thickness(P, N, 0.5).tolist(), thickness(P, N, 0.5, np.array([2, 1])).tolist()
+    ([0.1, 0.1, inf], [inf, 0.1])
     """
+    if rows is not None:  # the pairs of the rows' vertices only (a sample of a large mesh)
+        found = cKDTree(P[rows]).sparse_distance_matrix(cKDTree(P), limit, output_type="ndarray")
+        i, j = found["i"], found["j"]
+        out = np.full(len(rows), np.inf)
+        across = _across(P, normals, rows[i], j)
+        np.minimum.at(out, i[across], found["v"][across])
+        return out
     out = np.full(len(P), np.inf)
     pairs = cKDTree(P).query_pairs(limit, output_type="ndarray")
     if not len(pairs):
         return out
     i, j = pairs[:, 0], pairs[:, 1]
-    d = P[j] - P[i]
-    dist = np.linalg.norm(d, axis=1)
-    reach = dist * math.cos(math.pi / 4)
-    across = (((normals[i] * normals[j]).sum(axis=1) < -0.5) & (np.abs((d * normals[i]).sum(axis=1)) > reach)
-              & (np.abs((d * normals[j]).sum(axis=1)) > reach))
+    across = _across(P, normals, i, j)
+    dist = np.linalg.norm(P[j] - P[i], axis=1)
     np.minimum.at(out, i[across], dist[across])
     np.minimum.at(out, j[across], dist[across])
     return out
+
+
+def _across(P: np.ndarray, normals: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    # the pairs on opposite sides: normals more than 120° apart, each along the other's normal
+    d = P[j] - P[i]
+    reach = np.linalg.norm(d, axis=1) * math.cos(math.pi / 4)
+    return (((normals[i] * normals[j]).sum(axis=1) < -0.5) & (np.abs((d * normals[i]).sum(axis=1)) > reach)
+            & (np.abs((d * normals[j]).sum(axis=1)) > reach))
 
 
 def feature_widths(P: np.ndarray, normals: np.ndarray, crease_edges: np.ndarray, h: float,

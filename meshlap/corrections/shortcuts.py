@@ -157,13 +157,13 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
 
 
 def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: float,
-                  separated: np.ndarray | None = None) -> float:
+                  separated: np.ndarray | None = None, rows: np.ndarray | None = None) -> float:
     """The mass fraction of a surface's vertices whose other side is within
     ``THIN_WIDTHS · width``: another vertex whose normal points the opposite way (more than
     120° apart) and which lies along both normals (within 45°), as across a thin limb or wall.
     Vertices marked in ``separated`` (those that lost pairs to :func:`drop_shortcuts`, which
     already keeps the two sides apart: fandisk's thin walls, 2.6 of its 3.1% at h = ē²/2) do
-    not count.
+    not count. ``rows``: the fraction over those vertices only (a sample of a large mesh).
 
     Examples
     --------
@@ -173,7 +173,10 @@ def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: f
     >>> thin_fraction(V, geo.normals(), geo.mass, 0.1), thin_fraction(V, geo.normals(), geo.mass, 1.0)
     (0.0, 1.0)
     """
-    thin = np.isfinite(thickness(P, normals, THIN_WIDTHS * width))
+    thin = np.isfinite(thickness(P, normals, THIN_WIDTHS * width, rows))
+    if rows is not None:
+        mass = mass[rows]
+        separated = None if separated is None else separated[rows]
     if separated is not None:
         thin &= ~separated
     return float(mass[thin].sum() / mass.sum())

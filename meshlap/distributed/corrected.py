@@ -27,7 +27,8 @@ import scipy.sparse as sp
 
 from .. import assembly, corrections
 from ..geometry import Geometry
-from ..pipeline import Options, plain_predicted
+from ..options import Options
+from ..pencil import plain_arcs, plain_predicted
 from ..widths import Widths
 
 __all__ = ["PointAttributes", "attributes", "local_rows"]
@@ -85,15 +86,17 @@ def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
         T[band, 1] = 1.0
         T[band, 2 + d:2 + d + d0] = b
         T[band, 2 + 2 * d:2 + 2 * d + d0] = nu
-    if opts.arc_distance:
+    # at a narrow explicit width the plain kernel, where the resolution model predicts it more
+    # accurate, with chords where no part is thinner than its reach: the single machine's choice,
+    # made before any row
+    reason = plain_predicted(geo, widths)[1] if not opts.plain and opts.check_psd else None
+    arc = opts.arc_distance and (reason is None or plain_arcs(geo, widths))
+    if arc:
         T[:, 2:2 + d0] = geo.normals()
     raw = geo._cache.get("input_points") if opts.pointwise == "fit" else None
     if raw is not None:
         T = np.column_stack([T, assembly.pad3(raw)])
-    # at a narrow explicit width the plain kernel, where the resolution model predicts it more
-    # accurate: the single machine's choice, made before any row
-    reason = plain_predicted(geo, widths)[1] if not opts.plain and opts.check_psd else None
-    return PointAttributes(T, geo.dim, not opts.plain and reason is None, opts.arc_distance, opts.neumann,
+    return PointAttributes(T, geo.dim, not opts.plain and reason is None, arc, opts.neumann,
                            opts.pointwise, opts.check_psd, opts.tol, d0, raw is not None,
                            opts.pointwise_degree, reason)
 
