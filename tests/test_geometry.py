@@ -170,3 +170,20 @@ def test_boundary_flags_equal_the_unique_rows(which):
     want[uniq[counts == 1].reshape(-1)] = True
     got = _once(keys, n)
     assert np.array_equal(got, want) and 0 < got.sum() < len(V)
+
+
+def test_vertex_normals_equal_the_sums_of_np_add_at():
+    # the faces' normals added to their corners by bincount: the same sums to the bit as
+    # np.add.at corner by corner (the formula before); every face twice, the second time in
+    # reverse order, so that each corner's sum has many terms in a scrambled order
+    from meshlap.geometry import frames
+    from meshlap.geometry.validation import check_faces
+    V, F = shapes.sphere(3000, kind="random", seed=1)
+    faces = check_faces(np.vstack([F, F[::-1, [1, 2, 0]]]), len(V))
+    T = faces.triangles()
+    fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    N = np.zeros_like(V)
+    for c in range(3):
+        np.add.at(N, T[:, c], fn)
+    want = N / np.linalg.norm(N, axis=1, keepdims=True)
+    assert np.array_equal(frames.vertex_normals(V, faces), want)

@@ -356,3 +356,25 @@ def test_build_moment_scale_equals_the_product_after_the_fill():
     band = geo.boundary_frames(radius)[0]
     want = meshlap.corrections.second_moment_scale(lambda X: free @ X, geo.points, geo.mass, band, geo.dim)
     assert op.correction == "richardson" and 0 < len(band) < len(V) and op.moment_scale == want != 1.0
+
+
+@pytest.mark.parametrize("normals", [None, "radial", "rough"])
+def test_variable_rows_longer_than_the_first_buffers(normals):
+    # rows of up to ~1,200 candidates, more than the fill's first buffers hold (1,024): each
+    # candidate's d² and width written at its place in the grown buffers, then the kept ones
+    # moved to the front; the same pairs and values as the formula, and as the count pass
+    V, mass, hv, N = _variable_case(9, normals)
+    V, mass, hv = np.vstack([V, 1.01 * V, 0.99 * V]), np.tile(mass, 3), 25 * np.tile(hv, 3)
+    N = None if N is None else np.tile(N, (3, 1))
+    g = kernel.build_grid(V, mass, kernel.cutoff_radius(hv.max(), 1e-6))
+    indptr, indices, data = assembly.variable.variable_csr(V, g, hv, 1e-6, N, True, np.int32, np.float64)
+    assert np.diff(indptr).max() > 1024
+    assert np.array_equal(assembly.variable.count_entries(V, g, hv, 1e-6, N), np.diff(indptr))
+    ref, pattern = brute_force_variable(V, mass, hv, 1e-6, N, True, 2)
+    rows = np.repeat(np.arange(len(V)), np.diff(indptr))
+    dense = np.zeros_like(ref)
+    dense[rows, indices] = data
+    assert np.array_equal(dense != 0, pattern | (np.eye(len(V), dtype=bool) & (dense != 0)))
+    # the arc series' truncation (2e-8 at t = 0.1) times d²/4h: pairs at wider angles here
+    err = np.abs(dense - ref).max(axis=1) / np.abs(ref).max(axis=1)
+    assert err.max() < (1e-13 if N is None else 5e-7)

@@ -51,8 +51,12 @@ def vertex_normals(V: np.ndarray, faces: Polygons) -> np.ndarray:
     N = np.zeros_like(V, dtype=np.float64)
     if len(T):
         fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-        for c in range(3):
-            np.add.at(N, T[:, c], fn)
+        # each face's normal added to its corners: the first corners' in face order, then the
+        # second's, the third's, as np.add.at(N, T[:, c], fn) for c = 0, 1, 2 adds them (the
+        # same sums to the bit), but by bincount (0.38 -> 0.15 s of CPU at 400k vertices)
+        corner = T.T.ravel()
+        for k in range(3):
+            N[:, k] = np.bincount(corner, np.tile(fn[:, k], 3), minlength=len(V))
     norm = np.linalg.norm(N, axis=1, keepdims=True)
     return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
 
