@@ -32,10 +32,10 @@ def brute_force_L(V, mass, h, tol):
     return L, pattern
 
 
-def messy_mesh():
+def messy_mesh(n=700):
     """A random sphere plus 3 unreferenced vertices (no mass): one at a vertex's position,
     one inside the sphere, one far outside the grid of the sources."""
-    V, F = shapes.sphere(700, kind="random", seed=11)
+    V, F = shapes.sphere(n, kind="random", seed=11)
     extra = np.array([V[5], [0.1, 0.2, -0.1], [40.0, -3.0, 7.0]])
     return np.vstack([V, extra]), F
 
@@ -59,10 +59,11 @@ def test_exp_matches_libm_to_an_ulp():
     assert np.all(out[~normal] == 0) and ref[~normal].max() < 2.3e-308
 
 
-@pytest.mark.parametrize("tol", [1e-3, 1e-8])
-def test_csr_equals_brute_force(tol):
-    V, F = messy_mesh()
-    h = 0.004
+# 1,500 vertices at h = 0.05: rows of about 1,450 entries, more than the fill's and the
+# product's first buffers hold (1,024), read with unsigned source indices (branch i20g)
+@pytest.mark.parametrize("n, h, tol", [(700, 0.004, 1e-3), (700, 0.004, 1e-8), (1500, 0.05, 1e-8)])
+def test_csr_equals_brute_force(n, h, tol):
+    V, F = messy_mesh(n)
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
         op = meshlap.laplacian(V, F, h=h, tol=tol, correction="none")
@@ -80,6 +81,7 @@ def test_csr_equals_brute_force(tol):
     off = pattern
     assert np.max(np.abs(dense[off] / ref[off] - 1)) < 1e-14
     assert np.all(dense[-1] == 0)  # the far vertex
+    assert n < 1500 or np.diff(L.indptr).max() > 1024
 
 
 def test_int64_indices_give_the_same_matrix(monkeypatch):
@@ -124,13 +126,14 @@ def test_identical_under_any_schedule(monkeypatch):
         assert np.array_equal(L.data, ref.data)
 
 
-@pytest.mark.parametrize("dtype", [np.float64, np.float32])
-def test_matrix_free_matches_the_matrix(dtype):
-    V, F = messy_mesh()
+@pytest.mark.parametrize("dtype, n, h", [(np.float64, 700, 0.01), (np.float32, 700, 0.01),
+                                         (np.float64, 1500, 0.05)])
+def test_matrix_free_matches_the_matrix(dtype, n, h):
+    V, F = messy_mesh(n)  # 1,500 at h = 0.05: rows longer than the first buffers
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
-        op = meshlap.laplacian(V, F, h=0.01, dtype=dtype, correction="none")
-        free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
+        op = meshlap.laplacian(V, F, h=h, dtype=dtype, correction="none")
+        free = meshlap.laplacian(V, F, h=h, matrix_free=True, correction="none")
     rng = np.random.default_rng(1)
     for f in (rng.normal(size=len(V)), rng.normal(size=(len(V), 1)), rng.normal(size=(len(V), 3))):
         ref = np.asarray(op.L.astype(np.float64) @ f)

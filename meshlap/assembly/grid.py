@@ -251,17 +251,20 @@ def _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols):
 def _gather(x, y, z, sw, xs, ys, zs, r2, cols, ncols, sj, sd):
     # Compact the sources within r (other than slot sw) into sj (slot) and sd (d²), in
     # column order; branch-free: every candidate is written, the position only advances
-    # for accepted ones. Returns their number.
+    # for accepted ones. Returns their number. The source index is unsigned: numba guards a
+    # signed index against negative values (Python's wraparound) at every load, and with that
+    # select the compiler loaded the candidates' coordinates by gathers (vgatherqpd);
+    # unsigned, by contiguous vector loads (as in variable._count_var, branch i20k)
     pos = 0
     for i in range(ncols):
-        for j in range(cols[i, 0], cols[i, 1]):
+        for j in range(np.uint64(cols[i, 0]), np.uint64(cols[i, 1])):
             dx = xs[j] - x
             dy = ys[j] - y
             dz = zs[j] - z
             d2 = dx * dx + dy * dy + dz * dz
             sj[pos] = j
             sd[pos] = d2
-            pos += np.int64((d2 <= r2) & (j != sw))
+            pos += np.int64((d2 <= r2) & (np.int64(j) != sw))
     return pos
 
 
@@ -344,7 +347,7 @@ def _count_rows(next_chunk, rows, V, xs, ys, zs, self_slot, cell_start, dims, lo
             ncols = _columns(x, y, z, zs, cell_start, dims, lo, cell, r, full, cols)
             cnt = 0
             for i in range(ncols):
-                for j in range(cols[i, 0], cols[i, 1]):
+                for j in range(np.uint64(cols[i, 0]), np.uint64(cols[i, 1])):  # unsigned: see _gather
                     dx = xs[j] - x
                     dy = ys[j] - y
                     dz = zs[j] - z
