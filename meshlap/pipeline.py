@@ -103,11 +103,7 @@ class Built:
     def __init__(self, make_pencil: Callable[[], Pencil],
                  make_rows: Callable[[], Rows] | None = None) -> None:
         self._pencil = Once(make_pencil)
-        self._rows = Once(make_rows or self._pencils_rows)
-
-    def _pencils_rows(self) -> Rows:
-        p = self.assemble()
-        return Rows(p.L, p.pointwise_unchanged)
+        self._rows = Once(make_rows or _rows_of(self._pencil))
 
     pencil_pending = property(lambda self: self._pencil.pending, doc="Whether the pencil is to be built.")
     rows_pending = property(lambda self: self._rows.pending, doc="Whether the rows are still to be made.")
@@ -121,6 +117,15 @@ class Built:
     def fit_rows(self) -> Rows:
         """The rows ``op @ f`` applies, made on the first call."""
         return self._rows.get()
+
+
+def _rows_of(pencil: Once) -> Callable[[], Rows]:
+    # the rows that come with the pencil; the closure holds the pencil's Once, not the Built
+    # (a bound method would make a cycle: the matrices held until a garbage collection)
+    def rows() -> Rows:
+        p = pencil.get()
+        return Rows(p.L, p.pointwise_unchanged)
+    return rows
 
 
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None

@@ -137,3 +137,26 @@ def test_max_memory_is_refused_at_construction(sphere, kernel_rows, pencils):
         meshlap.laplacian(V, F, max_memory=8 * nnz)
     assert kernel_rows == [] and pencils == []  # refused before any row
     assert meshlap.laplacian(V, F, max_memory=64 * nnz).L_sym.nnz == nnz
+
+
+@pytest.mark.parametrize("kw", [{}, {"correction": "none"}, {"pointwise": True}, {"matrix_free": True}])
+def test_an_operator_let_go_frees_its_matrices_at_once(sphere, kw):
+    # no reference cycle holds the parts (a bound method of Built in its own Once did): the
+    # matrices go with the last reference, not at the next garbage collection
+    import gc
+    import weakref
+
+    V, F = sphere
+    if kw.get("matrix_free"):
+        kw = {**kw, "correction": "none"}
+    gc.collect()
+    gc.disable()
+    try:
+        op = meshlap.laplacian(V, F, **kw)
+        op @ V[:, 0]
+        op.assemble()
+        parts = weakref.ref(op._built)
+        del op
+        assert parts() is None
+    finally:
+        gc.enable()
