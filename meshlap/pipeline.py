@@ -164,11 +164,12 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     ('richardson', None)
     """
     if not opts.matrix_free:
-        kern = Kernel(geo.dim, dog=not opts.plain, normals=geo.normals() if opts.arc_distance else None,
-                      tol=opts.tol)
+        # the normals of arc distances only where the chord count does not fit (op @ f never reads them)
+        kern = Kernel(geo.dim, dog=not opts.plain, tol=opts.tol)
         images = opts.neumann and geo.boundary is not None and bool(geo.boundary.any())
         guard = pencil.guard_for(geo, opts, widths.h, images)
-        assembly.refuse_early(geo.points, geo.mass, widths, kern, guard)
+        assembly.refuse_early(geo.points, geo.mass, widths, kern, guard,
+                              geo.normals if opts.arc_distance else None)
 
     def make_pencil() -> Pencil:
         p = pencil.assemble(geo, widths, opts, report)

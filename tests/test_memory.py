@@ -1,5 +1,7 @@
 """The memory guard counts every matrix a build holds, not only L (issue 19)."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -41,3 +43,42 @@ def test_guard_counts_by_build():
     g = MemoryGuard.for_build(10, np.dtype(np.float64), 1 << 30, 0.1, images=False, pointwise=True,
                               own_pattern=True)
     assert (g.values, g.patterns) == (16, 2)
+
+
+def test_the_chord_count_bounds_the_arc_kernels_estimate():
+    # construction estimates the arc kernel's rows from chords, without normals, where that
+    # fits (arc factor >= 1: no row holds more pairs by arcs); the arc count decides otherwise
+    from meshlap import assembly
+    from meshlap.assembly import Kernel, variable
+    from meshlap.widths import Widths
+
+    V, F = shapes.sphere(2000, kind="random", seed=1)
+    g = meshlap.geometry.from_mesh(V, F)
+    h = 0.02  # wide on the unit sphere: arcs drop pairs that chords keep
+    w = Widths(h, np.full(len(V), h), False)
+    kern = Kernel(2, dog=True)
+    grid = assembly.grid.build_grid(V, g.mass, assembly.cutoff_radius(h, kern.tol))
+    chord = variable.count_entries(V, grid, w.h_vertex, kern.tol, None)
+    arc = variable.count_entries(V, grid, w.h_vertex, kern.tol, g.normals())
+    assert (arc <= chord).all() and (arc < chord).any()
+    mean_c = assembly._sampled(V, g.mass, w, kern, None, chords=True)[4]
+    arcs = Kernel(2, dog=True, normals=g.normals())
+    mean_a = assembly._sampled(V, g.mass, w, arcs, None)[4]
+    assert mean_a < mean_c
+    asked = []
+
+    def normals():
+        asked.append(1)
+        return g.normals()
+
+    def refuse(entries):  # a budget of 12 bytes an entry (float64, int32 indices)
+        guard = MemoryGuard(len(V), np.dtype(np.float64), 0, h)
+        guard.max_memory = math.ceil(guard.bytes_for(entries))
+        assembly.refuse_early(V, g.mass, w, kern, guard, normals)
+
+    refuse(mean_c)  # fits by chords: no normals
+    assert asked == []
+    refuse(0.5 * (mean_a + mean_c))  # not by chords, by arcs: no refusal
+    assert asked == [1]
+    with pytest.raises(meshlap.OperatorTooLargeError, match="at least about"):
+        refuse(0.5 * mean_a)
