@@ -153,20 +153,12 @@ def _psd_faces(geo: Geometry) -> Any:
     return None
 
 
-def pointwise_rows(geo: Geometry, free: sp.csr_matrix | None, hv: np.ndarray | None, opts: Options,
-                   report: Callable[[float, str], None] | None) -> tuple:
-    """``(L, unchanged, choice)``: the rows ``op @ f`` applies: width and degree chosen per point
-    ("fit", the default; ``free`` unused), fitted rows of a fixed degree on the kernel's stencil
-    ``free``, or degree-2 moments of the kernel's rows."""
-    if opts.pointwise == "fit":
-        # the positions f was sampled at: a denoised cloud's input points, whose noise the rows
-        # must average out (the projected points would hide it)
-        P = geo._cache.get("input_points", geo.points)
-        tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
-        L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim, progress=tick)
-        if L.dtype != opts.dtype:
-            L.data = L.data.astype(opts.dtype)
-        return L, None, choice
+def _stencil_rows(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray | None, opts: Options
+                  ) -> tuple[sp.csr_matrix, np.ndarray | None]:
+    """``(L, unchanged)``: the rows ``op @ f`` applies that come with the pencil, on the kernel's
+    stencil ``free``: fitted rows of a fixed degree (``pointwise_degree``) or degree-2 moments
+    of the kernel's rows (the default's fitted rows read the points alone:
+    :func:`meshlap.pipeline.fitted_rows`)."""
     # the rows below share free's index arrays: canonical first, or scipy's in-place sort of
     # one matrix would reorder the other's columns under its values
     if not free.has_sorted_indices:
@@ -175,11 +167,10 @@ def pointwise_rows(geo: Geometry, free: sp.csr_matrix | None, hv: np.ndarray | N
     if opts.pointwise_degree is not None:
         L = corrections.highorder.pointwise_rows(geo.points, free.indptr, free.indices, hv,
                                                  opts.pointwise_degree, k=geo.dim)
-        return L, None, None
+        return L, None
     # from the operator without mirror images: f need not satisfy Neumann conditions, and the
     # moment correction handles the one-sided rows
-    L, unchanged = corrections.moment_correction(free, geo.points, geo.dim)
-    return L, unchanged, None
+    return corrections.moment_correction(free, geo.points, geo.dim)
 
 
 def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
@@ -328,7 +319,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     if opts.pointwise is True:
         if report is not None:
             report(0.9, "point-wise rows")
-        out.L, out.pointwise_unchanged, _ = pointwise_rows(geo, free, hv, opts, report)
+        out.L, out.pointwise_unchanged = _stencil_rows(geo, free, hv, opts)
     if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
     if report is not None:

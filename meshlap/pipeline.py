@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from . import assembly, pencil
+from . import assembly, corrections, pencil
 from .assembly import Kernel
 from .geometry import Geometry
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
@@ -32,7 +32,7 @@ from .widths import Widths
 
 __all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "PLAIN_MARGIN", "POINTWISE",
            "PREDICT_MAX_IRREGULARITY", "QUADRATURES", "THIN_SAMPLE", "Built", "Once", "Options", "Rows",
-           "build", "default_tol", "plain_arcs", "plain_predicted"]
+           "build", "default_tol", "fitted_rows", "plain_arcs", "plain_predicted"]
 
 
 class Once:
@@ -128,13 +128,36 @@ def _rows_of(pencil: Once) -> Callable[[], Rows]:
     return rows
 
 
+def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None = None) -> Rows:
+    """The default's rows ``op @ f`` applies (``pointwise="fit"``): width and degree chosen per
+    point from the points alone (:func:`meshlap.corrections.rowchoice.choose_rows`), whose
+    stages report to ``report`` as "point-wise rows: <stage>".
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(800, seed=0))
+    >>> rows = fitted_rows(g, Options.resolve(g, None))
+    >>> bool(np.allclose(rows.L @ np.ones(800), 0)), rows.unchanged is None
+    (True, True)
+    """
+    # the positions f was sampled at: a denoised cloud's input points, whose noise the rows
+    # must average out (the projected points would hide it)
+    P = geo._cache.get("input_points", geo.points)
+    tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
+    L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim, progress=tick)
+    if L.dtype != opts.dtype:
+        L.data = L.data.astype(opts.dtype)
+    return Rows(L, None, choice)
+
+
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None
                ) -> Callable[[], Rows]:
     # the first use reports its stages to the build's progress, and is done again at 1.0
     def fit() -> Rows:
         if report is not None:
             report(0.9, "point-wise rows")
-        rows = Rows(*pencil.pointwise_rows(geo, None, None, opts, report))
+        rows = fitted_rows(geo, opts, report)
         if report is not None:
             report(1.0, "done")
         return rows
