@@ -107,22 +107,25 @@ def _frame(P, w, nbr, th, normal, use_normal, B, C, ev, vec, v):  # pragma: no c
 
 
 @jit(fastmath=True)
-def _gram(W, Phi, m, K, G):  # pragma: no cover - compiled
-    # the lower triangle of G = W Phiᵀ over the first m monomials (W = θ-weighted Phi): sums
-    # over contiguous rows, which the compiler vectorizes
-    for al in range(m):
-        for be in range(al + 1):
-            s = 0.0
-            for j in range(K):
-                s += W[al, j] * Phi[be, j]
-            G[al, be] = s
+def _dots(A, x, n, K, out):  # pragma: no cover - compiled
+    # out[a] = Σ_j A[a, j] x[j] for the first n rows: sums over contiguous rows, which the
+    # compiler vectorizes
+    for a in range(n):
+        s = 0.0
+        for j in range(K):
+            s += A[a, j] * x[j]
+        out[a] = s
 
 
 @jit(error_model=_IEEE)
-def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var, count,
-          targets, idx1, idx2, want_noise, out, used, resid, amp, bias, kap):  # pragma: no cover - compiled
+def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
+          count, pair, targets, idx1, idx2, want_noise, out, used, resid, amp, bias,
+          kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
-    # Cholesky factor of a leading block is the leading block of the factor); outputs by target
+    # Cholesky factor of a leading block is the leading block of the factor); outputs by
+    # target. The Gram matrix G_ab = Σ_j θ_j Φ_a Φ_b is read from the moments Σ_j θ_j Φ_e of
+    # the monomials of degree ≤ 2q (pair[a, b]: the monomial Φ_a Φ_b): at degree 6 on a
+    # surface 91 sums over the neighbours instead of 406
     d = P.shape[1]
     nc = d - k
     # the frame's and the metric's scratch, once per block
@@ -142,20 +145,22 @@ def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_norm
     for i in range(start, stop):
         r = order[i]
         Kb = max(Kb, indptr[r + 1] - indptr[r])
-    # Vandermonde with two more degrees, for the probes of the error model; stored by
-    # monomial (rows contiguous over the neighbours, for the sums over them)
+    # Vandermonde up to twice the degree (the moments; it holds the two more degrees of the
+    # probes of the error model), stored by monomial (rows contiguous over the neighbours)
     degree = 0
     for ti in range(len(targets)):
         degree = max(degree, targets[ti])
     top = min(degree + 2, len(count) - 1)
-    mb = count[top]
     m = count[degree]
+    nmom = count[min(2 * degree, len(count) - 1)]
+    mb = max(count[top], nmom)
     X = np.empty((Kb, d))
     th = np.empty(Kb)
     U = np.empty((k, Kb))  # by coordinate: contiguous over the neighbours
     Z = np.empty((nc, Kb))
     Phi = np.empty((mb, Kb))
-    W = np.empty((m, Kb))
+    mom = np.empty(mb)
+    tz = np.empty(Kb)
     Y = np.empty((m, Kb))
     G = np.empty((m, m))  # its lower triangle only is written and read
     floor = np.empty(m)
@@ -208,19 +213,15 @@ def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_norm
             pa, va = parent[al], var[al]
             for j in range(K):
                 Phi[al, j] = Phi[pa, j] * U[va, j]
+        _dots(Phi, th, nmom, K, mom)
         for al in range(m):
-            for j in range(K):
-                W[al, j] = th[j] * Phi[al, j]
-        _gram(W, Phi, m, K, G)
-        # the right-hand sides of the height fits, Σ_j W_αj z_j, for every degree at once: each
-        # sum in the order of the neighbours, the m of them side by side
+            for be in range(al + 1):
+                G[al, be] = mom[pair[al, be]]
+        # the right-hand sides of the height fits, Σ_j θ_j z_j Φ_α, for every degree at once
         for c in range(nc):
-            for al in range(m):
-                bz[c, al] = 0.0
             for j in range(K):
-                zj = Z[c, j]
-                for al in range(m):
-                    bz[c, al] += W[al, j] * zj
+                tz[j] = th[j] * Z[c, j]
+            _dots(Phi, tz, m, K, bz[c])
         for al in range(m):  # a pivot must stay above this fraction of its diagonal entry
             floor[al] = PIVOT_TOL * G[al, al]
         good = cholesky(G, m, floor)
@@ -271,9 +272,9 @@ def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_norm
                         g = G[i, q2]
                         for j in range(K):
                             yi[j] -= g * Y[q2, j]
-                    g = G[i, i]
+                    g = 1.0 / G[i, i]  # (a product: a vector of divisions costs as much as the rest)
                     for j in range(K):
-                        Y[i, j] = yi[j] / g
+                        Y[i, j] = yi[j] * g
                         lev[j] += Y[i, j] * Y[i, j]
                 for j in range(K):
                     dof += th[j] - th[j] * th[j] * lev[j]

@@ -29,6 +29,7 @@ Curves (k = 1), surfaces (k = 2) and volumes (k = d, no height function) share t
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from itertools import combinations_with_replacement
 from typing import Any
@@ -91,6 +92,17 @@ def _recursion(exps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         e[i] -= 1
         parent[a], var[a] = where[tuple(e)], i
     return parent, var
+
+
+@functools.cache
+def _tables(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # the monomials up to twice the highest degree (the Gram matrix's moments; they hold the
+    # probes' two more degrees) and pair[a, b], the monomial Φ_a Φ_b, for a, b of degree ≤ MAX_DEGREE
+    exps, count = monomials(k, 2 * MAX_DEGREE)
+    where = {tuple(e): a for a, e in enumerate(exps.tolist())}
+    m = int(count[MAX_DEGREE])
+    pair = np.array([[where[tuple(exps[a] + exps[b])] for b in range(m)] for a in range(m)], dtype=np.int64)
+    return exps, count, pair
 
 
 @dataclass
@@ -265,7 +277,7 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     hv = np.broadcast_to(np.asarray(h, dtype=np.float64), (rows,)).copy()
     if not (np.isfinite(hv).all() and (hv > 0).all()):
         raise MeshError("pointwise_rows: h must be finite and positive")
-    exps, count = monomials(k, MAX_DEGREE + 2)
+    exps, count, pair = _tables(k)
     idx1, idx2 = _derivative_slots(exps, k)
     T = len(degrees)
     out = np.zeros((T, len(indices)))
@@ -279,7 +291,7 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
         if order.shape != (rows,) or not np.array_equal(np.sort(order), np.arange(rows)):
             raise MeshError(f"fit_rows: order must be a permutation of the {rows} rows")
         in_blocks(_rows, rows, order, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count,
-                  targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
+                  pair, targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
     return [RowFit(_rows_matrix(n, centers, indptr, indices, out[t]), centers, used[t], resid[t], amp[t],
                    probes[:, 2 * t:2 * t + 2], kap[t], hv) for t in range(T)]
 
