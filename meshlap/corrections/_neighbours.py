@@ -248,7 +248,8 @@ def _sort_best(cd, ci, nc, K, hd, hi, nb):  # pragma: no cover - compiled
     cb = nb[2 * nc + 1:]
     nb[:2 * nc + 1] = 0
     for i in range(nc):
-        b = min(int(cd[i] * scale), 2 * nc - 1)
+        x = cd[i] * scale
+        b = int(x) if x < 2 * nc - 1 else 2 * nc - 1  # a NaN in the last bucket, not out of bounds
         cb[i] = b
         nb[b + 1] += 1
     # the buckets up to the one holding the K-th
