@@ -362,7 +362,9 @@ def test_fit_rows_in_any_order_are_the_same_rows():
 
 def test_grid_neighbours_are_the_k_d_trees():
     # the compiled grid search gives the k-d tree's neighbours and distances to the bit, on a
-    # surface, a volume, a plane, a curve in 2-D and queries off a subset; 4-D falls back
+    # surface, a volume, a plane, a curve in 2-D, queries off a subset and a dense clump (more
+    # points in a cell than its buffer holds); 4-D falls back. On lattices, where distances tie
+    # exactly, the same distances and, of equally far points, the lowest indices first
     from scipy.spatial import cKDTree
 
     from meshlap.corrections._neighbours import Nearest
@@ -370,13 +372,27 @@ def test_grid_neighbours_are_the_k_d_trees():
     rng = np.random.default_rng(3)
     sphere, _ = shapes.sphere(3000, kind="random", seed=0)
     t = rng.uniform(0, 6, 500)
+    clump = np.vstack([sphere, sphere[0] + 1e-4 * rng.standard_normal((400, 3))])
+    cube = np.stack(np.meshgrid(*[np.arange(12.0)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    square = np.stack(np.meshgrid(np.arange(40.0), np.arange(30.0), indexing="ij"), -1).reshape(-1, 2)
+    lattices = [(cube[rng.permutation(len(cube))], None), (square, square[::7] + 0.5), (square, None)]
     for P, Q in [(sphere, sphere), (rng.random((2000, 3)), None), (sphere[::3], sphere),
                  (np.column_stack([rng.random((900, 2)), np.zeros(900)]), None),
-                 (np.column_stack([np.cos(t), np.sin(t)]), None), (rng.random((300, 4)), None)]:
+                 (np.column_stack([np.cos(t), np.sin(t)]), None), (clump, None), (rng.random((300, 4)), None),
+                 *lattices]:
         Q = P if Q is None else Q
         near = Nearest(P)
-        for K in (1, 14, 64):
+        tied = any(P is L for L, _ in lattices)
+        if tied:  # every (squared distance, index), summed as the tree sums them, in order
+            s2 = sum((Q[:, None, a] - P[None, :, a]) ** 2 for a in range(P.shape[1]))
+            best = np.lexsort((np.broadcast_to(np.arange(len(P)), s2.shape), s2), axis=1)
+        for K in (1, 14, 30, 52, 64):
             d, i = near.query(Q, K)
             d0, i0 = cKDTree(P).query(Q, k=K)
-            assert np.array_equal(d, np.reshape(d0, d.shape)) and np.array_equal(i, np.reshape(i0, i.shape))
+            assert np.array_equal(d, np.reshape(d0, d.shape))
+            if tied:
+                assert np.array_equal(i, best[:, :K])
+                assert np.array_equal(d, np.sqrt(np.take_along_axis(s2, best[:, :K], 1)))
+            else:
+                assert np.array_equal(i, np.reshape(i0, i.shape))
         assert (P.shape[1] <= 3) == any(g is not None for g in near._grids.values())
