@@ -171,10 +171,10 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
     # most of a clean sphere of 8,000 points by its bias, without changing the rows
     built = []
 
-    def spy(P, idx, dist, degree, c, *args, **kw):
+    def spy(P, near, K, rows, degree, c, *args, **kw):
         if c == rowchoice._C_COMPACT and degree in (4, 6):
-            built.append((degree, len(idx)))
-        return real(P, idx, dist, degree, c, *args, **kw)
+            built.append((degree, len(near[0]) if rows is None else len(rows)))
+        return real(P, near, K, rows, degree, c, *args, **kw)
 
     real = rowchoice._candidate
     monkeypatch.setattr(rowchoice, "_candidate", spy)

@@ -118,8 +118,8 @@ def _dots(A, x, n, K, out):  # pragma: no cover - compiled
 
 
 @jit(error_model=_IEEE)
-def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_normals, k, parent, var,
-          count, pair, targets, idx1, idx2, want_noise, out, used, resid, amp, bias,
+def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, use_normals, k, parent,
+          var, count, pair, targets, idx1, idx2, want_noise, out, used, resid, amp, bias,
           kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
     # Cholesky factor of a leading block is the leading block of the factor); outputs by
@@ -179,7 +179,8 @@ def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_norm
         w = centers[r]
         a0 = indptr[r]
         K = indptr[r + 1] - a0
-        nbr = indices[a0:a0 + K]
+        s0 = starts[r]  # row r's neighbours in indices; its outputs at indptr[r]
+        nbr = indices[s0:s0 + K]
         inv4h = 1.0 / (4.0 * hv[r])
         th_sum = 0.0
         for j in range(K):
@@ -354,6 +355,15 @@ def _rows(start, stop, order, P, centers, indptr, indices, hv, normals, use_norm
                         s += out[ti, a0 + j] * Phi[al, j]
                     pacc += s * s
                 bias[r, 2 * ti + e] = math.sqrt(pacc) * rho ** qq
+
+
+@jit()
+def gather_columns(indices, starts, indptr, cols):  # pragma: no cover - compiled
+    # cols[indptr[r] + j] = indices[starts[r] + j]: the columns of rows read from a wider table
+    for r in range(len(indptr) - 1):
+        a, b = indptr[r], starts[r]
+        for j in range(indptr[r + 1] - a):
+            cols[a + j] = indices[b + j]
 
 
 @jit()

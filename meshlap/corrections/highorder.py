@@ -41,7 +41,7 @@ from scipy.spatial import cKDTree
 from .._jit import in_blocks
 from ..errors import MeshError
 from ..geometry import check_points
-from ._fit_kernel import _rows
+from ._fit_kernel import _rows, gather_columns
 
 __all__ = ["RowFit", "fit_rows", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
            "pointwise_rows"]
@@ -240,14 +240,19 @@ def pointwise_rows(P: Any, indptr: Any, indices: Any, h: Any, degree: int = 4, *
 
 
 def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...], *, k: int = 2,
-             normals: Any = None, centers: Any = None, noise_dof: bool = True, order: Any = None
-             ) -> list[RowFit]:
+             normals: Any = None, centers: Any = None, noise_dof: bool = True, order: Any = None,
+             starts: Any = None) -> list[RowFit]:
     """:func:`pointwise_rows` of several degrees on the same stencils, one :class:`RowFit` each,
     for little more than the highest alone: the frames, weights and Gram matrices are shared.
 
     ``order``, a permutation of the rows, is the order in which they are computed (the rows do
     not depend on it): rows whose neighbours lie near each other in memory one after another
     are faster on large inputs (16% on 100,000 points at degree 6, a k-d tree's order).
+
+    ``starts``, where each row's neighbours begin in ``indices`` (default ``indptr[:-1]``: a CSR
+    pattern), reads the rows from a wider table of neighbours, ``indices`` its rows flattened,
+    without a copy of it; ``indptr`` then places the rows' entries, and the matrices hold the
+    columns gathered (32-bit where they fit).
 
     Examples
     --------
@@ -269,8 +274,13 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     rows = len(indptr) - 1
     centers = np.arange(n) if centers is None else np.ascontiguousarray(centers, dtype=np.int64)
     if len(centers) != rows or rows < 0 or indptr[0] != 0 or (np.diff(indptr) < 0).any() \
-            or indptr[-1] != len(indices):
+            or (starts is None and indptr[-1] != len(indices)):
         raise MeshError("pointwise_rows: indptr must be a CSR row pointer with one row per centre")
+    if starts is not None:
+        starts = np.ascontiguousarray(starts, dtype=np.int64)
+        ends = starts + np.diff(indptr)
+        if starts.shape != (rows,) or rows and (starts.min() < 0 or ends.max() > len(indices)):
+            raise MeshError(f"fit_rows: starts must place {rows} rows inside indices")
     if len(indices) and (indices.min() < 0 or indices.max() >= n) or len(centers) and (
             centers.min() < 0 or centers.max() >= n):
         raise MeshError(f"pointwise_rows: indices and centers must lie in [0, {n})")
@@ -280,7 +290,7 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     exps, count, pair = _tables(k)
     idx1, idx2 = _derivative_slots(exps, k)
     T = len(degrees)
-    out = np.zeros((T, len(indices)))
+    out = np.zeros((T, int(indptr[-1])))
     used = np.zeros((T, rows), dtype=np.int64)
     resid, amp, kap = np.zeros((T, rows)), np.zeros((T, rows)), np.zeros((T, rows))
     probes = np.full((rows, 2 * T), np.nan)
@@ -290,9 +300,15 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
         order = np.arange(rows) if order is None else np.asarray(order, dtype=np.int64)
         if order.shape != (rows,) or not np.array_equal(np.sort(order), np.arange(rows)):
             raise MeshError(f"fit_rows: order must be a permutation of the {rows} rows")
-        in_blocks(_rows, rows, order, P, centers, indptr, indices, hv, N, use_normals, k, parent, var, count,
-                  pair, targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
-    return [RowFit(_rows_matrix(n, centers, indptr, indices, out[t]), centers, used[t], resid[t], amp[t],
+        first = indptr[:-1] if starts is None else starts
+        in_blocks(_rows, rows, order, P, centers, indptr, first, indices, hv, N, use_normals, k, parent, var,
+                  count, pair, targets, idx1, idx2, bool(noise_dof), out, used, resid, amp, probes, kap)
+    cols = indices
+    if starts is not None:
+        total = int(indptr[-1])
+        cols = np.empty(total, dtype=np.int32 if max(n, total) < 2**31 - 1 else np.int64)
+        gather_columns(indices, starts, indptr, cols)
+    return [RowFit(_rows_matrix(n, centers, indptr, cols, out[t]), centers, used[t], resid[t], amp[t],
                    probes[:, 2 * t:2 * t + 2], kap[t], hv) for t in range(T)]
 
 
@@ -302,7 +318,7 @@ def _rows_matrix(n: int, centers: np.ndarray, indptr: np.ndarray, indices: np.nd
     order = np.argsort(centers, kind="stable")
     counts = np.zeros(n, dtype=np.int64)
     np.add.at(counts, centers, np.diff(indptr))
-    full = np.zeros(n + 1, dtype=np.int64)
+    full = np.zeros(n + 1, dtype=indices.dtype)  # (scipy's kernels want both of one type)
     np.cumsum(counts, out=full[1:])
     if (np.diff(centers) > 0).all():
         idx, dat = indices, data

@@ -184,16 +184,20 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
     return err
 
 
-def _candidate(P, idx, dist, degree, c, k, normals, centers, noise_dof=True, place=None):
+def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None):
     # rows of the given degree (a tuple: of each, on the same stencils) on the K nearest
-    # neighbours (idx, dist: (rows, K), ascending), computed in the order of place (a k-d
-    # tree's, _Spread.place) or, without it, in their own
-    rows, K = idx.shape
-    h = np.maximum(dist[:, -1], 1e-300) ** 2 / (4.0 * c)
-    indptr = np.arange(rows + 1, dtype=np.int64) * K
+    # neighbours of the centres: the first K of the rows `rows` (None: all, the centres' own) of
+    # the tables near = (idx, dist), ascending, read in place; computed in the order of place (a
+    # k-d tree's, _Spread.place) or, without it, in their own
+    idx, dist = near
+    width = idx.shape[1]
+    sel = np.arange(len(idx)) if rows is None else rows
+    h = np.maximum(dist[sel, K - 1], 1e-300) ** 2 / (4.0 * c)
+    indptr = np.arange(len(sel) + 1, dtype=np.int64) * K
     fits = fit_rows(P, indptr, np.ascontiguousarray(idx).ravel(), h, degree if isinstance(degree, tuple) else
                     (degree,), k=k, normals=normals, centers=centers, noise_dof=noise_dof,
-                    order=None if place is None else np.argsort(place[centers], kind="stable"))
+                    order=None if place is None else np.argsort(place[centers], kind="stable"),
+                    starts=None if K == width and rows is None else sel * width)
     return fits if isinstance(degree, tuple) else fits[0]
 
 
@@ -234,22 +238,21 @@ def _scale(fit: RowFit, nb: np.ndarray, k: int, d: int, diameter: float, spacing
     return np.maximum(np.minimum(1.0 / np.maximum(kappa, 1e-300), diameter), 4.0 * spacing)
 
 
-def _compact(P, idx, dist, q, k, normals, done, level, scale, sample_own, comm, place) -> list:
+def _compact(P, near, K, q, k, normals, done, level, scale, sample_own, comm, place) -> list:
     # compact rows of degree q where they can win (the module's docstring): ‖row‖₂ ≥ R/ρ², ρ the
     # K-th neighbour's distance, R half the least ‖row‖₂ ρ² of a sample of the points, whose rows
     # come first (bench_pointwise's inputs: 12-20 at degree 4, 22-38 at degree 6); and its probes
     # probe_e ≥ F ρ^{q−1+e}, F from the sample's least probe_e / ρ^{q−1+e}: the bias that rules
     # degree 4 out where degree 6, built before it, is far ahead (clean data)
     sample, own = sample_own
-    K = idx.shape[1]
-    best = np.full(len(idx), np.inf)
+    best = np.full(len(near[0]), np.inf)
     for fit, _ in done:
         err = _errors(fit, level[fit.centers], scale[fit.centers])[0]
         best[fit.centers] = np.minimum(best[fit.centers], err)
     first = np.flatnonzero(sample)
-    fits = [_candidate(P, idx[first], dist[first], q, _C_COMPACT, k, normals, first, place=place)]
+    fits = [_candidate(P, near, K, first, q, _C_COMPACT, k, normals, first, place=place)]
     ok = (fits[0].degree == q) & own[first]
-    rho = np.maximum(dist[:, -1], 1e-300)
+    rho = np.maximum(near[1][:, K - 1], 1e-300)
     lows = [fits[0].amplification[ok] * rho[first[ok]] ** 2] + [
         np.nan_to_num(fits[0].probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
     least = [_min(comm, float(v.min()) if len(v) else math.inf) for v in lows]
@@ -258,7 +261,7 @@ def _compact(P, idx, dist, q, k, normals, done, level, scale, sample_own, comm, 
         floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
     rest = np.flatnonzero(~sample & (bound <= ROBUST * best))
     if len(rest):
-        fits.append(_candidate(P, idx[rest], dist[rest], q, _C_COMPACT, k, normals, rest, place=place))
+        fits.append(_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place))
     return [(fit, K) for fit in fits]
 
 
@@ -387,9 +390,9 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     tick("noise fit")
     # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
     # higher degree, lowest first, only where they can win (_compact)
-    fit = _candidate(P, idx_all[:, :Kn], dist_all[:, :Kn], 2, _C_WIDE, k, normals, everyone, place=place)
+    fit = _candidate(P, (idx_all, dist_all), Kn, None, 2, _C_WIDE, k, normals, everyone, place=place)
     noise_fit, K2 = (fit, Kn), Ks[-1]
-    low = _candidate(P, idx_all[:, :K2], dist_all[:, :K2], 2, _C_COMPACT, k, normals, everyone, place=place)
+    low = _candidate(P, (idx_all, dist_all), K2, None, 2, _C_COMPACT, k, normals, everyone, place=place)
     compact = {2: [(low, K2)]}
     resid = np.minimum(fit.residual, low.residual)
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
@@ -398,7 +401,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         tick(f"compact {q}")
         level = _local_noise(resid, nb, comm, own, noise)[0]
         done = [noise_fit] + [c for fits in compact.values() for c in fits]
-        compact[q] = _compact(P, idx_all[:, :K], dist_all[:, :K], q, k, normals, done, level, first_scale,
+        compact[q] = _compact(P, (idx_all, dist_all), K, q, k, normals, done, level, first_scale,
                               (sample, own), comm, place)
         for c, _ in compact[q]:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
@@ -412,7 +415,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     if typical is not None and typical > _NOISY * spacing:
         tick("curvature fit")
         idx_c, dist_c, _ = spread(Kc, everyone)
-        curv_fit = _candidate(P, idx_c, dist_c, 2, _C_WIDE, k, normals, everyone, False, place)
+        held = idx_c.shape[1]  # (at most SAMPLE of the Kc nearest)
+        curv_fit = _candidate(P, (idx_c, dist_c), held, None, 2, _C_WIDE, k, normals, everyone, False, place)
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     scale = first_scale if curv_fit is noise_fit[0] else _scale(curv_fit, nb, k, d, diameter, spacing)
@@ -449,9 +453,10 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
         reuse = K == Kc and curv_fit is not noise_fit[0]
-        idx, dist, _ = (idx_c[active], dist_c[active], 0) if reuse else spread(K, active)
+        near, rows = ((idx_c, dist_c), active) if reuse else (spread(K, active)[:2], None)
         want = tuple(q for q in ((4, 2) if max_degree >= 4 else (2,)) if not (reuse and q == 2))
-        fits = _candidate(P, idx, dist, want, _C_WIDE, k, normals, active, False, place) if want else []
+        fits = _candidate(P, near, near[0].shape[1], rows, want, _C_WIDE, k, normals, active, False, place) \
+            if want else []
         for fit in ([_restrict(curv_fit, active)] if reuse else []) + fits[::-1]:  # degree 2 first
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
