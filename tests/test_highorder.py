@@ -165,8 +165,9 @@ def test_noise_sweep_never_worse_than_the_papers_operator():
 
 
 def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
-    # the compact rows of degree 6 are built at every point of a clean sphere, and on a noisy
-    # one only on the sample that bounds their noise factor (1/16 of the points, at least 64):
+    # the compact rows of degree 6 are built at every point of a clean sphere (the sample that
+    # bounds their noise factor, 1/16 of the points and at least 64, first, then all of them in
+    # one fit), and on a noisy one only on the sample:
     # the noise term alone rules them out elsewhere; degree 4, built after 6, is ruled out on
     # most of a clean sphere of 8,000 points by its bias, without changing the rows
     built = []
@@ -184,7 +185,7 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         built.clear()
         rowchoice.choose_rows(X)
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
-    assert counts[0][1] == 1200
+    assert counts[0][1] == 1200 + 75
     assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
     P, _ = shapes.sphere(8000, kind="random", seed=0)
     rows = []
@@ -193,8 +194,27 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         built.clear()
         rows.append(rowchoice.choose_rows(P)[0])
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
-    assert counts[2][0] < 0.4 * 8000 and counts[3][0] == 8000  # measured 2,498
+    assert counts[2][0] < 0.4 * 8000 and counts[3][0] == 8000 + 500  # measured 2,498 (the sample: 500)
     assert (rows[0] != rows[1]).nnz == 0
+
+
+
+def test_assemble_takes_a_candidate_chosen_everywhere_whole(monkeypatch):
+    # rows of two candidates interleaved are their rows; one candidate of every point chosen at
+    # every point is the matrix itself, no copy (a clean sphere: degree 6 everywhere)
+    P = shapes.fibonacci_sphere(500)
+    four, two = highorder.fit_rows(P, *highorder.knn_pattern(P, 30)[:2], 0.002, (4, 2))
+    local = [(four, 30), (two, 30)]
+    f = np.exp(P[:, 0])
+    pick = np.arange(500) % 2
+    mixed = rowchoice._assemble(500, pick, local) @ f
+    np.testing.assert_array_equal(mixed[pick == 0], (four.matrix @ f)[pick == 0])
+    np.testing.assert_array_equal(mixed[pick == 1], (two.matrix @ f)[pick == 1])
+    assert rowchoice._assemble(500, np.ones(500, dtype=np.int64), local) is two.matrix
+    copies = []
+    monkeypatch.setattr(rowchoice, "copy_rows", lambda *a: copies.append(a))
+    L, choice = rowchoice.choose_rows(shapes.fibonacci_sphere(3000))
+    assert (choice.degree == 6).all() and not copies
 
 
 def test_known_noise_level_is_used():

@@ -260,6 +260,11 @@ def _compact(P, near, K, q, k, normals, done, level, scale, sample_own, comm, pl
     bound = GAMMA * level * scale * floor[0] / rho ** 2 + BETA * (
         floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
     rest = np.flatnonzero(~sample & (bound <= ROBUST * best))
+    if len(rest) + len(first) == len(best):
+        # every point (clean data): one fit of all, whose rows at the sample are the sample's
+        # (the same stencils, the same numbers), so that _assemble can take its matrix whole
+        everyone = np.arange(len(best))
+        return [(_candidate(P, near, K, None, q, _C_COMPACT, k, normals, everyone, place=place), K)]
     if len(rest):
         fits.append(_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place))
     return [(fit, K) for fit in fits]
@@ -273,7 +278,11 @@ def _restrict(fit: RowFit, rows: np.ndarray) -> RowFit:
 
 
 def _assemble(n: int, pick: np.ndarray, local: list) -> sp.csr_matrix:
-    # the chosen rows gathered from their candidates' CSR arrays, without a sort through COO
+    # the chosen rows gathered from their candidates' CSR arrays, without a sort through COO;
+    # a candidate of every row chosen everywhere is the matrix itself (at 400,000 clean points
+    # 250 MB neither written nor copied)
+    if n and pick[0] >= 0 and len(local[pick[0]][0].centers) == n and (pick == pick[0]).all():
+        return local[pick[0]][0].matrix
     counts = np.zeros(n, dtype=np.int64)
     chosen = []
     for i, (fit, _) in enumerate(local):
