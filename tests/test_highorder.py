@@ -415,4 +415,8 @@ def test_grid_neighbours_are_the_k_d_trees():
                 assert np.array_equal(d, np.sqrt(np.take_along_axis(s2, best[:, :K], 1)))
             else:
                 assert np.array_equal(i, np.reshape(i0, i.shape))
+            if K > 3:  # the distances of some ranks only: those columns, the same neighbours
+                keep = np.array([1, K // 2, K - 1])
+                dk, ik = near.query(Q, K, columns=keep)
+                assert np.array_equal(dk, d[:, keep]) and np.array_equal(ik, i)
         assert (P.shape[1] <= 3) == any(g is not None for g in near._grids.values())

@@ -187,18 +187,26 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
 def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None):
     # rows of the given degree (a tuple: of each, on the same stencils) on the K nearest
     # neighbours of the centres: the first K of the rows `rows` (None: all, the centres' own) of
-    # the tables near = (idx, dist), ascending, read in place; computed in the order of place (a
-    # k-d tree's, _Spread.place) or, without it, in their own
-    idx, dist = near
+    # the table near[0], ascending, read in place (near[1](K): the K-th one's distances, by
+    # _tables); computed in the order of place (a k-d tree's, _Spread.place) or, without it, in
+    # their own
+    idx, kth = near
     width = idx.shape[1]
     sel = np.arange(len(idx)) if rows is None else rows
-    h = np.maximum(dist[sel, K - 1], 1e-300) ** 2 / (4.0 * c)
+    h = np.maximum(kth(K)[sel], 1e-300) ** 2 / (4.0 * c)
     indptr = np.arange(len(sel) + 1, dtype=np.int64) * K
     fits = fit_rows(P, indptr, np.ascontiguousarray(idx).ravel(), h, degree if isinstance(degree, tuple) else
                     (degree,), k=k, normals=normals, centers=centers, noise_dof=noise_dof,
                     order=None if place is None else np.argsort(place[centers], kind="stable"),
                     starts=None if K == width and rows is None else sel * width)
     return fits if isinstance(degree, tuple) else fits[0]
+
+
+def _table(idx: np.ndarray, dist: np.ndarray, ranks: list[int] | None = None) -> tuple:
+    # (idx, kth) for _candidate: kth(K) the K-th nearest's distances, from dist's columns (those
+    # of the ranks given, or all)
+    where = {r: i for i, r in enumerate(ranks)} if ranks is not None else None
+    return idx, (lambda K: dist[:, K - 1]) if where is None else (lambda K: dist[:, where[K - 1]])
 
 
 def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -252,7 +260,7 @@ def _compact(P, near, K, q, k, normals, done, level, scale, sample_own, comm, pl
     first = np.flatnonzero(sample)
     fits = [_candidate(P, near, K, first, q, _C_COMPACT, k, normals, first, place=place)]
     ok = (fits[0].degree == q) & own[first]
-    rho = np.maximum(near[1][:, K - 1], 1e-300)
+    rho = np.maximum(near[1](K), 1e-300)
     lows = [fits[0].amplification[ok] * rho[first[ok]] ** 2] + [
         np.nan_to_num(fits[0].probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
     least = [_min(comm, float(v.min()) if len(v) else math.inf) for v in lows]
@@ -391,17 +399,21 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         Ks, Kn = [min(total, K) for K in Ks], min(total, _K_NOISE)
     # one query serves every compact candidate, the spacing and the neighbourhood medians:
     # the K nearest are a prefix of the Kq nearest
-    idx_all, dist_all = _nearest(spread.near, P, max(Ks + [Kn, min(16, n)]), everyone, spread.place)
-    spacing = _sum(comm, float(dist_all[own, 1:min(7, n)].mean(axis=1).sum())) / total
+    # (the distances of the spacing's neighbours and of each width's last one only)
+    ranks = sorted({*range(1, min(7, n)), *(K - 1 for K in Ks + [Kn])})
+    idx_all, dist_all = _nearest(spread.near, P, max(Ks + [Kn, min(16, n)]), everyone, spread.place,
+                                 np.asarray(ranks))
+    table = _table(idx_all, dist_all, ranks)
+    spacing = _sum(comm, float(dist_all[own, :min(7, n) - 1].mean(axis=1).sum())) / total
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
     diameter = float(np.linalg.norm(hi - lo))
     tick("noise fit")
     # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
     # higher degree, lowest first, only where they can win (_compact)
-    fit = _candidate(P, (idx_all, dist_all), Kn, None, 2, _C_WIDE, k, normals, everyone, place=place)
+    fit = _candidate(P, table, Kn, None, 2, _C_WIDE, k, normals, everyone, place=place)
     noise_fit, K2 = (fit, Kn), Ks[-1]
-    low = _candidate(P, (idx_all, dist_all), K2, None, 2, _C_COMPACT, k, normals, everyone, place=place)
+    low = _candidate(P, table, K2, None, 2, _C_COMPACT, k, normals, everyone, place=place)
     compact = {2: [(low, K2)]}
     resid = np.minimum(fit.residual, low.residual)
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
@@ -410,7 +422,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         tick(f"compact {q}")
         level = _local_noise(resid, nb, comm, own, noise)[0]
         done = [noise_fit] + [c for fits in compact.values() for c in fits]
-        compact[q] = _compact(P, (idx_all, dist_all), K, q, k, normals, done, level, first_scale,
+        compact[q] = _compact(P, table, K, q, k, normals, done, level, first_scale,
                               (sample, own), comm, place)
         for c, _ in compact[q]:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
@@ -425,7 +437,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         tick("curvature fit")
         idx_c, dist_c, _ = spread(Kc, everyone)
         held = idx_c.shape[1]  # (at most SAMPLE of the Kc nearest)
-        curv_fit = _candidate(P, (idx_c, dist_c), held, None, 2, _C_WIDE, k, normals, everyone, False, place)
+        curv_fit = _candidate(P, _table(idx_c, dist_c), held, None, 2, _C_WIDE, k, normals, everyone, False,
+                              place)
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     scale = first_scale if curv_fit is noise_fit[0] else _scale(curv_fit, nb, k, d, diameter, spacing)
@@ -462,7 +475,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
         reuse = K == Kc and curv_fit is not noise_fit[0]
-        near, rows = ((idx_c, dist_c), active) if reuse else (spread(K, active)[:2], None)
+        near, rows = (_table(idx_c, dist_c), active) if reuse else (_table(*spread(K, active)[:2]), None)
         want = tuple(q for q in ((4, 2) if max_degree >= 4 else (2,)) if not (reuse and q == 2))
         fits = _candidate(P, near, near[0].shape[1], rows, want, _C_WIDE, k, normals, active, False, place) \
             if want else []
