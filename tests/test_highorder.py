@@ -378,6 +378,22 @@ def test_fit_rows_in_any_order_are_the_same_rows():
         assert np.array_equal(a.matrix.data, b.matrix.data) and np.array_equal(a.residual, b.residual)
     with pytest.raises(MeshError, match="permutation"):
         highorder.fit_rows(P, indptr, indices, h, (4,), order=np.zeros(500, dtype=int))
+    # rows read in place from a wider table (starts) are the rows of the table's first columns
+    # gathered: the same numbers and columns, 32-bit
+    wide = highorder.knn_pattern(P, 40)[1].reshape(500, 40)
+    rows = np.arange(0, 500, 3)
+    gathered = highorder.fit_rows(P, indptr[:len(rows) + 1], wide[rows, :30].ravel(), h[rows], (4, 2),
+                                  centers=rows)
+    in_place = highorder.fit_rows(P, indptr[:len(rows) + 1], wide.ravel(), h[rows], (4, 2), centers=rows,
+                                  starts=rows * 40)
+    for a, b in zip(gathered, in_place, strict=True):
+        A, B = a.matrix, b.matrix
+        assert np.array_equal(A.data, B.data) and np.array_equal(A.indices, B.indices)
+        assert np.array_equal(A.indptr, B.indptr) and B.indices.dtype == np.int32
+        assert np.array_equal(a.residual, b.residual) and np.array_equal(a.probes, b.probes, equal_nan=True)
+    with pytest.raises(MeshError, match="starts"):
+        highorder.fit_rows(P, indptr[:3], wide.ravel(), h[:2], (4,), centers=rows[:2],
+                           starts=[0, 500 * 40 - 10])
 
 
 def test_grid_neighbours_are_the_k_d_trees():
