@@ -199,14 +199,15 @@ def test_vertex_normals_equal_the_numpy_expression_where_undefined_too():
     V = np.vstack([V, [[3.0, 0, 0], [4.0, 0, 0], [5.0, 0, 0], [6.0, 0, 0]]])
     faces = check_faces(np.vstack([F, [[n + 1, n + 2, n + 3]]]), len(V))  # collinear: area 0
     T = faces.triangles()
-    fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-    N = np.zeros_like(V)
-    for k in range(3):
-        N[:, k] = np.bincount(T.T.ravel(), np.tile(fn[:, k], 3), minlength=len(V))
-    norm = np.linalg.norm(N, axis=1, keepdims=True)
-    want = np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
-    got = frames.vertex_normals(V, faces)
-    assert np.array_equal(got, want) and not got[n:].any()
+    for X in (V, V.astype(np.float32)):  # float32 positions: float32 cross products, float64 sums
+        fn = np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]])
+        N = np.zeros_like(X, dtype=np.float64)
+        for k in range(3):
+            N[:, k] = np.bincount(T.T.ravel(), np.tile(fn[:, k], 3), minlength=len(X))
+        norm = np.linalg.norm(N, axis=1, keepdims=True)
+        want = np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
+        got = frames.vertex_normals(X, faces)
+        assert np.array_equal(got, want) and not got[n:].any()
 
 
 def test_mean_edge_length_equals_the_numpy_expression():

@@ -47,9 +47,10 @@ def vertex_normals(V: np.ndarray, faces: Polygons) -> np.ndarray:
     >>> vertex_normals(V, check_faces([[0, 1, 2]], 3))[0].tolist()
     [0.0, 0.0, 1.0]
     """
+    # float32 positions keep their float32 cross products, as numpy made them
+    V = np.ascontiguousarray(V, dtype=V.dtype if V.dtype == np.float32 else np.float64)
     N = np.zeros((len(V), 3))
-    _unit_normal_sums(np.ascontiguousarray(V, dtype=np.float64),
-                      np.ascontiguousarray(faces.triangles(), dtype=np.int64), N)
+    _unit_normal_sums(V, np.ascontiguousarray(faces.triangles(), dtype=np.int64), N)
     return N
 
 
