@@ -187,3 +187,37 @@ def test_vertex_normals_equal_the_sums_of_np_add_at():
         np.add.at(N, T[:, c], fn)
     want = N / np.linalg.norm(N, axis=1, keepdims=True)
     assert np.array_equal(frames.vertex_normals(V, faces), want)
+
+
+def test_vertex_normals_equal_the_numpy_expression_where_undefined_too():
+    # the compiled sums against the numpy code they replaced (bincount corner by corner, then
+    # np.linalg.norm), with a vertex in no face and one in a zero-area face only: normal 0
+    from meshlap.geometry import frames
+    from meshlap.geometry.validation import check_faces
+    V, F = shapes.sphere(2000, kind="random", seed=2)
+    n = len(V)
+    V = np.vstack([V, [[3.0, 0, 0], [4.0, 0, 0], [5.0, 0, 0], [6.0, 0, 0]]])
+    faces = check_faces(np.vstack([F, [[n + 1, n + 2, n + 3]]]), len(V))  # collinear: area 0
+    T = faces.triangles()
+    for X in (V, V.astype(np.float32)):  # float32 positions: float32 cross products, float64 sums
+        fn = np.cross(X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]])
+        N = np.zeros_like(X, dtype=np.float64)
+        for k in range(3):
+            N[:, k] = np.bincount(T.T.ravel(), np.tile(fn[:, k], 3), minlength=len(X))
+        norm = np.linalg.norm(N, axis=1, keepdims=True)
+        want = np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
+        got = frames.vertex_normals(X, faces)
+        assert np.array_equal(got, want) and not got[n:].any()
+
+
+def test_mean_edge_length_equals_the_numpy_expression():
+    # the compiled lengths against np.linalg.norm's, on triangles and on mixed polygons
+    from meshlap.geometry.mass import _mean_edge_length
+    from meshlap.geometry.validation import check_faces
+    rng = np.random.default_rng(3)
+    V, F = shapes.sphere(3000, kind="random", seed=3)
+    V = V * rng.uniform(0.5, 2.0, size=(len(V), 1))
+    mixed = [*F[:100].tolist(), [0, 5, 9, 7], [1, 2, 3, 4, 6]]
+    for faces in (check_faces(F, len(V)), check_faces(mixed, len(V))):
+        e = faces.edges()
+        assert _mean_edge_length(V, faces) == float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())

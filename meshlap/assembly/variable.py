@@ -309,10 +309,13 @@ def _pass_args(V: np.ndarray, grid: Grid, hv: np.ndarray, tol: float, normals: n
     hv = np.ascontiguousarray(hv, dtype=np.float64)
     use_normals = normals is not None
     nv = np.ascontiguousarray(normals if use_normals else np.zeros((len(V), 3)), dtype=np.float64)
+    # the sources' normals by coordinate; unread without normals (the copy cost a sampled count
+    # 0.04 s of CPU at 400k vertices)
+    ns = np.ascontiguousarray(nv[grid.src_index].T) if use_normals else np.zeros((3, 1))
     order = grid.tgt_order if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
     return (order, V, grid.xs, grid.ys, grid.zs, grid.src_mass, grid.src_index, grid.self_slot,
             grid.cell_start, grid.dims, grid.lo, grid.cell, grid.full, grid.max_columns, _CHUNK_ROWS,
-            hv, np.ascontiguousarray(hv[grid.src_index]), nv, np.ascontiguousarray(nv[grid.src_index].T),
+            hv, np.ascontiguousarray(hv[grid.src_index]), nv, ns,
             use_normals, lnt4, float(hv.max()), dog_factor(dim) if dog else 0.0, 0.5 * dim)
 
 

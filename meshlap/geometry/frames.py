@@ -47,18 +47,44 @@ def vertex_normals(V: np.ndarray, faces: Polygons) -> np.ndarray:
     >>> vertex_normals(V, check_faces([[0, 1, 2]], 3))[0].tolist()
     [0.0, 0.0, 1.0]
     """
-    T = faces.triangles()
-    N = np.zeros_like(V, dtype=np.float64)
-    if len(T):
-        fn = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
-        # each face's normal added to its corners: the first corners' in face order, then the
-        # second's, the third's, as np.add.at(N, T[:, c], fn) for c = 0, 1, 2 adds them (the
-        # same sums to the bit), but by bincount (0.38 -> 0.15 s of CPU at 400k vertices)
-        corner = T.T.ravel()
-        for k in range(3):
-            N[:, k] = np.bincount(corner, np.tile(fn[:, k], 3), minlength=len(V))
-    norm = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
+    # float32 positions keep their float32 cross products, as numpy made them
+    V = np.ascontiguousarray(V, dtype=V.dtype if V.dtype == np.float32 else np.float64)
+    N = np.zeros((len(V), 3))
+    _unit_normal_sums(V, np.ascontiguousarray(faces.triangles(), dtype=np.int64), N)
+    return N
+
+
+@jit()
+def _unit_normal_sums(V, T, N):  # pragma: no cover - compiled
+    # N (zeros) += each face's cross product at its corners, then N / |N| (0 where |N| = 0):
+    # the sums of the numpy expression to the bit (np.cross's products, np.add.at(N, T[:, c],
+    # fn) for c = 0, 1, 2: the first corners' in face order, then the second's, the third's;
+    # np.linalg.norm's ((x² + y²) + z²)), in one pass per corner (0.12 -> 0.02 s of CPU at
+    # 400k vertices, measured)
+    m = len(T)
+    fn = np.empty((m, 3))
+    for c in range(3):
+        for t in range(m):
+            if c == 0:
+                i0, i1, i2 = T[t, 0], T[t, 1], T[t, 2]
+                a0, a1, a2 = V[i1, 0] - V[i0, 0], V[i1, 1] - V[i0, 1], V[i1, 2] - V[i0, 2]
+                b0, b1, b2 = V[i2, 0] - V[i0, 0], V[i2, 1] - V[i0, 1], V[i2, 2] - V[i0, 2]
+                fn[t, 0] = a1 * b2 - a2 * b1
+                fn[t, 1] = a2 * b0 - a0 * b2
+                fn[t, 2] = a0 * b1 - a1 * b0
+            v = T[t, c]
+            N[v, 0] += fn[t, 0]
+            N[v, 1] += fn[t, 1]
+            N[v, 2] += fn[t, 2]
+    for v in range(len(N)):
+        s = N[v, 0] * N[v, 0] + N[v, 1] * N[v, 1] + N[v, 2] * N[v, 2]
+        if s > 0.0:
+            r = np.sqrt(s)
+            N[v, 0] /= r
+            N[v, 1] /= r
+            N[v, 2] /= r
+        else:
+            N[v, 0] = N[v, 1] = N[v, 2] = 0.0
 
 
 def pca_frames(P: np.ndarray, k: int, neighbors: int = 16) -> tuple[np.ndarray, np.ndarray]:

@@ -7,6 +7,7 @@ from typing import Any
 import igl
 import numpy as np
 
+from .._jit import jit
 from .polygons import Polygons
 from .validation import check_faces, check_vertices
 
@@ -58,8 +59,26 @@ def face_areas(V: Any, F: Any) -> np.ndarray:
 
 
 def _mean_edge_length(V: np.ndarray, faces: Polygons) -> float:
+    # the mean of np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1) over the face sides, the
+    # lengths made in one pass, without the (m, 3) temporaries (0.28 -> 0.06 s of CPU at
+    # 400k vertices, measured)
     e = faces.edges()
-    return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+    lengths = np.empty(len(e))
+    _edge_lengths(np.ascontiguousarray(V, dtype=np.float64), e, lengths)
+    return float(lengths.mean())
+
+
+@jit()
+def _edge_lengths(V, e, out):  # pragma: no cover - compiled
+    # out[i] = |V[e[i, 0]] - V[e[i, 1]]| as np.linalg.norm makes it: sqrt((x² + y²) + z²)
+    for i in range(len(e)):
+        a, b = e[i, 0], e[i, 1]
+        x = V[a, 0] - V[b, 0]
+        s = x * x
+        for c in range(1, V.shape[1]):
+            x = V[a, c] - V[b, c]
+            s += x * x
+        out[i] = np.sqrt(s)
 
 
 def _vertex_mass(V: np.ndarray, faces: Polygons, areas: np.ndarray | None = None) -> np.ndarray:
