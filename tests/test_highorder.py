@@ -217,6 +217,23 @@ def test_assemble_takes_a_candidate_chosen_everywhere_whole(monkeypatch):
     assert (choice.degree == 6).all() and not copies
 
 
+
+def test_noise_at_the_coordinates_rounding_widens_no_row(monkeypatch):
+    # a dense cap of the unit sphere (4,000 points within 1e-3 of its pole): the noise level is
+    # the arithmetic's (1e-12 of the spacing), and the ladder, whose wide rows cannot win there,
+    # is not climbed; without the rounding floor it is, and chooses the same rows
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-1e-3, 1e-3, (4000, 2))
+    P = np.column_stack([xy, np.sqrt(1 - (xy**2).sum(axis=1))])
+    stages = []
+    L, choice = rowchoice.choose_rows(P, progress=stages.append)
+    assert not any(s.startswith("rung") for s in stages) and (choice.degree == 6).all()
+    monkeypatch.setattr(rowchoice, "_ROUNDING", 0.0)
+    stages.clear()
+    L0, choice0 = rowchoice.choose_rows(P, progress=stages.append)
+    assert any(s.startswith("rung") for s in stages) and (L0 != L).nnz == 0
+
+
 def test_known_noise_level_is_used():
     V0, V, F = noisy_sphere(1500, 0.005)
     _, choice = rowchoice.choose_rows(V, noise=0.005)
