@@ -192,8 +192,8 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
 def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None):
     # rows of the given degree (a tuple: of each, on the same stencils) on the K nearest
     # neighbours of the centres: the first K of the rows `rows` (None: all, the centres' own) of
-    # the table near[0], ascending, read in place (near[1](K): the K-th one's distances, by
-    # _tables); computed in the order of place (a k-d tree's, _Spread.place) or, without it, in
+    # the table near[0], ascending, read in place (near[1](K): the K-th one's distances, from
+    # _table); computed in the order of place (a k-d tree's, _Spread.place) or, without it, in
     # their own
     idx, kth = near
     width = idx.shape[1]
