@@ -101,66 +101,12 @@ def _adjacency(n: int, edges: np.ndarray) -> sp.csr_matrix:
 
 
 def _ring_average(n: int, edges: np.ndarray, x: np.ndarray, times: int) -> np.ndarray:
-    # average over each point and its edge neighbours, ``times`` times: scipy's products with
-    # A = adjacency + I, whose CSR arrays (sorted columns, repeated edges counted) are made by
-    # _ring_matrix as scipy made them from the sum of two sparse matrices (CPU 0.010 -> 0.003 s
-    # on a random 16k-vertex sphere, 0.22 -> 0.17 s at 400k, measured)
-    indptr, indices, data, norm = _ring_matrix(n, np.ascontiguousarray(edges, dtype=np.int64))
-    A = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    # average over each point and its edge neighbours, ``times`` times
+    A = _adjacency(n, edges) + sp.eye(n, format="csr")
+    norm = np.asarray(A.sum(axis=1)).ravel()
     for _ in range(times):
         x = (A @ x) / norm
     return x
-
-
-@jit()
-def _ring_matrix(n, e):  # pragma: no cover - compiled
-    # the canonical CSR arrays of adjacency(e) + I (each row's columns sorted and once, a
-    # column's value the times it appears) and the row sums. The entries grouped by row, then
-    # by column in the order of their rows: A is symmetric, so column c's rows, ascending,
-    # are row c's columns, sorted without a sort
-    ptr = np.zeros(n + 1, dtype=np.int64)
-    for i in range(len(e)):
-        ptr[e[i, 0] + 1] += 1
-        ptr[e[i, 1] + 1] += 1
-    for v in range(n):
-        ptr[v + 1] += ptr[v] + 1
-    by_row = np.empty(ptr[n], dtype=np.int64)
-    at = ptr[:-1].copy()
-    for v in range(n):
-        by_row[at[v]] = v
-        at[v] += 1
-    for i in range(len(e)):
-        a, b = e[i, 0], e[i, 1]
-        by_row[at[a]] = b
-        at[a] += 1
-        by_row[at[b]] = a
-        at[b] += 1
-    cols = np.empty(ptr[n], dtype=np.int64)
-    for v in range(n):  # not at[:] = ptr[:-1]: numba took 2 s longer to compile the kernel
-        at[v] = ptr[v]
-    for r in range(n):
-        for k in range(ptr[r], ptr[r + 1]):
-            c = by_row[k]
-            cols[at[c]] = r
-            at[c] += 1
-    indptr = np.empty(n + 1, dtype=np.int64)
-    indices = np.empty(ptr[n], dtype=np.int64)
-    data = np.empty(ptr[n])
-    norm = np.empty(n)
-    k = 0
-    indptr[0] = 0
-    for v in range(n):
-        j = ptr[v]
-        while j < ptr[v + 1]:
-            start = j
-            while j < ptr[v + 1] and cols[j] == cols[start]:
-                j += 1
-            indices[k] = cols[start]
-            data[k] = j - start
-            k += 1
-        indptr[v + 1] = k
-        norm[v] = ptr[v + 1] - ptr[v]
-    return indptr, indices[:k], data[:k], norm
 
 
 def local_h(P: np.ndarray, edges: np.ndarray, scale: float, smoothing: int = 3) -> np.ndarray:

@@ -95,14 +95,16 @@ def _recursion(exps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.cache
-def _tables(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    # the monomials up to twice the highest degree (the Gram matrix's moments; they hold the
-    # probes' two more degrees) and pair[a, b], the monomial Φ_a Φ_b, for a, b of degree ≤ MAX_DEGREE
+def _tables(k: int) -> tuple[np.ndarray, ...]:
+    # what the compiled fit reads of the monomials in k variables, once per k: their counts by
+    # degree up to twice the highest (the Gram matrix's moments; they hold the probes' two more
+    # degrees), the Vandermonde's recursion, the slots of the first and second derivatives, and
+    # pair[a, b], the monomial Φ_a Φ_b, for a, b of degree ≤ MAX_DEGREE
     exps, count = monomials(k, 2 * MAX_DEGREE)
     where = {tuple(e): a for a, e in enumerate(exps.tolist())}
     m = int(count[MAX_DEGREE])
     pair = np.array([[where[tuple(exps[a] + exps[b])] for b in range(m)] for a in range(m)], dtype=np.int64)
-    return exps, count, pair
+    return (count, *_recursion(exps), *_derivative_slots(exps, k), pair)
 
 
 @dataclass
@@ -287,15 +289,13 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     hv = np.broadcast_to(np.asarray(h, dtype=np.float64), (rows,)).copy()
     if not (np.isfinite(hv).all() and (hv > 0).all()):
         raise MeshError("pointwise_rows: h must be finite and positive")
-    exps, count, pair = _tables(k)
-    idx1, idx2 = _derivative_slots(exps, k)
+    count, parent, var, idx1, idx2, pair = _tables(k)
     T = len(degrees)
     out = np.zeros((T, int(indptr[-1])))
     used = np.zeros((T, rows), dtype=np.int64)
     resid, amp, kap = np.zeros((T, rows)), np.zeros((T, rows)), np.zeros((T, rows))
     probes = np.full((rows, 2 * T), np.nan)
     if rows:
-        parent, var = _recursion(exps)
         targets = np.asarray(degrees, dtype=np.int64)
         order = np.arange(rows) if order is None else np.asarray(order, dtype=np.int64)
         if order.shape != (rows,) or not np.array_equal(np.sort(order), np.arange(rows)):
