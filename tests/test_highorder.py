@@ -207,15 +207,46 @@ def test_assemble_takes_a_candidate_chosen_everywhere_whole(monkeypatch):
     local = [(four, 30), (two, 30)]
     f = np.exp(P[:, 0])
     pick = np.arange(500) % 2
-    mixed = rowchoice._assemble(500, pick, local) @ f
+    mixed = rowchoice._assemble(500, pick, local, {}) @ f
     np.testing.assert_array_equal(mixed[pick == 0], (four.matrix @ f)[pick == 0])
     np.testing.assert_array_equal(mixed[pick == 1], (two.matrix @ f)[pick == 1])
-    assert rowchoice._assemble(500, np.ones(500, dtype=np.int64), local) is two.matrix
+    assert rowchoice._assemble(500, np.ones(500, dtype=np.int64), local, {}) is two.matrix
     copies = []
     monkeypatch.setattr(rowchoice, "copy_rows", lambda *a: copies.append(a))
     L, choice = rowchoice.choose_rows(shapes.fibonacci_sphere(3000))
     assert (choice.degree == 6).all() and not copies
 
+
+
+def test_candidates_measured_only_are_fitted_again_where_chosen(monkeypatch):
+    # fit_rows(keep_rows=False) measures what keep_rows=True does, without the weights
+    P = shapes.fibonacci_sphere(500)
+    pattern = highorder.knn_pattern(P, 30)[:2]
+    kept, measured = (highorder.fit_rows(P, *pattern, 0.002, (4, 2), keep_rows=keep)
+                      for keep in (True, False))
+    for a, b in zip(kept, measured, strict=True):
+        assert b.matrix is None and a.matrix.nnz == 500 * 30
+        for name in ("degree", "residual", "amplification", "probes", "curvature", "h"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    # choose_rows keeps no weights of the noise fit and the compact degree-2 rows, and fits
+    # again the rows chosen of them: on a noisy sphere, where both win at some points, L is the
+    # same as with every candidate's rows kept
+    real = rowchoice._candidate
+    kept_all = []
+
+    def keep_all(*args, **kw):
+        kept_all.append(kw.get("keep", True))
+        return real(*args, **{**kw, "keep": True})
+
+    V0, V, F = noisy_sphere(1500, 0.001)  # (1,326 rows of the noise fit, 28 compact of degree 2)
+    L, choice = rowchoice.choose_rows(V)
+    monkeypatch.setattr(rowchoice, "_candidate", keep_all)
+    L_kept, choice_kept = rowchoice.choose_rows(V)
+    assert kept_all.count(False) == 2 and (L != L_kept).nnz == 0
+    assert np.array_equal(choice.neighbors, choice_kept.neighbors)
+    K2 = int(round(rowchoice._K_PER_MONOMIAL * 6 + 4))
+    assert ((choice.neighbors == rowchoice._K_NOISE) & (choice.degree == 2)).any()
+    assert ((choice.neighbors == K2) & (choice.degree == 2)).any()
 
 
 def test_noise_at_the_coordinates_rounding_widens_no_row(monkeypatch):
@@ -447,7 +478,7 @@ def test_grid_neighbours_are_the_k_d_trees():
         for K in (1, 14, 30, 52, 64):
             d, i = near.query(Q, K)
             d0, i0 = cKDTree(P).query(Q, k=K)
-            assert np.array_equal(d, np.reshape(d0, d.shape))
+            assert np.array_equal(d, np.reshape(d0, d.shape)) and i.dtype == np.int32  # (grid or tree)
             if tied:
                 assert np.array_equal(i, best[:, :K])
                 assert np.array_equal(d, np.sqrt(np.take_along_axis(s2, best[:, :K], 1)))

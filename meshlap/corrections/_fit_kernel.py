@@ -119,7 +119,7 @@ def _dots(A, x, n, K, out):  # pragma: no cover - compiled
 
 @jit(error_model=_IEEE)
 def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, use_normals, k, parent,
-          var, count, pair, targets, idx1, idx2, want_noise, out, used, resid, amp, bias,
+          var, count, pair, targets, idx1, idx2, want_noise, keep, out, used, resid, amp, bias,
           kap):  # pragma: no cover - compiled
     # one stencil, frame and Gram matrix serve the rows of every degree in targets (the
     # Cholesky factor of a leading block is the leading block of the factor); outputs by
@@ -174,12 +174,16 @@ def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, 
     t = np.empty(k)
     lam = np.empty(m)
     acc = np.empty(Kb)
+    # the rows go to out at their places, or (keep False: what the fits measure only) each in
+    # turn to one scratch row
+    row = out if keep else np.empty((len(targets), Kb))
     for o in range(start, stop):  # row r = order[o]: the caller's order, for the memory's sake
         r = order[o]
         w = centers[r]
         a0 = indptr[r]
         K = indptr[r + 1] - a0
         s0 = starts[r]  # row r's neighbours in indices; its outputs at indptr[r]
+        b0 = a0 if keep else 0
         nbr = indices[s0:s0 + K]
         inv4h = 1.0 / (4.0 * hv[r])
         th_sum = 0.0
@@ -233,7 +237,7 @@ def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, 
             if q < 2:
                 used[ti, r] = -1
                 for j in range(K):
-                    out[ti, a0 + j] = 0.0
+                    row[ti, b0 + j] = 0.0
                 continue
             used[ti, r] = q
             mq = count[q]
@@ -329,18 +333,18 @@ def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, 
                     acc[j] += Phi[al, j] * la
             for j in range(K):
                 s = acc[j] * th[j]
-                out[ti, a0 + j] = s
+                row[ti, b0 + j] = s
                 s2 += s * s
             # the basis holds the constants, so the row sums to zero up to rounding: make it exact
             # on the centre's own entry (it is among the neighbours)
             tot_row = 0.0
             self_q = -1
             for j in range(K):
-                tot_row += out[ti, a0 + j]
+                tot_row += row[ti, b0 + j]
                 if nbr[j] == w:
-                    self_q = a0 + j
+                    self_q = b0 + j
             if self_q >= 0:
-                out[ti, self_q] -= tot_row
+                row[ti, self_q] -= tot_row
             amp[ti, r] = math.sqrt(s2)
             # probes: the row applied to the monomials of degree q + 1 and q + 2 (unscaled)
             for e in range(2):
@@ -352,7 +356,7 @@ def _rows(start, stop, order, P, centers, indptr, starts, indices, hv, normals, 
                 for al in range(count[qq - 1], count[qq]):
                     s = 0.0
                     for j in range(K):
-                        s += out[ti, a0 + j] * Phi[al, j]
+                        s += row[ti, b0 + j] * Phi[al, j]
                     pacc += s * s
                 bias[r, 2 * ti + e] = math.sqrt(pacc) * rho ** qq
 

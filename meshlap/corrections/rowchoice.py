@@ -79,6 +79,7 @@ from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
 from ._fit_kernel import copy_rows, neighbour_medians
 from ._neighbours import _nearest, _Spread
+from ._ranks import _bounds, _median, _min, _sum
 from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
@@ -189,12 +190,12 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
     return err
 
 
-def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None):
+def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None, keep=True):
     # rows of the given degree (a tuple: of each, on the same stencils) on the K nearest
     # neighbours of the centres: the first K of the rows `rows` (None: all, the centres' own) of
     # the table near[0], ascending, read in place (near[1](K): the K-th one's distances, from
     # _table); computed in the order of place (a k-d tree's, _Spread.place) or, without it, in
-    # their own
+    # their own; keep=False: measured only (fit_rows' keep_rows)
     idx, kth = near
     width = idx.shape[1]
     sel = np.arange(len(idx)) if rows is None else rows
@@ -203,7 +204,7 @@ def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True,
     fits = fit_rows(P, indptr, np.ascontiguousarray(idx).ravel(), h, degree if isinstance(degree, tuple) else
                     (degree,), k=k, normals=normals, centers=centers, noise_dof=noise_dof,
                     order=None if place is None else np.argsort(place[centers], kind="stable"),
-                    starts=None if K == width and rows is None else sel * width)
+                    starts=None if K == width and rows is None else sel * width, keep_rows=keep)
     return fits if isinstance(degree, tuple) else fits[0]
 
 
@@ -290,18 +291,22 @@ def _restrict(fit: RowFit, rows: np.ndarray) -> RowFit:
                                       ("degree", "residual", "amplification", "probes", "curvature", "h")))
 
 
-def _assemble(n: int, pick: np.ndarray, local: list) -> sp.csr_matrix:
+def _assemble(n: int, pick: np.ndarray, local: list, refit: dict) -> sp.csr_matrix:
     # the chosen rows gathered from their candidates' CSR arrays, without a sort through COO;
     # a candidate of every row chosen everywhere is the matrix itself (at 400,000 clean points
-    # 250 MB neither written nor copied)
+    # 250 MB neither written nor copied). A candidate measured only (its matrix None) fits the
+    # rows chosen of it again: refit[id(fit)](rows)
+    def rows_of(fit: RowFit, rows: np.ndarray) -> sp.csr_matrix:
+        return fit.matrix if fit.matrix is not None else refit[id(fit)](rows).matrix
+
     if n and pick[0] >= 0 and len(local[pick[0]][0].centers) == n and (pick == pick[0]).all():
-        return local[pick[0]][0].matrix
+        return rows_of(local[pick[0]][0], np.arange(n))
     counts = np.zeros(n, dtype=np.int64)
     chosen = []
     for i, (fit, _) in enumerate(local):
         rows = np.flatnonzero(pick == i)
         if len(rows):
-            M = fit.matrix
+            M = rows_of(fit, rows)
             counts[rows] = M.indptr[rows + 1] - M.indptr[rows]
             chosen.append((rows, M))
     total = int(counts.sum())
@@ -418,9 +423,18 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     tick("noise fit")
     # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
     # higher degree, lowest first, only where they can win (_compact)
-    fit = _candidate(P, table, Kn, None, 2, _C_WIDE, k, normals, everyone, place=place)
-    noise_fit, K2 = (fit, Kn), Ks[-1]
-    low = _candidate(P, table, K2, None, 2, _C_COMPACT, k, normals, everyone, place=place)
+    # (their rows measured, not kept: clean data choose neither, and 250 MB of weights at 400,000
+    # points cost more than fitting again the rows noisy data do choose)
+    def measured(K: int, c: float) -> RowFit:
+        return _candidate(P, table, K, None, 2, c, k, normals, everyone, place=place, keep=False)
+
+    def again(K: int, c: float) -> Callable[[np.ndarray], RowFit]:
+        return lambda rows: _candidate(P, table, K, rows, 2, c, k, normals, rows, False, place)
+
+    K2 = Ks[-1]
+    fit, low = measured(Kn, _C_WIDE), measured(K2, _C_COMPACT)
+    refit = {id(fit): again(Kn, _C_WIDE), id(low): again(K2, _C_COMPACT)}
+    noise_fit = (fit, Kn)
     compact = {2: [(low, K2)]}
     resid = np.minimum(fit.residual, low.residual)
     first_scale = _scale(fit, nb, k, d, diameter, spacing)
@@ -522,7 +536,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
             pos = np.searchsorted(fit.centers, rows)
             degree[rows] = fit.degree[pos]
             hv[rows] = fit.h[pos]
-    L = _assemble(n, pick, local)
+    L = _assemble(n, pick, local, refit)
     return L, RowChoice(degree, widths, hv, sig, scale, best, spacing, notes)
 
 
@@ -558,32 +572,3 @@ def wider_rows(P: Any, choice: RowChoice, *, k: int = 2, normals: Any = None, fa
         out = out + pointwise_rows(P, indptr, idx.ravel(), factor * choice.h[centers], q, k=k,
                                    normals=normals, centers=centers)
     return sp.csr_matrix(out)
-
-
-def _sum(comm: Any, x: float) -> float:
-    return x if comm is None else float(comm.allreduce(x))
-
-
-def _min(comm: Any, x: float) -> float:
-    return x if comm is None else float(min(comm.allgather(x)))
-
-
-def _median(comm: Any, values: np.ndarray) -> float | None:
-    # the median over every rank's values (None when there are none)
-    if comm is not None:
-        values = np.concatenate(comm.allgather(np.asarray(values, dtype=np.float64)))
-    return float(np.median(values)) if len(values) else None
-
-
-def _bounds(comm: Any, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    d = P.shape[1]
-    lo = P.min(axis=0) if len(P) else np.full(d, np.inf)
-    hi = P.max(axis=0) if len(P) else np.full(d, -np.inf)
-    if comm is not None:
-        from mpi4py import MPI
-
-        glo, ghi = np.empty(d), np.empty(d)
-        comm.Allreduce(np.ascontiguousarray(lo, dtype=np.float64), glo, op=MPI.MIN)
-        comm.Allreduce(np.ascontiguousarray(hi, dtype=np.float64), ghi, op=MPI.MAX)
-        lo, hi = glo, ghi
-    return lo, hi
