@@ -165,16 +165,18 @@ def test_noise_sweep_never_worse_than_the_papers_operator():
 
 
 def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
-    # the compact rows of degree 6 are built at every point of a clean sphere (the sample that
-    # bounds their noise factor, 1/16 of the points and at least 64, first, then all of them in
-    # one fit), and on a noisy one only on the sample:
+    # the compact rows of degree 6 are built at every point of a clean sphere, each once (the
+    # sample that bounds their noise factor, 1/16 of the points and at least 64, first, then the
+    # rest in one fit that takes the sample's rows), and on a noisy one only on the sample:
     # the noise term alone rules them out elsewhere; degree 4, built after 6, is ruled out on
     # most of a clean sphere of 8,000 points by its bias, without changing the rows
     built = []
 
     def spy(P, near, K, rows, degree, c, *args, **kw):
         if c == rowchoice._C_COMPACT and degree in (4, 6):
-            built.append((degree, len(near[0]) if rows is None else len(rows)))
+            skip = kw.get("skip")
+            fitted = (len(near[0]) if rows is None else len(rows)) - (0 if skip is None else int(skip.sum()))
+            built.append((degree, fitted))
         return real(P, near, K, rows, degree, c, *args, **kw)
 
     real = rowchoice._candidate
@@ -185,7 +187,7 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         built.clear()
         rowchoice.choose_rows(X)
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
-    assert counts[0][1] == 1200 + 75
+    assert counts[0][1] == 1200
     assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
     P, _ = shapes.sphere(8000, kind="random", seed=0)
     rows = []
@@ -194,7 +196,7 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
         built.clear()
         rows.append(rowchoice.choose_rows(P)[0])
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
-    assert counts[2][0] < 0.4 * 8000 and counts[3][0] == 8000 + 500  # measured 2,498 (the sample: 500)
+    assert counts[2][0] < 0.4 * 8000 and counts[3][0] == 8000  # measured 2,498 (the sample: 500)
     assert (rows[0] != rows[1]).nnz == 0
 
 
@@ -228,6 +230,13 @@ def test_candidates_measured_only_are_fitted_again_where_chosen(monkeypatch):
         assert b.matrix is None and a.matrix.nnz == 500 * 30
         for name in ("degree", "residual", "amplification", "probes", "curvature", "h"):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    # order: the rows computed; those left out are left empty
+    some = np.arange(0, 500, 3)[::-1]
+    part = highorder.fit_rows(P, *pattern, 0.002, (4,), order=some)[0]
+    rows = np.zeros(500, dtype=bool)
+    rows[some] = True
+    assert (part.matrix[rows] != kept[0].matrix[rows]).nnz == 0 and part.matrix[~rows].count_nonzero() == 0
+    assert np.array_equal(part.degree[rows], kept[0].degree[rows]) and (part.degree[~rows] == 0).all()
     # choose_rows keeps no weights of the noise fit and the compact degree-2 rows, and fits
     # again the rows chosen of them: on a noisy sphere, where both win at some points, L is the
     # same as with every candidate's rows kept
@@ -429,8 +438,9 @@ def test_fit_rows_in_any_order_are_the_same_rows():
     order = np.random.default_rng(0).permutation(500)
     for a, b in zip(plain, highorder.fit_rows(P, indptr, indices, h, (4, 2), order=order), strict=True):
         assert np.array_equal(a.matrix.data, b.matrix.data) and np.array_equal(a.residual, b.residual)
-    with pytest.raises(MeshError, match="permutation"):
-        highorder.fit_rows(P, indptr, indices, h, (4,), order=np.zeros(500, dtype=int))
+    for wrong in (np.zeros(500, dtype=int), [500], [-1]):
+        with pytest.raises(MeshError, match="at most once"):
+            highorder.fit_rows(P, indptr, indices, h, (4,), order=wrong)
     # rows read in place from a wider table (starts) are the rows of the table's first columns
     # gathered: the same numbers and columns, 32-bit
     wide = highorder.knn_pattern(P, 40)[1].reshape(500, 40)

@@ -248,9 +248,11 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     """:func:`pointwise_rows` of several degrees on the same stencils, one :class:`RowFit` each,
     for little more than the highest alone: the frames, weights and Gram matrices are shared.
 
-    ``order``, a permutation of the rows, is the order in which they are computed (the rows do
-    not depend on it): rows whose neighbours lie near each other in memory one after another
-    are faster on large inputs (16% on 100,000 points at degree 6, a k-d tree's order).
+    ``order``, the rows computed in the order they are computed (default all, in order; the
+    rows do not depend on it): rows whose neighbours lie near each other in memory one after
+    another are faster on large inputs (16% on 100,000 points at degree 6, a k-d tree's order).
+    Rows left out of it are left empty (zero weights and figures), for a caller that has them
+    from another fit.
 
     ``starts``, where each row's neighbours begin in ``indices`` (default ``indptr[:-1]``: a CSR
     pattern), reads the rows from a wider table of neighbours, ``indices`` its rows flattened,
@@ -305,12 +307,13 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     if rows:
         targets = np.asarray(degrees, dtype=np.int64)
         order = np.arange(rows) if order is None else np.asarray(order, dtype=np.int64)
-        if order.shape != (rows,) or not np.array_equal(np.sort(order), np.arange(rows)):
-            raise MeshError(f"fit_rows: order must be a permutation of the {rows} rows")
+        if order.ndim != 1 or len(order) and (order.min() < 0 or order.max() >= rows
+                                              or np.bincount(order, minlength=rows).max() > 1):
+            raise MeshError(f"fit_rows: order must list each of the {rows} rows at most once")
         first = indptr[:-1] if starts is None else starts
-        in_blocks(_rows, rows, order, P, centers, indptr, first, indices, hv, N, use_normals, k, parent, var,
-                  count, pair, targets, idx1, idx2, bool(noise_dof), bool(keep_rows), out, used, resid, amp,
-                  probes, kap)
+        in_blocks(_rows, len(order), order, P, centers, indptr, first, indices, hv, N, use_normals, k, parent,
+                  var, count, pair, targets, idx1, idx2, bool(noise_dof), bool(keep_rows), out, used, resid,
+                  amp, probes, kap)
     cols = indices
     if starts is not None and keep_rows:
         total = int(indptr[-1])

@@ -190,20 +190,22 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
     return err
 
 
-def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None, keep=True):
+def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True, place=None, keep=True,
+               skip=None):
     # rows of the given degree (a tuple: of each, on the same stencils) on the K nearest
     # neighbours of the centres: the first K of the rows `rows` (None: all, the centres' own) of
     # the table near[0], ascending, read in place (near[1](K): the K-th one's distances, from
     # _table); computed in the order of place (a k-d tree's, _Spread.place) or, without it, in
-    # their own; keep=False: measured only (fit_rows' keep_rows)
+    # their own; keep=False: measured only (fit_rows' keep_rows); skip: the rows left empty
     idx, kth = near
     width = idx.shape[1]
     sel = np.arange(len(idx)) if rows is None else rows
     h = np.maximum(kth(K)[sel], 1e-300) ** 2 / (4.0 * c)
     indptr = np.arange(len(sel) + 1, dtype=np.int64) * K
+    order = np.arange(len(sel)) if place is None else np.argsort(place[centers], kind="stable")
     fits = fit_rows(P, indptr, np.ascontiguousarray(idx).ravel(), h, degree if isinstance(degree, tuple) else
                     (degree,), k=k, normals=normals, centers=centers, noise_dof=noise_dof,
-                    order=None if place is None else np.argsort(place[centers], kind="stable"),
+                    order=order if skip is None else order[~skip[order]],
                     starts=None if K == width and rows is None else sel * width, keep_rows=keep)
     return fits if isinstance(degree, tuple) else fits[0]
 
@@ -275,10 +277,15 @@ def _compact(P, near, K, q, k, normals, done, level, scale, sample_own, comm, pl
         floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
     rest = np.flatnonzero(~sample & (bound <= ROBUST * best))
     if len(rest) + len(first) == len(best):
-        # every point (clean data): one fit of all, whose rows at the sample are the sample's
-        # (the same stencils, the same numbers), so that _assemble can take its matrix whole
+        # every point (clean data): one fit of the rest, that takes the sample's rows and figures
+        # (the same stencils, the same numbers) in their places, so that _assemble can take its
+        # matrix whole
         everyone = np.arange(len(best))
-        return [(_candidate(P, near, K, None, q, _C_COMPACT, k, normals, everyone, place=place), K)]
+        whole = _candidate(P, near, K, None, q, _C_COMPACT, k, normals, everyone, place=place, skip=sample)
+        whole.matrix.data.reshape(-1, K)[first] = fits[0].matrix.data.reshape(-1, K)
+        for name in ("degree", "residual", "amplification", "probes", "curvature"):
+            getattr(whole, name)[first] = getattr(fits[0], name)
+        return [(whole, K)]
     if len(rest):
         fits.append(_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place))
     return [(fit, K) for fit in fits]
