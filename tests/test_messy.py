@@ -294,6 +294,31 @@ def test_duplicates_in_clusters():
     assert topology.duplicate_vertices(P, rtol=0).tolist() == [0] * 11 + [11] * 3 + [14, 15]
 
 
+def test_near_copies_by_sweep_as_by_the_tree(monkeypatch):
+    # the sweep along one direction finds the same copies as the k-d tree: exact and near copies,
+    # a grid with copies; where more than 16 points lie within the tolerance along the sweep (a
+    # cluster of 40 near copies, a tolerance of 1e-3) it leaves them to the tree
+    from meshlap.geometry import topology as topo
+
+    rng = np.random.default_rng(0)
+    V, _ = shapes.sphere(20000, kind="random", seed=0)
+    grid = np.stack(np.meshgrid(np.arange(100.0), np.arange(100.0), [0.0]), -1).reshape(-1, 3)
+    cases = [(V, 1e-10), (np.vstack([V, V[:500] + 1e-12 * rng.standard_normal((500, 3)), V[:300]]), 1e-10),
+             (np.vstack([V, V[0] + 1e-13 * rng.standard_normal((40, 3))]), 1e-10),
+             (np.vstack([grid, grid[:50] + 1e-9]), 1e-10), (V, 1e-4), (V, 1e-3)]
+    swept = []
+    for P, rtol in cases:
+        real = topo._near_pairs
+        swept.append(real(P, rtol * float(np.linalg.norm(np.ptp(P, axis=0)))) is not None)
+        rep = topo.duplicate_vertices(P, rtol=rtol)
+        monkeypatch.setattr(topo, "_near_pairs", lambda P, atol: None)
+        assert np.array_equal(rep, topo.duplicate_vertices(P, rtol=rtol))
+        monkeypatch.setattr(topo, "_near_pairs", real)
+    # copies found: 0, 800, 40, 50, 5 and 592 (measured); the cluster and the wide tolerance
+    # by the tree
+    assert swept == [True, True, False, True, True, False]
+
+
 def test_boundary_mask_and_bias():
     # plane [-1, 1]²: the band is the set of vertices within width·√h of the square's sides
     V, F = shapes.plane(4000, seed=7)
