@@ -314,10 +314,12 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
         in_blocks(_rows, len(order), order, P, centers, indptr, first, indices, hv, N, use_normals, k, parent,
                   var, count, pair, targets, idx1, idx2, bool(noise_dof), bool(keep_rows), out, used, resid,
                   amp, probes, kap)
-    cols = indices
+    # the matrices' columns: 32-bit where their row pointers fit too (scipy wants both alike)
+    total = int(indptr[-1])
+    index = np.int32 if max(n, total) < 2**31 - 1 else np.int64
+    cols = indices.astype(index, copy=False)
     if starts is not None and keep_rows:
-        total = int(indptr[-1])
-        cols = np.empty(total, dtype=np.int32 if max(n, total) < 2**31 - 1 else np.int64)
+        cols = np.empty(total, dtype=index)
         gather_columns(indices, starts, indptr, cols)
     return [RowFit(_rows_matrix(n, centers, indptr, cols, out[t]) if keep_rows else None, centers, used[t],
                    resid[t], amp[t], probes[:, 2 * t:2 * t + 2], kap[t], hv) for t in range(T)]
