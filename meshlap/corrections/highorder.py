@@ -248,11 +248,11 @@ def fit_rows(P: Any, indptr: Any, indices: Any, h: Any, degrees: tuple[int, ...]
     """:func:`pointwise_rows` of several degrees on the same stencils, one :class:`RowFit` each,
     for little more than the highest alone: the frames, weights and Gram matrices are shared.
 
-    ``order``, the rows computed in the order they are computed (default all, in order; the
-    rows do not depend on it): rows whose neighbours lie near each other in memory one after
-    another are faster on large inputs (16% on 100,000 points at degree 6, a k-d tree's order).
-    Rows left out of it are left empty (zero weights and figures), for a caller that has them
-    from another fit.
+    ``order`` lists the rows to compute, in the order they are computed (default: all, in
+    order; the rows do not depend on it). Rows whose neighbours lie near each other in memory,
+    one after another, are faster on large inputs (16% on 100,000 points at degree 6, a k-d
+    tree's order). Rows left out are left empty (zero weights and figures), for a caller that
+    has them from another fit.
 
     ``starts``, where each row's neighbours begin in ``indices`` (default ``indptr[:-1]``: a CSR
     pattern), reads the rows from a wider table of neighbours, ``indices`` its rows flattened,
