@@ -94,12 +94,13 @@ class Nearest:
 
     def query(self, Q: np.ndarray, K: int, place: np.ndarray | None = None,
               columns: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(dist, idx), each (len(Q), K): the K nearest points of each query point, searched
+        """(dist, idx), each (len(Q), K), idx 32-bit where the points number fewer than 2³¹:
+        the K nearest points of each query point, searched
         cell by cell, or by the k-d tree in the order of ``place`` (a spatial order of the
         queries: consecutive ones then walk the same nodes, 6% less CPU at 16,000 points and
-        19% at 100,000). With ``columns`` (ranks from 0), dist holds those neighbours' distances
-        only (a caller that reads a few of them need not hold them all: 180 MB at 400,000
-        points and K = 64)."""
+        19% at 100,000). With ``columns`` (ranks from 0), dist is (len(Q), len(columns)) and
+        holds those neighbours' distances only (a caller that reads a few of them need not hold
+        them all: 180 MB at 400,000 points and K = 64)."""
         Q = np.ascontiguousarray(Q, dtype=np.float64)
         grid = self._grid(K) if 1 <= K <= len(self.D) and self.D.shape[1] <= 3 else None
         cols = np.arange(K) if columns is None else np.asarray(columns, dtype=np.int64)
