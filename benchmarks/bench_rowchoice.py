@@ -33,7 +33,7 @@ from meshlap.corrections import rowchoice
 
 # in the order they import each other
 MODULES = ("_dense", "corrections/_neighbours", "corrections/_fit_kernel", "corrections/highorder",
-           "corrections/rowchoice")
+           "corrections/_ranks", "corrections/rowchoice")
 
 
 def load_base(root: Path):
@@ -42,7 +42,7 @@ def load_base(root: Path):
     for where in MODULES:
         name = where.rsplit("/", 1)[-1]
         src = (root / "meshlap" / f"{where}.py").read_text()
-        own = r"^from \.\.?(_dense|_neighbours|_fit_kernel|highorder) import"
+        own = r"^from \.\.?(_dense|_neighbours|_fit_kernel|highorder|_ranks) import"
         rest = r"^from \.\.?(\w*) import"
         for pattern, repl in ((own, r"from base_\1 import"), (rest, r"from meshlap.\1 import")):
             src = re.sub(pattern, repl, src, flags=re.M)

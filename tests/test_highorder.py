@@ -11,7 +11,7 @@ import sympy
 
 import meshlap
 from meshlap import shapes
-from meshlap.corrections import highorder, rowchoice
+from meshlap.corrections import _gather, highorder, rowchoice
 from meshlap.errors import MeshError, MeshWarning
 
 
@@ -214,7 +214,7 @@ def test_assemble_takes_a_candidate_chosen_everywhere_whole(monkeypatch):
     np.testing.assert_array_equal(mixed[pick == 1], (two.matrix @ f)[pick == 1])
     assert rowchoice._assemble(500, np.ones(500, dtype=np.int64), local, {}) is two.matrix
     copies = []
-    monkeypatch.setattr(rowchoice, "copy_rows", lambda *a: copies.append(a))
+    monkeypatch.setattr(_gather, "copy_rows", lambda *a: copies.append(a))
     L, choice = rowchoice.choose_rows(shapes.fibonacci_sphere(3000))
     assert (choice.degree == 6).all() and not copies
 
@@ -251,11 +251,58 @@ def test_candidates_measured_only_are_fitted_again_where_chosen(monkeypatch):
     L, choice = rowchoice.choose_rows(V)
     monkeypatch.setattr(rowchoice, "_candidate", keep_all)
     L_kept, choice_kept = rowchoice.choose_rows(V)
-    assert kept_all.count(False) == 2 and (L != L_kept).nnz == 0
+    assert kept_all.count(False) == 4 and (L != L_kept).nnz == 0  # (the sample's and the rest's)
     assert np.array_equal(choice.neighbors, choice_kept.neighbors)
     K2 = int(round(rowchoice._K_PER_MONOMIAL * 6 + 4))
     assert ((choice.neighbors == rowchoice._K_NOISE) & (choice.degree == 2)).any()
     assert ((choice.neighbors == K2) & (choice.degree == 2)).any()
+
+
+def test_clean_points_fit_the_top_degree_alone(monkeypatch):
+    # where the sample points near a point predict degree 6 far ahead of the degree-2 rows, the
+    # point's degree-2 candidates are not fitted; the rows chosen are those of the full path
+    # (_MARGIN infinite: every candidate fitted wherever it can win). A sphere noisy on one side
+    fitted = []
+
+    def spy(P, near, K, rows, degree, c, *args, **kw):
+        if degree == 2:
+            fitted.append(len(near[0]) if rows is None else len(rows))
+        return real(P, near, K, rows, degree, c, *args, **kw)
+
+    real = rowchoice._candidate
+    monkeypatch.setattr(rowchoice, "_candidate", spy)
+    V, _ = shapes.sphere(6000, kind="random", seed=3)
+    sample = int((rowchoice._Spread(V, rowchoice.cKDTree(V), rowchoice.SAMPLE).rank < 6000 // 16).sum())
+    L, choice = rowchoice.choose_rows(V)
+    # the sample's degree-2 fits, and those of the few points whose degree-6 residual is more than
+    # twice their neighbours' median (measured 27)
+    assert fitted[:2] == [sample, sample] and sum(fitted[2:]) < 0.02 * 6000 and (choice.degree == 6).all()
+    noisy = V * (1 + 0.003 * (V[:, 2] > 0) * np.random.default_rng(0).standard_normal(6000))[:, None]
+    fitted.clear()
+    L, choice = rowchoice.choose_rows(noisy)
+    # the points not clean, each fitted once by both degree-2 candidates: the noisy half and a margin
+    assert fitted[2] == fitted[3] and 3000 < fitted[2] < 4500  # measured 3,752
+    monkeypatch.setattr(rowchoice, "_MARGIN", np.inf)
+    L_all, choice_all = rowchoice.choose_rows(noisy)
+    assert np.array_equal(choice.degree, choice_all.degree) and (L != L_all).nnz == 0
+
+
+def test_noise_between_the_sample_points_is_caught(monkeypatch):
+    # noise on 40 points none of which is a sample point: the points near them are taken as
+    # clean, and their degree-6 rows, noise-dominated, have the degree-2 candidates fitted after
+    # all (the ladder then widens them): the rows the full path chooses
+    V, _ = shapes.sphere(6000, kind="random", seed=4)
+    tree = rowchoice.cKDTree(V)
+    sample = rowchoice._Spread(V, tree, rowchoice.SAMPLE).rank < 6000 // 16
+    patch = next(p for p in tree.query(V, 40)[1] if not sample[p].any())
+    noisy = V.copy()
+    noisy[patch] *= 1 + 0.01 * np.random.default_rng(1).standard_normal((40, 1))
+    stages = []
+    L, choice = rowchoice.choose_rows(noisy, progress=stages.append)
+    assert stages.count("noise fit") == 2 and (choice.degree[patch] < 6).all()  # (4 and 2)
+    monkeypatch.setattr(rowchoice, "_MARGIN", np.inf)
+    L_all, choice_all = rowchoice.choose_rows(noisy)
+    assert np.array_equal(choice.degree, choice_all.degree) and (L != L_all).nnz == 0
 
 
 def test_noise_at_the_coordinates_rounding_widens_no_row(monkeypatch):
@@ -400,11 +447,16 @@ def test_rows_pinned_to_the_previous_implementation():
         np.testing.assert_array_equal(choice.neighbors, ref[f"{name}_neighbors"])
         scale = np.abs(ref[f"{name}_Lf"]).max()
         np.testing.assert_allclose(Lf, ref[f"{name}_Lf"], rtol=1e-7, atol=1e-7 * scale)
-        for field in ("h", "scale", "predicted"):
-            np.testing.assert_allclose(getattr(choice, field), ref[f"{name}_{field}"], rtol=1e-7)
-        if name == "clean":  # its noise level is rounding (1e-5 of the spacing): only its size
+        np.testing.assert_allclose(choice.h, ref[f"{name}_h"], rtol=1e-7)
+        if name == "clean":
+            # its noise level is rounding (1e-5 of the spacing): only its size. The points are
+            # clean (the rows of degree 6 fitted alone), and the scale is the unit sphere's radius
+            # from the curvature of those rows (the wide degree-2 fit's, before: 0.916)
             assert choice.noise.max() < 1e-3 * choice.spacing
+            assert np.abs(choice.scale - 1).max() < 1e-3
         else:
+            for field in ("scale", "predicted"):
+                np.testing.assert_allclose(getattr(choice, field), ref[f"{name}_{field}"], rtol=1e-7)
             np.testing.assert_allclose(choice.noise, ref[f"{name}_noise"], rtol=1e-7)
 
 

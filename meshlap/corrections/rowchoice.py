@@ -57,6 +57,18 @@ come within ROBUST of the least predicted error of the rows built before (degree
 4, then the ladder, which only lowers it). On the noisy spheres and tori of bench_pointwise
 they are built almost nowhere; on clean data degree 6 everywhere and degree 4 where degree 6's
 lead is small (16,000 sphere points: 13% of them, the same rows as building it everywhere).
+Clean regions fit one candidate (:func:`_clean`). Every candidate is fitted first at the sample
+(every 16th point); where the sample points among a point's 64 nearest, and among its 16 nearest
+points' 64, all predict the compact rows of degree > 2 at least :data:`_MARGIN` (10×) more
+accurate than the degree-2 candidates, the point fits only the top degree (without the
+residual's correction for the degrees of freedom: there it measures shape, not noise). Its
+noise level and scale then come from that fit (on the unit sphere ℓ = 1.000 instead of the wide
+fit's 0.916); the other points' medians keep their numbers. A clean point whose row turns out
+noise-dominated, or whose residual exceeds twice its neighbours' level (a crease or a noisy
+patch between the sample's points), has the degree-2 candidates fitted after all. On the 15
+inputs of bench_pointwise E2 is unchanged (L the same in 14); at 400,000 clean points the row
+choice costs 6.4 s of CPU instead of 10.1, at 1,000,000 16.1 s instead of 29.6.
+
 With the ladder reusing the curvature fit and one stencil serving a rung's two degrees
 (:func:`meshlap.corrections.highorder.fit_rows`), the row choice on 16,000 points with 1%
 radial noise costs 1.0 s of CPU instead of 1.9 (E2 0.180 → 0.175), on the clean sphere 0.52
@@ -77,9 +89,10 @@ from scipy.spatial import cKDTree
 
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
-from ._fit_kernel import copy_rows, neighbour_medians
+from ._gather import _assemble, _restrict, _table
+from ._levels import _local_noise, _scale
 from ._neighbours import _nearest, _Spread
-from ._ranks import _bounds, _median, _min, _sum
+from ._ranks import _bounds, _min, _sum
 from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
@@ -118,6 +131,10 @@ _EXCESS = 2.0
 # (_compact; the probes' spread is wider: a quarter of the sample's least is below every one of
 # 16,000 sphere points' at degree 4)
 _FLOORS = (0.5, 0.25, 0.25)
+# Where the sample points near a point predict the compact rows of degree > 2 this many times
+# more accurate than the wide and the compact degree-2 rows, the point is clean (_clean): its
+# degree-2 candidates are not fitted, unless its row turns out noise-dominated
+_MARGIN = 10.0
 
 
 @dataclass
@@ -210,13 +227,6 @@ def _candidate(P, near, K, rows, degree, c, k, normals, centers, noise_dof=True,
     return fits if isinstance(degree, tuple) else fits[0]
 
 
-def _table(idx: np.ndarray, dist: np.ndarray, ranks: list[int] | None = None) -> tuple:
-    # (idx, kth) for _candidate: kth(K) the K-th nearest's distances, from dist's columns (those
-    # of the ranks given, or all)
-    where = {r: i for i, r in enumerate(ranks)} if ranks is not None else None
-    return idx, (lambda K: dist[:, K - 1]) if where is None else (lambda K: dist[:, where[K - 1]])
-
-
 def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # the predicted error of each row and its bias part. A fit's residual well beyond the noise
     # level is shape its polynomials miss (a surface rough at the spacing): it reaches Δf as
@@ -225,109 +235,72 @@ def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray
     return predicted_error(fit, sig + excess, scale), predicted_error(fit, excess, scale)
 
 
-def _local_noise(resid: np.ndarray, nb: np.ndarray, comm: Any, own: np.ndarray, noise: float | None
-                 ) -> tuple[np.ndarray, float | None]:
-    # σ̂ per point, the median of its neighbours' least residuals (one noisy fit does not decide
-    # a point's row), or the noise given; and the median over the points (None: no fit left
-    # degrees of freedom to estimate it, σ̂ then 0)
-    typical = _median(comm, resid[own & np.isfinite(resid)])
-    if noise is not None:
-        return np.full(len(resid), float(noise)), typical
-    if typical is None:
-        return np.zeros(len(resid)), None
-    # an all-NaN neighbourhood takes the typical level
-    finite = np.where(np.isfinite(resid), resid, np.nan)
-    return np.nan_to_num(_medians(finite, nb, True), nan=typical), typical
+def _clean(wide: RowFit, low: RowFit, highs: list, near: np.ndarray, width: int, nb: np.ndarray, k: int,
+           d: int, diameter: float, spacing: float) -> np.ndarray:
+    # the points whose `width` nearest hold no sample point (the centres of these fits) but clean
+    # ones, and whose nb's rows do not either: clean where the compact rows of degree > 2 predict
+    # an error _MARGIN times below the wide and the compact degree-2 rows', with the sample
+    # point's own least residual and the wide fit's curvature for σ̂ and ℓ (no medians: the
+    # sample points are 16 spacings² apart). The second condition leaves the noise level and the
+    # scale of the other points, medians over nb, the numbers they had with every fit everywhere
+    fits = [wide, low, *highs]
+    sig = np.min([np.where(np.isfinite(f.residual), f.residual, np.inf) for f in fits], axis=0)
+    curvature = wide.curvature if k < d else np.zeros(len(sig))
+    scale = np.maximum(np.minimum(1.0 / np.maximum(curvature, 1e-300), diameter), 4.0 * spacing)
+    lo = np.minimum(*(_errors(f, sig, scale)[0] for f in (wide, low)))
+    hi = np.min([_errors(f, sig, scale)[0] for f in highs], axis=0)
+    status = np.zeros(len(nb), dtype=np.int8)  # 1: a clean sample point, 2: another sample point
+    status[wide.centers] = np.where(np.isfinite(sig) & (_MARGIN * hi <= lo), 1, 2)
+    if not (status == 1).any():
+        return np.zeros(len(nb), dtype=bool)
+    out = np.ones(len(nb), dtype=bool)
+    if (status == 2).any():  # (in blocks: one table of bytes of the neighbours' size is 64 MB at 1M)
+        for a in range(0, len(nb), 1 << 16):
+            out[a:a + (1 << 16)] = (status[near[a:a + (1 << 16), :width]] < 2).all(axis=1)
+    return out & out[nb].all(axis=1)
 
 
-def _medians(values: np.ndarray, nb: np.ndarray, skip_nan: bool) -> np.ndarray:
-    # np.nanmedian(values[nb], axis=1) (skip_nan) or np.median, the same numbers compiled
-    out = np.empty(len(nb))
-    neighbour_medians(np.ascontiguousarray(values, dtype=np.float64), nb, skip_nan, out)
-    return out
+def _whole(P, near, K, q, k, normals, fit, place, noise_dof=True) -> RowFit:
+    # the compact rows of degree q at every point, one fit that takes those of `fit` (a sample's:
+    # the same stencils, the same numbers) in their places, so that _assemble can take its
+    # matrix whole
+    skip = np.zeros(len(near[0]), dtype=bool)
+    skip[fit.centers] = True
+    whole = _candidate(P, near, K, None, q, _C_COMPACT, k, normals, np.arange(len(skip)), noise_dof, place,
+                       skip=skip)
+    whole.matrix.data.reshape(-1, K)[fit.centers] = fit.matrix.data.reshape(-1, K)
+    for name in ("degree", "residual", "amplification", "probes", "curvature"):
+        getattr(whole, name)[fit.centers] = getattr(fit, name)
+    return whole
 
 
-def _scale(fit: RowFit, nb: np.ndarray, k: int, d: int, diameter: float, spacing: float) -> np.ndarray:
-    # ℓ = 1/κ, κ the median of the fit's curvature over the neighbours, from 4 spacings to the
-    # diameter (a volume, k = d, has no curvature: the diameter)
-    kappa = _medians(fit.curvature, nb, False) if k < d else np.zeros(len(nb))
-    return np.maximum(np.minimum(1.0 / np.maximum(kappa, 1e-300), diameter), 4.0 * spacing)
-
-
-def _compact(P, near, K, q, k, normals, done, level, scale, sample_own, comm, place) -> list:
-    # compact rows of degree q where they can win (the module's docstring): ‖row‖₂ ≥ R/ρ², ρ the
-    # K-th neighbour's distance, R half the least ‖row‖₂ ρ² of a sample of the points, whose rows
-    # come first (bench_pointwise's inputs: 12-20 at degree 4, 22-38 at degree 6); and its probes
-    # probe_e ≥ F ρ^{q−1+e}, F from the sample's least probe_e / ρ^{q−1+e}: the bias that rules
-    # degree 4 out where degree 6, built before it, is far ahead (clean data)
-    sample, own = sample_own
+def _compact(P, near, K, q, k, normals, done, level, scale, sampled, todo, own, comm, place) -> list:
+    # compact rows of degree q where they can win (the module's docstring), among the points
+    # todo: ‖row‖₂ ≥ R/ρ², ρ the K-th neighbour's distance, R half the least ‖row‖₂ ρ² of the
+    # sample's rows, `sampled` (bench_pointwise's inputs: 12-20 at degree 4, 22-38 at degree 6);
+    # and its probes probe_e ≥ F ρ^{q−1+e}, F from the sample's least probe_e / ρ^{q−1+e}: the
+    # bias that rules degree 4 out where degree 6, built before it, is far ahead (clean data).
+    # The fits built, the sample's first
     best = np.full(len(near[0]), np.inf)
     for fit, _ in done:
         err = _errors(fit, level[fit.centers], scale[fit.centers])[0]
         best[fit.centers] = np.minimum(best[fit.centers], err)
-    first = np.flatnonzero(sample)
-    fits = [_candidate(P, near, K, first, q, _C_COMPACT, k, normals, first, place=place)]
-    ok = (fits[0].degree == q) & own[first]
+    first = sampled.centers
+    ok = (sampled.degree == q) & own[first]
     rho = np.maximum(near[1](K), 1e-300)
-    lows = [fits[0].amplification[ok] * rho[first[ok]] ** 2] + [
-        np.nan_to_num(fits[0].probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
+    lows = [sampled.amplification[ok] * rho[first[ok]] ** 2] + [
+        np.nan_to_num(sampled.probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
     least = [_min(comm, float(v.min()) if len(v) else math.inf) for v in lows]
     floor = [f * x if math.isfinite(x) else 0.0 for f, x in zip(_FLOORS, least, strict=True)]
     bound = GAMMA * level * scale * floor[0] / rho ** 2 + BETA * (
         floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
-    rest = np.flatnonzero(~sample & (bound <= ROBUST * best))
-    if len(rest) + len(first) == len(best):
-        # every point (clean data): one fit of the rest, that takes the sample's rows and figures
-        # (the same stencils, the same numbers) in their places, so that _assemble can take its
-        # matrix whole
-        everyone = np.arange(len(best))
-        whole = _candidate(P, near, K, None, q, _C_COMPACT, k, normals, everyone, place=place, skip=sample)
-        whole.matrix.data.reshape(-1, K)[first] = fits[0].matrix.data.reshape(-1, K)
-        for name in ("degree", "residual", "amplification", "probes", "curvature"):
-            getattr(whole, name)[first] = getattr(fits[0], name)
-        return [(whole, K)]
+    rest = np.flatnonzero(todo & (bound <= ROBUST * best))
+    if len(rest) + len(first) == len(best):  # every point (clean data)
+        return [(_whole(P, near, K, q, k, normals, sampled, place), K)]
+    fits = [(sampled, K)]
     if len(rest):
-        fits.append(_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place))
-    return [(fit, K) for fit in fits]
-
-
-def _restrict(fit: RowFit, rows: np.ndarray) -> RowFit:
-    # the fit's rows at these centres (its matrix keeps the others, which no pick refers to)
-    pos = np.searchsorted(fit.centers, rows)
-    return RowFit(fit.matrix, rows, *(getattr(fit, name)[pos] for name in
-                                      ("degree", "residual", "amplification", "probes", "curvature", "h")))
-
-
-def _assemble(n: int, pick: np.ndarray, local: list, refit: dict) -> sp.csr_matrix:
-    # the chosen rows gathered from their candidates' CSR arrays, without a sort through COO;
-    # a candidate of every row chosen everywhere is the matrix itself (at 400,000 clean points
-    # 250 MB neither written nor copied). A candidate measured only (its matrix None) fits the
-    # rows chosen of it again: refit[id(fit)](rows)
-    def rows_of(fit: RowFit, rows: np.ndarray) -> sp.csr_matrix:
-        return fit.matrix if fit.matrix is not None else refit[id(fit)](rows).matrix
-
-    if n and pick[0] >= 0 and len(local[pick[0]][0].centers) == n and (pick == pick[0]).all():
-        return rows_of(local[pick[0]][0], np.arange(n))
-    counts = np.zeros(n, dtype=np.int64)
-    chosen = []
-    for i, (fit, _) in enumerate(local):
-        rows = np.flatnonzero(pick == i)
-        if len(rows):
-            M = rows_of(fit, rows)
-            counts[rows] = M.indptr[rows + 1] - M.indptr[rows]
-            chosen.append((rows, M))
-    total = int(counts.sum())
-    # 32-bit indices where they fit (12 bytes an entry, as the kernel's rows)
-    index = np.int32 if max(n, total) < np.iinfo(np.int32).max else np.int64
-    indptr = np.zeros(n + 1, dtype=index)
-    np.cumsum(counts, out=indptr[1:])
-    data = np.empty(total)
-    indices = np.empty(total, dtype=index)
-    for rows, M in chosen:
-        copy_rows(rows, M.indptr, M.indices, M.data, indptr, indices, data)
-    L = sp.csr_matrix((n, n))  # consistent by construction: no check, no copy
-    L.data, L.indices, L.indptr = data, indices, indptr
-    return L
+        fits.append((_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place), K))
+    return fits
 
 
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
@@ -427,40 +400,76 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     diameter = float(np.linalg.norm(hi - lo))
     # a noise level at the coordinates' own rounding widens no row (_ROUNDING)
     rounding = _ROUNDING * np.finfo(np.float64).eps * float(np.maximum(np.abs(lo), np.abs(hi)).max())
-    tick("noise fit")
-    # the compact degree-2 rows and the wide noise fit everywhere; then the compact rows of
-    # higher degree, lowest first, only where they can win (_compact)
-    # (their rows measured, not kept: clean data choose neither, and 250 MB of weights at 400,000
-    # points cost more than fitting again the rows noisy data do choose)
-    def measured(K: int, c: float) -> RowFit:
-        return _candidate(P, table, K, None, 2, c, k, normals, everyone, place=place, keep=False)
-
-    def again(K: int, c: float) -> Callable[[np.ndarray], RowFit]:
-        return lambda rows: _candidate(P, table, K, rows, 2, c, k, normals, rows, False, place)
-
-    K2 = Ks[-1]
-    fit, low = measured(Kn, _C_WIDE), measured(K2, _C_COMPACT)
-    refit = {id(fit): again(Kn, _C_WIDE), id(low): again(K2, _C_COMPACT)}
-    noise_fit = (fit, Kn)
-    compact = {2: [(low, K2)]}
-    resid = np.minimum(fit.residual, low.residual)
-    first_scale = _scale(fit, nb, k, d, diameter, spacing)
+    # every candidate at the sample first (it bounds _compact, and _clean reads it); the clean
+    # points fit the top degree alone, the others the degree-2 candidates, then the compact rows
+    # of higher degree where they can win. (The degree-2 rows measured, not kept: 250 MB at
+    # 400,000 points cost more than fitting again the rows noisy data do choose)
+    tick("sample")
     sample = spread.rank < max(_CALIBRATE[0], total // _CALIBRATE[1])
-    for q, K in zip(degrees[:-1], Ks[:-1], strict=True):  # the highest first: it rules lower ones out
+    first = np.flatnonzero(sample)
+    K2 = Ks[-1]
+    refit: dict[int, Callable[[np.ndarray], RowFit]] = {}
+
+    def measured(K: int, c: float, rows: np.ndarray) -> tuple[RowFit, int]:
+        fit = _candidate(P, table, K, rows, 2, c, k, normals, rows, place=place, keep=False)
+        refit[id(fit)] = lambda again: _candidate(P, table, K, again, 2, c, k, normals, again, False, place)
+        return fit, K
+
+    highs = list(zip(degrees[:-1], Ks[:-1], strict=True))  # (q, K) of degree > 2, the highest first
+    wide, low = [measured(Kn, _C_WIDE, first)], [measured(K2, _C_COMPACT, first)]
+    sampled = {q: _candidate(P, table, K, first, q, _C_COMPACT, k, normals, first, place=place)
+               for q, K in highs}
+    fast = _clean(wide[0][0], low[0][0], list(sampled.values()), idx_all, Kn, nb, k, d, diameter, spacing) \
+        & ~sample if highs else np.zeros(n, dtype=bool)
+    compact: dict[int, list] = {q: [] for q in degrees}
+    top = compact[highs[0][0]] if highs else []
+    if fast.any():
+        q, K = highs[0]
+        tick(f"compact {q}")
+        rows = np.flatnonzero(fast)
+        if len(rows) + len(first) == n:
+            top.append((_whole(P, table, K, q, k, normals, sampled[q], place, False), K))
+        else:
+            rest = _candidate(P, table, K, rows, q, _C_COMPACT, k, normals, rows, False, place)
+            top += [(sampled[q], K), (rest, K)]
+    slow = np.flatnonzero(~fast & ~sample)
+    if len(slow):
+        tick("noise fit")
+        wide.append(measured(Kn, _C_WIDE, slow))
+        low.append(measured(K2, _C_COMPACT, slow))
+    compact[2] = low
+    # the noise level as the fits everywhere gave it before the compact rows of degree > 2 (the
+    # clean points: of their top degree's)
+    resid = np.full(n, np.inf)
+    curvature = np.full(n, np.nan)  # of the wide fit, else of the top degree's
+    for fit, _ in [c for c in top if c[0] is not sampled[highs[0][0]]] + low + wide:
+        resid[fit.centers] = np.minimum(resid[fit.centers], fit.residual)
+    for fit, _ in top + wide:
+        curvature[fit.centers] = fit.curvature
+    first_scale = _scale(curvature, nb, k, d, diameter, spacing)
+    for q, K in highs:  # the highest first: it rules lower ones out
+        todo = ~sample & ~fast if q == highs[0][0] else ~sample
+        if not _sum(comm, float(todo.any())):  # (on no rank: _compact's reductions are collective)
+            if not compact[q]:  # (every point a sample point)
+                compact[q] = [(sampled[q], K)]
+                resid[first] = np.minimum(resid[first], sampled[q].residual)
+            continue
         tick(f"compact {q}")
         level = _local_noise(resid, nb, comm, own, noise)[0]
-        done = [noise_fit] + [c for fits in compact.values() for c in fits]
-        compact[q] = _compact(P, table, K, q, k, normals, done, level, first_scale,
-                              (sample, own), comm, place)
-        for c, _ in compact[q]:
+        done = wide + [c for fits in compact.values() for c in fits]
+        built = _compact(P, table, K, q, k, normals, done, level, first_scale, sampled[q], todo, own, comm,
+                         place)
+        for c, _ in built:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
-    cands = [c for q in degrees for c in compact[q]] + [noise_fit]
+        compact[q] += [c for c in built if not (compact[q] and c[0] is sampled[q])]
+    cands = [c for q in degrees for c in compact[q]] + wide
     sig, typical = _local_noise(resid, nb, comm, own, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
-    # are clean; where noise would inflate the curvature of a small fit, on the ladder's first
-    # rung (256), whose degree-2 rows that fit then is
+    # are clean (where clean points fitted none, of their rows of the top degree); where noise
+    # would inflate the curvature of a small fit, on the ladder's first rung (256), whose
+    # degree-2 rows that fit then is
     Kmax = min(total, max_neighbors or min(1000, total // 4))
-    curv_fit, Kc = noise_fit[0], max(Kn, min(Kmax, int(round(Kn * _LADDER))))
+    curv_fit, Kc = None, max(Kn, min(Kmax, int(round(Kn * _LADDER))))
     if typical is not None and typical > _NOISY * spacing:
         tick("curvature fit")
         idx_c, dist_c, _ = spread(Kc, everyone)
@@ -469,7 +478,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                               place)
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
-    scale = first_scale if curv_fit is noise_fit[0] else _scale(curv_fit, nb, k, d, diameter, spacing)
+    scale = first_scale if curv_fit is None else _scale(curv_fit.curvature, nb, k, d, diameter, spacing)
 
     best = np.full(n, np.inf)
     pick = np.full(n, -1)
@@ -494,6 +503,17 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     tick("compare")
     for fit, K in cands:
         consider(fit, K)
+    # a clean point whose row turns out noise-dominated (noise between the sample's points), or
+    # whose top-degree fit leaves shape in its residual (a crease), has the degree-2 candidates
+    # fitted after all
+    rough = np.zeros(n, dtype=bool)
+    for fit, _ in top:
+        rough[fit.centers] = fit.residual > _EXCESS * sig[fit.centers]
+    suspect = np.flatnonzero(fast & (dominated | rough) & own)
+    if len(suspect):
+        tick("noise fit")
+        consider(*measured(K2, _C_COMPACT, suspect))
+        consider(*measured(Kn, _C_WIDE, suspect))
     K = Kn
     pick[~own] = -1  # the halo's rows are not built here
     active = np.flatnonzero(dominated & own)
@@ -502,7 +522,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         tick(f"rung {K}")
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
-        reuse = K == Kc and curv_fit is not noise_fit[0]
+        reuse = K == Kc and curv_fit is not None
         near, rows = (_table(idx_c, dist_c), active) if reuse else (_table(*spread(K, active)[:2]), None)
         want = tuple(q for q in ((4, 2) if max_degree >= 4 else (2,)) if not (reuse and q == 2))
         fits = _candidate(P, near, near[0].shape[1], rows, want, _C_WIDE, k, normals, active, False, place) \
