@@ -59,15 +59,14 @@ they are built almost nowhere; on clean data degree 6 everywhere and degree 4 wh
 lead is small (16,000 sphere points: 13% of them, the same rows as building it everywhere).
 Clean regions fit one candidate (:func:`_clean`). Every candidate is fitted first at the sample
 (every 16th point); where the sample points among a point's 64 nearest, and among its 16 nearest
-points' 64, all predict the compact rows of degree > 2 at least :data:`_MARGIN` (10×) more
-accurate than the degree-2 candidates, the point fits only the top degree (without the
-residual's correction for the degrees of freedom: there it measures shape, not noise). Its
-noise level and scale then come from that fit (on the unit sphere ℓ = 1.000 instead of the wide
-fit's 0.916); the other points' medians keep their numbers. A clean point whose row turns out
-noise-dominated, or whose residual exceeds twice its neighbours' level (a crease or a noisy
-patch between the sample's points), has the degree-2 candidates fitted after all. On the 15
-inputs of bench_pointwise E2 is unchanged (L the same in 14); at 400,000 clean points the row
-choice costs 6.4 s of CPU instead of 10.1, at 1,000,000 16.1 s instead of 29.6.
+points' 64, all predict the compact rows of degree > 2 :data:`_MARGIN` (10×) more accurate than
+the degree-2 candidates, the point fits the top degree alone (its residual not corrected for the
+degrees of freedom: it measures shape there), and takes its noise level and scale from it (ℓ =
+1.000 on the unit sphere, the wide fit's 0.916); the other points' medians keep their numbers.
+A clean point whose row turns out noise-dominated, or whose residual exceeds twice its level (a
+crease, a noisy patch between the sample's points), has the degree-2 candidates fitted after all.
+bench_pointwise's 15 inputs: E2 unchanged (L the same in 14); the row choice at 400,000 clean
+points 6.4 s of CPU instead of 10.1, at 1,000,000 16.1 s instead of 29.6.
 
 With the ladder reusing the curvature fit and one stencil serving a rung's two degrees
 (:func:`meshlap.corrections.highorder.fit_rows`), the row choice on 16,000 points with 1%
@@ -237,12 +236,11 @@ def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray
 
 def _clean(wide: RowFit, low: RowFit, highs: list, near: np.ndarray, width: int, nb: np.ndarray, k: int,
            d: int, diameter: float, spacing: float) -> np.ndarray:
-    # the points whose `width` nearest hold no sample point (the centres of these fits) but clean
-    # ones, and whose nb's rows do not either: clean where the compact rows of degree > 2 predict
-    # an error _MARGIN times below the wide and the compact degree-2 rows', with the sample
-    # point's own least residual and the wide fit's curvature for σ̂ and ℓ (no medians: the
-    # sample points are 16 spacings² apart). The second condition leaves the noise level and the
-    # scale of the other points, medians over nb, the numbers they had with every fit everywhere
+    # the points whose `width` nearest, and their nb's, hold no sample point (these fits' centres)
+    # but clean ones: where degree > 2 predicts an error _MARGIN times below the degree-2
+    # candidates', with the sample point's own least residual and wide curvature for σ̂ and ℓ (no
+    # medians: a sample point stands for 16 spacings²). The nb condition leaves the other points'
+    # noise level and scale, medians over nb, the numbers they had with every fit everywhere
     fits = [wide, low, *highs]
     sig = np.min([np.where(np.isfinite(f.residual), f.residual, np.inf) for f in fits], axis=0)
     curvature = wide.curvature if k < d else np.zeros(len(sig))
@@ -336,7 +334,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         extent, number of points) are reduced, each point counted by the rank that owns it.
         The rows are then those of the single machine.
     progress : callable, optional
-        ``progress(stage)`` as each stage starts ("queries", "noise fit", "compact 4", "rung 1000", ...).
+        ``progress(stage)`` as each stage starts ("queries", "sample", "compact 6", "noise fit",
+        "rung 1000", ...).
 
     Returns
     -------
