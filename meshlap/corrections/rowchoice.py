@@ -132,7 +132,7 @@ _EXCESS = 2.0
 _FLOORS = (0.5, 0.25, 0.25)
 # Where the sample points near a point predict the compact rows of degree > 2 this many times
 # more accurate than the wide and the compact degree-2 rows, the point is clean (_clean): its
-# degree-2 candidates are not fitted, unless its row turns out noise-dominated
+# degree-2 candidates are not fitted, unless its row turns out noise-dominated or rough
 _MARGIN = 10.0
 
 
