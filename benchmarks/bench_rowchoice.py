@@ -12,6 +12,12 @@ everything else shared; the two are run alternately on
 best of ``--repeat`` by CPU time (`time.process_time`: other processes' load counts less),
 each stage timed through the progress callback. It prints whether the two gave the same L
 and `RowChoice`, bit for bit. Prints only.
+
+    python benchmarks/bench_rowchoice.py --base /tmp/base --cases 16000
+
+runs bench_pointwise.py's inputs instead (sphere, torus and spot; clean, irregular and noisy;
+its E2 = ‖Lf − Δf‖/‖Δf‖ over its two functions): E2 and CPU of both versions, whether L is the
+same and at how many points the degree differs. bench_pointwise.py has the peers.
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ import re
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numba
@@ -59,13 +66,39 @@ def load_base(root: Path):
     return sys.modules["base_rowchoice"]
 
 
+def cases(base, n: int) -> None:
+    """E2 of both versions' rows on bench_pointwise's inputs, one build each."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    import bench_pointwise as bp
+
+    all_cases = bp.sphere_cases(n) + bp.torus_cases(n) + bp.spot_cases()
+    for module in (base, rowchoice):
+        module.choose_rows(all_cases[0].V[:2000])  # compiles or loads the kernels
+    for case in all_cases:
+        out = {}
+        for name, module in (("base", base), ("this", rowchoice)):
+            t = time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", meshlap.MeshWarning)
+                L, choice = module.choose_rows(case.V)
+            out[name] = (L, choice, time.process_time() - t)
+            out[name] += (bp.e2(case, lambda f, L=L: L @ f),)
+        (La, ca, ta, ea), (Lb, cb, tb, eb) = out["base"], out["this"]
+        print(f"{case.shape} {case.condition}: E2 base {ea:.3g}, this {eb:.3g}; CPU {ta:.2f} -> {tb:.2f} s; "
+              f"L identical {(La != Lb).nnz == 0}; degrees differ at {int((ca.degree != cb.degree).sum())}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", type=Path, required=True, help="a tree of the version to compare with")
     ap.add_argument("--n", type=int, default=16000)
     ap.add_argument("--noise", type=float, default=0.0, help="radial noise, relative to the radius")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--cases", type=int, metavar="N", help="bench_pointwise's inputs at N points instead")
     args = ap.parse_args()
+    if args.cases:
+        cases(load_base(args.base), args.cases)
+        return
     V = meshlap.shapes.sphere(args.n, kind="random", seed=0)[0]
     if args.noise:
         V = V * (1 + args.noise * np.random.default_rng(1).standard_normal(len(V)))[:, None]

@@ -34,9 +34,13 @@ def _medians(values: np.ndarray, nb: np.ndarray, skip_nan: bool) -> np.ndarray:
     return out
 
 
-def _scale(curvature: np.ndarray, nb: np.ndarray, k: int, d: int, diameter: float, spacing: float
+def _scale(curvature: np.ndarray, nb: np.ndarray | None, k: int, d: int, diameter: float, spacing: float
            ) -> np.ndarray:
-    # ℓ = 1/κ, κ the median of a fit's curvature over the neighbours (those a fit measured it at:
-    # NaN elsewhere), from 4 spacings to the diameter (a volume, k = d, has no curvature: the diameter)
-    kappa = np.nan_to_num(_medians(curvature, nb, True), nan=0.0) if k < d else np.zeros(len(nb))
+    # ℓ = 1/κ, κ the median of a fit's curvature over the neighbours nb (those a fit measured it
+    # at: NaN elsewhere; nb None: each point's own), from 4 spacings to the diameter (a volume,
+    # k = d, has no curvature: the diameter)
+    if k >= d:
+        kappa = np.zeros(len(curvature))
+    else:
+        kappa = curvature if nb is None else np.nan_to_num(_medians(curvature, nb, True), nan=0.0)
     return np.maximum(np.minimum(1.0 / np.maximum(kappa, 1e-300), diameter), 4.0 * spacing)

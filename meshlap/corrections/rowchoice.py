@@ -243,8 +243,7 @@ def _clean(wide: RowFit, low: RowFit, highs: list, near: np.ndarray, width: int,
     # noise level and scale, medians over nb, the numbers they had with every fit everywhere
     fits = [wide, low, *highs]
     sig = np.min([np.where(np.isfinite(f.residual), f.residual, np.inf) for f in fits], axis=0)
-    curvature = wide.curvature if k < d else np.zeros(len(sig))
-    scale = np.maximum(np.minimum(1.0 / np.maximum(curvature, 1e-300), diameter), 4.0 * spacing)
+    scale = _scale(wide.curvature, None, k, d, diameter, spacing)
     lo = np.minimum(*(_errors(f, sig, scale)[0] for f in (wide, low)))
     hi = np.min([_errors(f, sig, scale)[0] for f in highs], axis=0)
     status = np.zeros(len(nb), dtype=np.int8)  # 1: a clean sample point, 2: another sample point
@@ -420,47 +419,47 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                for q, K in highs}
     fast = _clean(wide[0][0], low[0][0], list(sampled.values()), idx_all, Kn, nb, k, d, diameter, spacing) \
         & ~sample if highs else np.zeros(n, dtype=bool)
-    compact: dict[int, list] = {q: [] for q in degrees}
-    top = compact[highs[0][0]] if highs else []
+    # the clean points' rows of the top degree: one fit of every point but the sample's, that
+    # takes the sample's rows (_whole), where every other point is clean
+    clean: list = []
     if fast.any():
         q, K = highs[0]
         tick(f"compact {q}")
         rows = np.flatnonzero(fast)
-        if len(rows) + len(first) == n:
-            top.append((_whole(P, table, K, q, k, normals, sampled[q], place, False), K))
-        else:
-            rest = _candidate(P, table, K, rows, q, _C_COMPACT, k, normals, rows, False, place)
-            top += [(sampled[q], K), (rest, K)]
+        whole = len(rows) + len(first) == n
+        clean = [(_whole(P, table, K, q, k, normals, sampled[q], place, False) if whole else
+                  _candidate(P, table, K, rows, q, _C_COMPACT, k, normals, rows, False, place), K)]
     slow = np.flatnonzero(~fast & ~sample)
     if len(slow):
         tick("noise fit")
         wide.append(measured(Kn, _C_WIDE, slow))
         low.append(measured(K2, _C_COMPACT, slow))
-    compact[2] = low
     # the noise level as the fits everywhere gave it before the compact rows of degree > 2 (the
-    # clean points: of their top degree's)
+    # clean points: of their top degree's); the curvature of the wide fit, else of the top degree
     resid = np.full(n, np.inf)
-    curvature = np.full(n, np.nan)  # of the wide fit, else of the top degree's
-    for fit, _ in [c for c in top if c[0] is not sampled[highs[0][0]]] + low + wide:
+    curvature = np.full(n, np.nan)
+    for fit, _ in clean + low + wide:
         resid[fit.centers] = np.minimum(resid[fit.centers], fit.residual)
-    for fit, _ in top + wide:
+    for fit, _ in clean + wide:
         curvature[fit.centers] = fit.curvature
     first_scale = _scale(curvature, nb, k, d, diameter, spacing)
+    compact: dict[int, list] = {2: low}
     for q, K in highs:  # the highest first: it rules lower ones out
-        todo = ~sample & ~fast if q == highs[0][0] else ~sample
-        if not _sum(comm, float(todo.any())):  # (on no rank: _compact's reductions are collective)
-            if not compact[q]:  # (every point a sample point)
-                compact[q] = [(sampled[q], K)]
-                resid[first] = np.minimum(resid[first], sampled[q].residual)
-            continue
-        tick(f"compact {q}")
-        level = _local_noise(resid, nb, comm, own, noise)[0]
-        done = wide + [c for fits in compact.values() for c in fits]
-        built = _compact(P, table, K, q, k, normals, done, level, first_scale, sampled[q], todo, own, comm,
-                         place)
+        mine = clean if q == highs[0][0] else []
+        todo = ~sample & ~fast if mine else ~sample
+        if _sum(comm, float(todo.any())):  # (on every rank alike: _compact's reductions are collective)
+            tick(f"compact {q}")
+            level = _local_noise(resid, nb, comm, own, noise)[0]
+            done = wide + mine + [c for fits in compact.values() for c in fits]
+            built = _compact(P, table, K, q, k, normals, done, level, first_scale, sampled[q], todo, own,
+                             comm, place)
+        else:
+            built = [(sampled[q], K)]
+        if mine and len(mine[0][0].centers) == n:  # (the whole fit holds the sample's rows)
+            built = [c for c in built if c[0] is not sampled[q]]
         for c, _ in built:
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
-        compact[q] += [c for c in built if not (compact[q] and c[0] is sampled[q])]
+        compact[q] = built[:1] + mine + built[1:]  # (the sample's first, as before)
     cands = [c for q in degrees for c in compact[q]] + wide
     sig, typical = _local_noise(resid, nb, comm, own, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
@@ -506,7 +505,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     # whose top-degree fit leaves shape in its residual (a crease), has the degree-2 candidates
     # fitted after all
     rough = np.zeros(n, dtype=bool)
-    for fit, _ in top:
+    for fit, _ in clean:
         rough[fit.centers] = fit.residual > _EXCESS * sig[fit.centers]
     suspect = np.flatnonzero(fast & (dominated | rough) & own)
     if len(suspect):
