@@ -7,13 +7,15 @@ All of them run the same pipeline (:mod:`meshlap.pipeline`) with the same defaul
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse as sp
 
 from .geometry import Geometry, point_cloud_geometry
-from .operator import MeshLaplacian
+from .operator import MeshLaplacian, as_geometry
+from .policy import Operator, decide
+from .progress import ProgressLike
 
 __all__ = ["laplacian", "mesh_laplacian", "point_cloud_laplacian", "point_cloud_matrices"]
 
@@ -22,48 +24,81 @@ def laplacian(
     V: Any,
     F: Any = None,
     h: float | None = None,
+    *,
+    operator: Operator = "auto",
+    k: int | None = None,
     tol: float | None = None,
-    **kwargs: Any,
+    matrix_free: bool = False,
+    dtype: Literal["float64", "float32"] | type = np.float64,
+    progress: ProgressLike = None,
+    **kernel_options: Any,
 ) -> MeshLaplacian:
-    """Build the Belkin–Sun–Wang mesh Laplacian of a mesh (SoCG 2008, eq. 1).
+    """The Laplacian of a mesh, curve, volume or point cloud, chosen by :mod:`meshlap.policy`.
+
+    With cells, the symmetric pencil ``(op.S, op.M)`` (spectra, heat flow, smoothing) is linear
+    FEM on them (intrinsic Delaunay, blended mass: :mod:`meshlap.fem`), whose worst case is
+    linear FEM on the same mesh; without cells it is the corrected heat kernel of Belkin, Sun
+    and Wang (SoCG 2008, eq. 1). ``op @ f`` applies point-wise rows fitted to the points, exact
+    for polynomials to degree 6 where the data are clean. ``op.decision`` says what was built
+    and why.
 
     Parameters
     ----------
     V : (n, d) array_like, Geometry, or a mesh object
         Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None), or,
         with ``F`` None, a ``trimesh.Trimesh``, ``pyvista.PolyData`` / ``UnstructuredGrid``,
-        ``open3d`` ``TriangleMesh`` / ``TetraMesh``, ``meshio.Mesh`` or a file path
-        (:func:`meshlap.inputs.as_geometry_input`).
+        ``open3d`` mesh, ``meshio.Mesh`` or a file path (:func:`meshlap.inputs.as_geometry_input`).
     F : (m, c) array_like or list of sequences
         Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
-        Kernel width (exp(-d²/4h)); default 4ē² narrowed where the geometry bends; with
-        ``correction="none"`` the paper's :func:`~meshlap.widths.default_h` = (2ē)².
+        A kernel width (exp(-d²/4h)): asks for the heat kernel at that width.
+    operator : {"auto", "fem", "kernel", "galerkin", "paper"}, default "auto"
+        The symmetric pencil: "fem" linear FEM on the cells; "kernel" the corrected heat kernel
+        on the vertices; "galerkin" the kernel integrated over the cells; "paper" the paper's
+        operator, eq. (1), bit for bit (its ``op.L`` is eq. (1) too). "auto": :mod:`meshlap.policy`.
+    k : {1, 2, 3}, optional
+        Intrinsic dimension (inferred from ``F``; 3 for tetrahedra given as (m, 4)).
     tol : float, optional
-        Kernel tolerance; default 1e-6 for the corrected operators (their Galerkin pencil
-        keeps 1e-8), 1e-8 for the paper's (``correction="none"``); 0 for the untruncated operator.
-    **kwargs
-        ``k``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and the
-        accuracy options ``correction`` (default "richardson" on surface meshes; "none" is
-        the paper's operator), ``adaptive``, ``arc_distance``, ``pointwise``, ``neumann``,
-        ``curvature_limit``, ``check_psd``: see :class:`MeshLaplacian` and docs/accuracy.md.
+        The kernel's tolerance: weights below it are dropped (default 1e-6, 1e-8 for "paper").
+    matrix_free : bool, default False
+        Do not store the kernel (a large cloud): ``op @ f`` recomputes it (the kernel only).
+    dtype : {"float64", "float32"}, default float64
+        Value type of the stored matrices.
+    progress : bool or callable, optional
+        ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
+    **kernel_options
+        Options of the kernel builder (:class:`MeshLaplacian`: ``correction``, ``quadrature``,
+        ``pointwise``, ``neumann``, ...); giving one asks for the kernel.
 
     Returns
     -------
     MeshLaplacian
-        Holds ``L``, ``M``, ``S``, ``mass``, ``h``, ``radius``; ``op @ f`` applies L.
+        ``op.S``, ``op.M`` (symmetric pencil), ``op @ f`` / ``op.L`` (point-wise rows),
+        ``op.decision``.
 
     Examples
     --------
     >>> import meshlap
-    >>> V, F = meshlap.shapes.plane(2000, seed=0)
-    >>> op = meshlap.laplacian(V, F, h=0.01)
-    >>> op.L.shape
-    (2000, 2000)
+    >>> V, F = meshlap.shapes.sphere(2000, seed=0)
+    >>> op = meshlap.laplacian(V, F)
+    >>> op.decision.operator
+    'fem'
+    >>> lam, _ = meshlap.spectral.eigs(op, 4)
+    >>> (lam.round(2) + 0.0).tolist()          # 0, then l(l+1) = 2 three times
+    [0.0, 2.0, 2.0, 2.0]
     """
     if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
-        V, F, kwargs["k"] = _held_input(V, kwargs.get("k"))
-    return MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
+        V, F, k = _held_input(V, k)
+    geo = as_geometry(V, F, k)
+    chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None})
+    named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
+             "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
+    if chosen.operator == "kernel" and kernel_options.get("quadrature") is None:
+        named = {"quadrature": "vertex"}
+    op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
+                       **{**kernel_options, **named})
+    op._decision = chosen
+    return op
 
 
 def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:

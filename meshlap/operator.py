@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
-from . import pipeline
+from . import pipeline, policy
 from . import widths as widths_mod
 from .assembly import cutoff_radius, fmt_bytes, normalization
 from .errors import MeshError, OperatorTooLargeError
@@ -245,11 +245,25 @@ class MeshLaplacian(LumpedLaplacian):
                                      review=True)
         self._half: pipeline.Built | None = None
         self._S = None
+        self._decision: policy.Decision | None = None
 
     # -- what the stages decided ---------------------------------------------------------
     dim = property(lambda self: self.geometry.dim, doc="Intrinsic dimension k.")
     faces = property(lambda self: self.geometry.faces, doc="The faces of a surface mesh, else None.")
-    mass = property(lambda self: self.geometry.mass, doc="Lumped masses m_p.")
+    @property
+    def mass(self) -> np.ndarray:
+        """Lumped masses m_p: the geometry's, or the FEM pencil's (built on first read)."""
+        if self.options.quadrature == "fem":
+            return self._built.assemble().mass
+        return self.geometry.mass
+
+    @property
+    def decision(self) -> policy.Decision:
+        """Which operator was built and why (:mod:`meshlap.policy`)."""
+        if self._decision is None:
+            self._decision = policy.decide(self.geometry, _named(self.options))
+        return self._decision
+
     h = property(lambda self: self.widths.h, doc="Kernel width (the base width with per-point widths).")
     h_vertex = property(lambda self: self.widths.h_vertex, doc="Per-point widths, when they differ.")
     h_auto = property(lambda self: self.widths.h_auto, doc="Whether h was chosen automatically.")
@@ -507,6 +521,8 @@ class MeshLaplacian(LumpedLaplacian):
         ]
         if pencil is None:
             rows.append(("pencil", "on first use"))
+        elif pencil.quadrature == "fem":
+            rows.append(("pencil", "linear FEM on the cells (intrinsic Delaunay, blended mass)"))
         elif pencil.quadrature == "galerkin":
             narrow = pencil.narrowed
             rows.append(("pencil", f"Galerkin over the cells, h={pencil.quadrature_h:.4g}"
@@ -546,6 +562,13 @@ class MeshLaplacian(LumpedLaplacian):
         body = "".join(f"<tr><th style='text-align:left'>{k}</th><td>{v}</td></tr>"
                        for k, v in self._summary())
         return f"<table><caption>MeshLaplacian (Belkin–Sun–Wang)</caption>{body}</table>"
+
+
+def _named(opts: pipeline.Options) -> str:
+    # the named builder an operator's options amount to
+    if opts.quadrature in ("fem", "galerkin"):
+        return opts.quadrature
+    return "paper" if opts.plain else "kernel"
 
 
 def truncation_bound(op: MeshLaplacian, f: np.ndarray) -> np.ndarray:

@@ -27,9 +27,10 @@ CORRECTIONS = ("richardson", "none")
 #: :mod:`meshlap.corrections.rowchoice`; the default), the degree-2 moment rows of the kernel's
 #: stencil (True), or none (False).
 POINTWISE = (True, False, "fit")
-#: ``quadrature`` values for the symmetric pencil: one point per vertex (the lumped masses),
-#: or the kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`); None chooses.
-QUADRATURES = ("vertex", "galerkin")
+#: ``quadrature`` values for the symmetric pencil: the kernel with one point per vertex (the
+#: lumped masses), the kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`), or
+#: no kernel: linear finite elements on the cells (:mod:`meshlap.fem`).
+QUADRATURES = ("vertex", "galerkin", "fem")
 #: Kernel tolerance of the paper's operator: Gaussian weights below 1e-8 of the peak are dropped.
 DEFAULT_TOL = 1e-8
 #: Kernel tolerance of the corrected operators when none is given. Against 1e-8 on a 16k-vertex
@@ -120,8 +121,8 @@ class Options:
         pointwise = ("fit" if on else False) if pointwise is None else (
             "fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
-        if curvature_limit is None:
-            curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals) else 0.0
+        if curvature_limit is None:  # the kernel's widths; the FEM pencil reads none
+            curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals and quadrature != "fem") else 0.0
         elif curvature_limit:
             check_positive(curvature_limit, "curvature_limit")
         if matrix_free and (adaptive or arc_distance or pointwise or neumann or curvature_limit
@@ -137,6 +138,12 @@ class Options:
                             "operator at one h")
         if quadrature is not None and quadrature not in QUADRATURES:
             raise MeshError(f"quadrature must be one of {', '.join(QUADRATURES)} or None; got {quadrature!r}")
+        if quadrature == "fem":
+            if geo.faces is None and geo.cells is None:
+                raise MeshError(f"the FEM pencil integrates over cells; this {geo.source} has none")
+            if matrix_free or pointwise is True or pointwise_degree is not None:
+                raise MeshError("the FEM pencil stores S and has no kernel stencil: not with matrix_free, "
+                                "pointwise=True or pointwise_degree (use operator='kernel')")
         if quadrature == "galerkin":
             if corrections.galerkin.simplices(geo) is None:
                 raise MeshError("quadrature='galerkin' integrates over simplices: a triangle mesh, a curve's "

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import assembly, corrections, resolution
+from . import assembly, corrections, denoise, fem, resolution
 from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshWarning, user_stacklevel
 from .geometry import Geometry
@@ -72,6 +72,8 @@ class Pencil:
     thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
     chords: bool = False  # the plain kernel taken before the rows measures chords (plain_arcs)
+    #: the masses the pencil goes with, where they are not the geometry's (the FEM pencil's)
+    mass: np.ndarray | None = field(default=None, repr=False)
     #: the resolution report of the kernel in effect, from the figures measured before the rows
     #: (:func:`plain_predicted`; None where none were)
     resolution: Any = field(default=None, repr=False)
@@ -225,6 +227,35 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         out.L = L
 
 
+def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None) -> Pencil:
+    # no kernel: linear FEM on the cells, copies of a vertex welded (meshlap.fem)
+    if report is not None:
+        report(0.5, "FEM pencil")
+    S, m = fem.fem_pencil(geo, weld=fem.welded(geo))
+    sigma = fem.surface_noise(geo)
+    if sigma > 0:  # normal noise: FEM on the positions after a heat step that averages it out
+        if report is not None:
+            report(0.7, "denoised positions")
+        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), points=denoise.denoised(geo.points, S, m, sigma))
+    inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+    L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
+    if report is not None:
+        report(1.0, "done")
+    return Pencil(L, None if opts.pointwise == "fit" else L, "fem", quadrature="fem", mass=m)
+
+
+def _apart(geo: Geometry, out: Pencil) -> None:
+    # the kernel reaches across the air between the parts of a mesh: no pairs between parts, so
+    # that each part keeps its own zero eigenvalue (the paper's operator, eq. 1, is left as it is)
+    parts = fem.part_labels(geo)
+    if parts is None or parts[0] < 2 or out.correction == "none" and out.quadrature == "vertex":
+        return
+    same = out.L is out.L_sym
+    out.L_sym = fem.separate_parts(out.L_sym, parts[1])
+    if same:
+        out.L = out.L_sym
+
+
 def assemble(geo: Geometry, widths: Widths, opts: Options,
              report: Callable[[float, str], None] | None = None) -> Pencil:
     """The symmetric pencil of one geometry at its widths: kernel choice, kernel rows, the
@@ -240,6 +271,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     >>> p.correction, p.quadrature, p.L is None  # the fitted rows are not the pencil's
     ('richardson', 'galerkin', True)
     """
+    if opts.quadrature == "fem":
+        return _fem(geo, opts, report)
     radius = cutoff_radius(widths.largest, opts.tol)
     checked = not opts.plain and opts.check_psd and not opts.matrix_free
     if checked and report is not None and not widths.h_auto:
@@ -322,6 +355,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         out.L, out.pointwise_unchanged = _stencil_rows(geo, free, hv, opts)
     if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
+    _apart(geo, out)
     if report is not None:
         report(1.0, "done")
     return out
@@ -331,6 +365,8 @@ def review(geo: Geometry, widths: Widths, opts: Options, p: Pencil) -> Pencil:
     """The operator's resolution report of pencil ``p`` (``p.report``) and its warnings: the
     fallback to the plain kernel where that pencil is used, and the resolution's "too coarse";
     pointed at the user's line that asked for the pencil. Returns ``p``."""
+    if p.quadrature == "fem":  # nothing to report: no kernel, no fallback
+        return p
     level = user_stacklevel()
     # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
     # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own)

@@ -186,7 +186,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
     >>> b.assemble().correction, b.assemble().fallback_reason
     ('richardson', None)
     """
-    if not opts.matrix_free:
+    if not opts.matrix_free and opts.quadrature != "fem":
         # the normals of arc distances only where the chord count does not fit (op @ f never reads them)
         kern = Kernel(geo.dim, dog=not opts.plain, tol=opts.tol)
         images = opts.neumann and geo.boundary is not None and bool(geo.boundary.any())

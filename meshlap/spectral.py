@@ -214,7 +214,10 @@ def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
             raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
         return V, check_faces(F, len(V), "mesh[1]").triangles()
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
-        return op.V, op.faces.triangles()
+        T = op.faces.triangles()
+        rep = op.geometry._cache.get("weld") if hasattr(op, "geometry") else None
+        # copies of a vertex that the pencil welds: their faces' cotangents join the representative
+        return op.V, (T if rep is None else rep[T])
     # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud) serve as well
     cells = getattr(getattr(op, "geometry", None), "cells", None)
     if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:

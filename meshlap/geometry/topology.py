@@ -489,15 +489,15 @@ def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
     problems = []
     if len(unref):
         problems.append(
-            f"{len(unref):,} unreferenced vertices (in no face): mass 0, so M is singular; L is "
-            "defined there but they do not enter any other row"
+            f"{len(unref):,} unreferenced vertices (in no face): mass 0 for the kernel (the FEM pencil "
+            "gives each a tiny mass and a stiff mode of its own); they enter no other row"
         )
     if len(zero):
         problems.append(f"{len(zero):,} zero-area faces: they add nothing to the vertex masses")
     if len(dup):
         problems.append(
-            f"{len(dup):,} duplicate vertices (coincident with another vertex): L is unchanged, but "
-            "the connectivity is split there"
+            f"{len(dup):,} duplicate vertices (coincident with another vertex): the default's FEM "
+            "pencil welds them; the connectivity of the faces is split there"
         )
     if len(nonman):
         problems.append(f"{len(nonman):,} non-manifold edges (shared by more than two faces)")

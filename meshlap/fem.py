@@ -1,0 +1,415 @@
+"""Linear finite elements on the mesh's own cells: the symmetric pencil of the default.
+
+For hat functions φ_i on simplices of any dimension k (segments, triangles, tetrahedra) in any
+ambient dimension, the stiffness and the consistent mass of one cell need only its Gram matrix
+G = E Eᵀ (E the k edge vectors from corner 0):
+
+    K_cell = vol · B G⁻¹ Bᵀ,   C_cell = vol / ((k+1)(k+2)) · (1 + δ_ij),   vol = √det G / k!
+
+with B = [−1ᵀ; I] the gradients of the barycentric coordinates in the edge basis. A triangle's
+Gram matrix comes from its three edge lengths, so triangle meshes are first flipped to their
+intrinsic Delaunay triangulation (Bobenko and Springborn 2007): the same surface, whose cotangent
+weights are non-negative, so that slivers and obtuse triangles of scans and CAD exports cost
+nothing.
+
+The mass is the blend ½(C + D) of the consistent mass C and its lumping D = diag(C·1). Since
+D − C is a graph Laplacian with weights C_ij > 0, C ⪯ ½(C + D) ⪯ D, so by min-max every
+eigenvalue of the blended pencil lies between the lumped one and the consistent (Galerkin,
+upper-bound) one: its error is at most the larger of the two FEM errors, and on a uniform mesh
+their leading O(ē²λ) terms, equal and opposite, cancel. The pencil is moved onto the diagonal D
+(what every solver here expects) by the congruence S' = Bᵀ S B, B = I + ¼ D⁻¹(D − C), exact to
+first order in D⁻¹(D − C) = O(ē²λ) on a mode of eigenvalue λ. It keeps one zero eigenvalue per
+connected part, and −S' stays semidefinite.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+import numpy as np
+import scipy.sparse as sp
+
+from ._jit import jit
+from .errors import MeshError
+
+__all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
+           "simplicial_cells", "surface_noise", "welded"]
+
+#: ``mass`` values of :func:`fem_pencil`: ½(consistent + lumped) moved onto the lumped diagonal
+#: (the default), the lumped diagonal (the cotangent Laplacian's pencil), or the consistent mass
+#: moved onto it by the same congruence.
+FEM_MASSES = ("blend", "lumped", "consistent")
+#: Copies of one vertex (an unwelded seam) are tied by a stiffness this many times their
+#: representative's diagonal entry: the pencil splits into the welded mesh's (exact) and the
+#: copies' differences, whose eigenvalues (about 4× the vertex's own frequency) lie above the
+#: smooth modes while the pencil stays as well conditioned as the mesh's.
+TIE = 1.0
+
+
+def _halfedge_twins(F: np.ndarray) -> np.ndarray:
+    # twin[f, c] = 3 f' + c' for the halfedge F[f,c] -> F[f,c+1] whose reverse is (f', c'),
+    # where exactly one reverse exists and the edge has two faces; -1 elsewhere (boundary,
+    # non-manifold or inconsistently oriented edges are never flipped)
+    m = len(F)
+    a, b = F.ravel(), np.roll(F, -1, axis=1).ravel()
+    n = int(F.max()) + 1 if m else 0
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    start = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]])
+    count = np.diff(np.r_[start, len(ks)])
+    twin = np.full(3 * m, -1, dtype=np.int64)
+    pair = start[count == 2]
+    h0, h1 = order[pair], order[pair + 1]
+    opposite = a[h0] == b[h1]
+    twin[h0[opposite]], twin[h1[opposite]] = h1[opposite], h0[opposite]
+    return twin.reshape(m, 3)
+
+
+@jit()
+def _cot(a, b, c):  # pragma: no cover - compiled
+    # cotangent of the angle opposite side a in the triangle of sides a, b, c
+    s = 0.5 * (a + b + c)
+    area = math.sqrt(max(s * (s - a) * (s - b) * (s - c), 0.0))
+    floor = 1e-14 * max(a, b, c) ** 2
+    return (b * b + c * c - a * a) / (4.0 * max(area, floor))
+
+
+@jit()
+def _flip(F, L, twin, max_passes):  # pragma: no cover - compiled
+    flips = 0
+    for _ in range(max_passes):
+        done = True
+        for f in range(F.shape[0]):
+            for c in range(3):
+                t = twin[f, c]
+                if t < 0:
+                    continue
+                g, d = t // 3, t % 3
+                c1, c2, d1, d2 = (c + 1) % 3, (c + 2) % 3, (d + 1) % 3, (d + 2) % 3
+                w = _cot(L[f, c], L[f, c1], L[f, c2]) + _cot(L[g, d], L[g, d1], L[g, d2])
+                if w >= -1e-12:
+                    continue
+                a, b, cc, dd = F[f, c], F[f, c1], F[f, c2], F[g, d2]
+                if cc == dd:
+                    continue
+                lab, lbc, lca, lad, ldb = L[f, c], L[f, c1], L[f, c2], L[g, d1], L[g, d2]
+                # the quad unfolded about ab: the angles at a on either side, then cd across
+                t1 = math.acos(min(1.0, max(-1.0, (lab * lab + lca * lca - lbc * lbc) / (2 * lab * lca))))
+                t2 = math.acos(min(1.0, max(-1.0, (lab * lab + lad * lad - ldb * ldb) / (2 * lab * lad))))
+                lcd = math.sqrt(max(lca * lca + lad * lad - 2 * lca * lad * math.cos(t1 + t2), 0.0))
+                tw_ca, tw_ad, tw_db, tw_bc = twin[f, c2], twin[g, d1], twin[g, d2], twin[f, c1]
+                # f = (cc, a, dd), g = (dd, b, cc); slot 2 of each is the new diagonal
+                F[f, 0], F[f, 1], F[f, 2] = cc, a, dd
+                L[f, 0], L[f, 1], L[f, 2] = lca, lad, lcd
+                F[g, 0], F[g, 1], F[g, 2] = dd, b, cc
+                L[g, 0], L[g, 1], L[g, 2] = ldb, lbc, lcd
+                twin[f, 0], twin[f, 1], twin[f, 2] = tw_ca, tw_ad, 3 * g + 2
+                twin[g, 0], twin[g, 1], twin[g, 2] = tw_db, tw_bc, 3 * f + 2
+                for slot, tw in ((3 * f, tw_ca), (3 * f + 1, tw_ad), (3 * g, tw_db), (3 * g + 1, tw_bc)):
+                    if tw >= 0:
+                        twin[tw // 3, tw % 3] = slot
+                flips += 1
+                done = False
+        if done:
+            break
+    return flips
+
+
+def intrinsic_delaunay(P: np.ndarray, tri: np.ndarray, max_passes: int = 1000) -> tuple[np.ndarray, np.ndarray]:
+    """The intrinsic Delaunay triangulation of a triangle mesh, by edge flips on edge lengths.
+
+    Each interior edge whose opposite angles sum to more than π is replaced by the other
+    diagonal of its two triangles unfolded into the plane (Lawson's flips, which end at the
+    intrinsic Delaunay triangulation of the same polyhedral surface: Bobenko and Springborn
+    2007). Boundary, non-manifold and inconsistently oriented edges stay.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray
+        Vertex positions.
+    tri : (m, 3) int ndarray
+        Triangles.
+    max_passes : int, default 1000
+        Sweeps over the edges at most.
+
+    Returns
+    -------
+    tri : (m, 3) int64 ndarray
+        The flipped triangles (the same vertices).
+    lengths : (m, 3) ndarray
+        ``lengths[f, c]`` the intrinsic length of the edge from corner c to corner c + 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = np.array([[0, 0, 0], [2, 0, 0], [1, 0.2, 0], [1, -0.2, 0]], float)
+    >>> T, lengths = intrinsic_delaunay(P, np.array([[0, 1, 2], [1, 0, 3]]))
+    >>> sorted(map(int, T[0])), round(float(lengths.max()), 3)  # the short diagonal 2-3
+    ([0, 2, 3], 1.02)
+    """
+    F = np.array(tri, dtype=np.int64, copy=True)
+    L = np.linalg.norm(P[np.roll(F, -1, axis=1)] - P[F], axis=2)
+    if len(F):
+        _flip(F, L, _halfedge_twins(F), int(max_passes))
+    return F, L
+
+
+def _gram_from_lengths(L: np.ndarray) -> np.ndarray:
+    # triangles (corners 0, 1, 2; L[:, c] the side c -> c+1): E1 = p1 - p0, E2 = p2 - p0
+    l01, l12, l20 = L[:, 0], L[:, 1], L[:, 2]
+    G = np.empty((len(L), 2, 2))
+    G[:, 0, 0], G[:, 1, 1] = l01**2, l20**2
+    G[:, 0, 1] = G[:, 1, 0] = 0.5 * (l01**2 + l20**2 - l12**2)
+    return G
+
+
+def cell_matrices(P: np.ndarray | None, cells: np.ndarray, gram: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-cell P1 stiffness and consistent mass of simplices, and their volumes.
+
+    Parameters
+    ----------
+    P : (n, d) ndarray or None
+        Vertex positions (any ambient dimension d ≥ k); None when ``gram`` is given.
+    cells : (m, k + 1) int ndarray
+        Segments, triangles or tetrahedra.
+    gram : (m, k, k) ndarray, optional
+        The cells' Gram matrices E Eᵀ (e.g. from intrinsic edge lengths) instead of ``P``.
+
+    Returns
+    -------
+    K : (m, k + 1, k + 1) ndarray
+        ∫ ∇φ_i · ∇φ_j over each cell (positive semidefinite, rows summing to zero).
+    C : (m, k + 1, k + 1) ndarray
+        ∫ φ_i φ_j over each cell.
+    vol : (m,) ndarray
+        Length, area or volume (0 for a degenerate cell, whose K is 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> K, C, vol = cell_matrices(np.array([[0, 0], [1, 0], [0, 1]], float), np.array([[0, 1, 2]]))
+    >>> K[0].round(3).tolist(), float(vol[0]), round(float(C[0].sum()), 12)
+    ([[1.0, -0.5, -0.5], [-0.5, 0.5, 0.0], [-0.5, 0.0, 0.5]], 0.5, 0.5)
+    """
+    cells = np.asarray(cells, dtype=np.int64)
+    k = cells.shape[1] - 1
+    if gram is None:
+        E = P[cells[:, 1:]] - P[cells[:, :1]]
+        gram = E @ np.swapaxes(E, 1, 2)
+    det = np.linalg.det(gram)
+    scale = np.einsum("mii->m", gram) / k
+    ok = det > 1e-12 * np.maximum(scale, 1e-300) ** k
+    vol = np.sqrt(np.where(ok, det, 0.0)) / math.factorial(k)
+    inv = np.zeros_like(gram)
+    inv[ok] = np.linalg.inv(gram[ok])
+    B = np.vstack([-np.ones((1, k)), np.eye(k)])
+    K = vol[:, None, None] * (B @ inv @ B.T)
+    C = (vol / ((k + 1) * (k + 2)))[:, None, None] * (np.ones((k + 1, k + 1)) + np.eye(k + 1))
+    return K, C, vol
+
+
+def _scatter(cells: np.ndarray, local: np.ndarray, n: int) -> sp.csr_matrix:
+    c = cells.shape[1]
+    rows = np.repeat(cells, c, axis=1).ravel()
+    cols = np.tile(cells, (1, c)).ravel()
+    return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
+
+
+def simplicial_cells(geo: Any) -> np.ndarray | None:
+    """The geometry's cells as simplices: a surface's faces fan-triangulated, a curve's
+    segments, tetrahedra; None for a point cloud.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> simplicial_cells(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(100, seed=0))).shape[1]
+    3
+    """
+    if geo.faces is not None:
+        return geo.faces.triangles()
+    return geo.cells
+
+
+def welded(geo: Any) -> np.ndarray | None:
+    """Each vertex's representative among coincident copies (an unwelded seam, a triangle
+    soup), once per geometry; None where there are none.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], float)
+    >>> welded(meshlap.geometry.from_mesh(V, [[0, 1, 2], [3, 4, 2]])).tolist()
+    [0, 1, 2, 1, 4]
+    """
+    def make() -> np.ndarray | None:
+        from .geometry.topology import duplicate_vertices
+
+        if geo.ambient_dim > 3:
+            return None
+        rep = duplicate_vertices(geo.points)
+        return None if bool((rep == np.arange(len(rep))).all()) else rep
+
+    return geo._cached("weld", make)
+
+
+def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
+    """``(parts, label)``: the connected parts of a mesh's cells, copies welded (vertices in no
+    cell get their own label, not counted); None for a point cloud.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(200, seed=0)
+    >>> g = meshlap.geometry.from_mesh(np.vstack([V, V + 3]), np.vstack([F, F + 200]))
+    >>> part_labels(g)[0]
+    2
+    """
+    def make() -> tuple[int, np.ndarray] | None:
+        from scipy.sparse.csgraph import connected_components
+
+        cells = simplicial_cells(geo)
+        if cells is None or geo.source == "point cloud":
+            return None
+        n = geo.n_points
+        rep = welded(geo)
+        c = cells if rep is None else rep[cells]
+        i, j = np.repeat(c[:, :1], c.shape[1] - 1, axis=1).ravel(), c[:, 1:].ravel()
+        if rep is not None:
+            i, j = np.r_[i, np.arange(n)], np.r_[j, rep]
+        _, label = connected_components(sp.coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)), directed=False)
+        used = np.zeros(n, dtype=bool)
+        used[c.ravel()] = True
+        return int(len(np.unique(label[used]))), label
+
+    return geo._cached("parts", make)
+
+
+def separate_parts(L: sp.csr_matrix, label: np.ndarray) -> sp.csr_matrix:
+    """``L`` without its entries between different parts, each row's removed sum moved onto its
+    diagonal: rows still sum to zero, and the pencil has one zero eigenvalue per part.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> L = sp.csr_matrix(np.array([[-2.0, 1, 1], [1, -2, 1], [1, 1, -2]]))
+    >>> separate_parts(L, np.array([0, 0, 1])).toarray().tolist()
+    [[-1.0, 1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    A = L.tocoo()
+    cross = label[A.row] != label[A.col]
+    if not cross.any():
+        return L
+    lost = np.bincount(A.row[cross], A.data[cross], minlength=L.shape[0])
+    keep = ~cross
+    out = sp.csr_matrix((A.data[keep], (A.row[keep], A.col[keep])), shape=L.shape) + sp.diags(lost)
+    return out.tocsr().astype(L.dtype)
+
+
+def surface_noise(geo: Any) -> float:
+    """The normal noise σ̂ of a surface mesh in R³ (:func:`meshlap.denoise.normal_noise`), once
+    per geometry; 0 for other inputs and where it is below a thousandth of the mean edge (its
+    heat step would move nothing).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> surface_noise(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, seed=0)))
+    0.0
+    """
+    def make() -> float:
+        from .denoise import normal_noise
+
+        if geo.faces is None or geo.ambient_dim != 3 or geo.source == "point cloud":
+            return 0.0
+        sigma = normal_noise(geo.points)
+        return sigma if sigma > 1e-3 * geo.spacing else 0.0
+
+    return geo._cached("normal_noise", make)
+
+
+def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "blend",
+               intrinsic: bool = True, weld: np.ndarray | None = None, points: np.ndarray | None = None
+               ) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The linear-FEM pencil ``(S, m)`` of a mesh: S symmetric negative semidefinite (≈ M Δ),
+    m the lumped masses of its diagonal mass matrix.
+
+    Parameters
+    ----------
+    geo : Geometry
+        A surface (faces of any size, fan-triangulated), curve or tetrahedral mesh.
+    mass : {"blend", "lumped", "consistent"}, default "blend"
+        The mass the stiffness pairs with (module docstring): "lumped" gives the cotangent
+        Laplacian's pencil; "blend" and "consistent" are moved onto the lumped diagonal.
+    intrinsic : bool, default True
+        Flip a triangle mesh to its intrinsic Delaunay triangulation first.
+    weld : (n,) int ndarray, optional
+        For every vertex its representative (:func:`meshlap.topology.duplicate_vertices`):
+        copies count as one vertex (one mass, shared equally), tied by a stiff spring.
+    points : (n, d) ndarray, optional
+        Positions to use instead of the geometry's (e.g. denoised ones).
+
+    Returns
+    -------
+    S : (n, n) scipy.sparse.csr_matrix
+    m : (n,) ndarray
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np, scipy.sparse.linalg as sla
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, seed=0))
+    >>> S, m = fem_pencil(g)
+    >>> lam = np.sort(sla.eigsh(-S, 4, sp.diags(m), sigma=-1e-6, return_eigenvectors=False))
+    >>> np.round(lam, 2).tolist()     # 0, then l(l + 1) = 2 three times
+    [0.0, 2.0, 2.0, 2.0]
+    """
+    if mass not in FEM_MASSES:
+        raise MeshError(f"mass must be one of {', '.join(FEM_MASSES)}; got {mass!r}")
+    cells = simplicial_cells(geo)
+    if cells is None:
+        raise MeshError(f"linear FEM needs cells (faces, segments or tetrahedra); this {geo.source} has none")
+    P, n = (geo.points if points is None else points), geo.n_points
+    rep = np.arange(n) if weld is None else np.asarray(weld, dtype=np.int64)
+    cells = rep[cells]
+    distinct = np.all(np.sort(cells, axis=1)[:, 1:] != np.sort(cells, axis=1)[:, :-1], axis=1)
+    cells = cells[distinct]
+    gram = None
+    if cells.shape[1] == 3 and intrinsic:
+        cells, lengths = intrinsic_delaunay(P, cells)
+        gram = _gram_from_lengths(lengths)
+    K, C, _ = cell_matrices(P, cells, gram)
+    S = -_scatter(cells, K, n)
+    Cm = _scatter(cells, C, n)
+    m = np.asarray(Cm.sum(axis=1)).ravel()
+    if mass != "lumped":
+        inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+        w = 0.25 if mass == "blend" else 0.5
+        B = sp.identity(n, format="csr") + w * (sp.identity(n) - sp.diags(inv) @ Cm)
+        S = B.T @ S @ B
+        S = 0.5 * (S + S.T)
+    return _expand(sp.csr_matrix(S), m, rep)
+
+
+def _expand(S: sp.csr_matrix, m: np.ndarray, rep: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
+    # copies share their representative's mass equally and are tied to it by a spring as stiff
+    # as its own diagonal entry; a vertex in no cell (unreferenced) gets a small mass and a
+    # diagonal entry of the same ratio: their modes lie above the mesh's own
+    n = len(m)
+    count = np.bincount(rep, minlength=n).astype(float)
+    d = np.abs(S.diagonal())
+    lone = m[rep] <= 0
+    if not (rep != np.arange(n)).any() and not lone.any():
+        return S, m
+    tiny = 1e-6 * (m[m > 0].mean() if (m > 0).any() else 1.0)
+    share = np.where(lone, tiny, m[rep] / count[rep])
+    ratio = float(np.max(d[m > 0] / m[m > 0])) if (m > 0).any() else 1.0
+    copies = np.flatnonzero(rep != np.arange(n))
+    i, j = copies, rep[copies]
+    c = TIE * np.where(lone[i], ratio * tiny, d[j])
+    R = sp.csr_matrix((1.0 / count[rep], (np.arange(n), rep)), shape=(n, n))
+    tie = sp.csr_matrix((np.r_[-c, -c, c, c], (np.r_[i, j, i, j], np.r_[i, j, j, i])), shape=(n, n))
+    alone = (lone & (rep == np.arange(n))).astype(float) * TIE * ratio * tiny
+    out = R @ S @ R.T + tie - sp.diags(alone)
+    return sp.csr_matrix(0.5 * (out + out.T)), share

@@ -1,0 +1,145 @@
+"""The one place that chooses which operator :func:`meshlap.laplacian` builds, and records why.
+
+The builders are mechanisms, each deterministic and named (``operator=``):
+
+========== =================================================================================
+"fem"      linear finite elements on the mesh's cells, intrinsic Delaunay, blended mass
+           (:mod:`meshlap.fem`): the symmetric pencil ``(S, M)``
+"kernel"   the corrected heat kernel on the vertices (Richardson kernel, arc distances, mirror
+           images; :class:`meshlap.MeshLaplacian`)
+"galerkin" the corrected heat kernel integrated over the cells (:mod:`meshlap.corrections.galerkin`)
+"paper"    Belkin, Sun and Wang's operator, eq. (1), bit for bit
+========== =================================================================================
+
+and ``op @ f`` of all but the paper's applies the fitted point-wise rows
+(:mod:`meshlap.corrections.rowchoice`), which read the points alone.
+
+The policy for ``operator="auto"`` has no tuned threshold:
+
+- an input with cells gets the "fem" pencil: its eigenvalues lie between the lumped and the
+  consistent FEM's on the same mesh (:mod:`meshlap.fem`), so its worst case is linear FEM there,
+  and parts stay apart (one zero eigenvalue per connected part); where a surface's vertices carry
+  normal noise (measured: :func:`meshlap.denoise.normal_noise`), FEM is taken on the positions
+  after one heat step of time (2σ̂)², which averages it out of the metric (:mod:`meshlap.denoise`);
+  the kernel keeps what FEM cannot give: ``op @ f``, point-wise convergent rows;
+- an input without cells (a point cloud) gets the "kernel" pencil, the only one it can have;
+- a kernel width ``h`` or an option of the kernel (``correction``, ``quadrature``, ...) asks for
+  the kernel: "paper" with ``correction="none"``, "galerkin" with ``quadrature="galerkin"``,
+  else "kernel".
+
+The decision, with what it read, is kept on the operator as ``op.decision``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from .errors import MeshError
+from .fem import part_labels, surface_noise, welded
+
+__all__ = ["OPERATORS", "Decision", "decide"]
+
+#: ``operator`` values of :func:`meshlap.laplacian`.
+OPERATORS = ("auto", "fem", "kernel", "galerkin", "paper")
+Operator = Literal["auto", "fem", "kernel", "galerkin", "paper"]
+
+_REASONS = {
+    "cells": "the input has cells: linear FEM on them, intrinsic Delaunay with the blended mass, whose "
+             "eigenvalues lie between the lumped and the consistent FEM's (worst case linear FEM)",
+    "cloud": "the input has no cells (a point cloud): the corrected heat kernel on the points",
+    "h": "a kernel width h was given: the corrected heat kernel at that width",
+    "options": "options of the kernel were given ({}): the kernel they configure",
+    "asked": "operator={!r} was asked for",
+}
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What :func:`decide` chose and why.
+
+    Attributes
+    ----------
+    operator : str
+        The symmetric pencil built: "fem", "kernel", "galerkin" or "paper".
+    rows : str
+        What ``op @ f`` applies: "fitted" (point-wise rows from the points alone) or "pencil"
+        (the pencil's own L: the paper's operator, or an option of the kernel's rows).
+    reason : str
+        Why, in a sentence.
+    measured : dict
+        The quantities read from the input (vertices, cells, parts, welded copies).
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> d = meshlap.laplacian(*meshlap.shapes.sphere(300, seed=0)).decision
+    >>> d.operator, d.rows, d.measured["parts"]
+    ('fem', 'fitted', 1)
+    """
+
+    operator: str
+    rows: str
+    reason: str
+    measured: dict = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        facts = ", ".join(f"{k}={v}" for k, v in self.measured.items())
+        return f"{self.operator} pencil, {self.rows} rows: {self.reason} ({facts})"
+
+
+def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict | None = None
+           ) -> Decision:
+    """The operator :func:`meshlap.laplacian` builds for ``geo``, and why.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The input.
+    operator : {"auto", "fem", "kernel", "galerkin", "paper"}
+        What was asked for.
+    h : float or array_like, optional
+        A kernel width, if given (it asks for the kernel).
+    kernel_options : dict, optional
+        The kernel's options given (``correction``, ``quadrature``, ...): they ask for it.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = meshlap.geometry.point_cloud_geometry(meshlap.samples.sphere_points(500), 2)
+    >>> decide(g).operator, decide(g, h=0.01).reason.startswith("a kernel width")
+    ('kernel', True)
+    """
+    if operator not in OPERATORS:
+        raise MeshError(f"operator must be one of {', '.join(map(repr, OPERATORS))}; got {operator!r}")
+    opts = {k: v for k, v in (kernel_options or {}).items() if v is not None}
+    has_cells = geo.source != "point cloud" and (geo.faces is not None or geo.cells is not None)
+    measured: dict = {"vertices": geo.n_points, "k": geo.dim}
+    if has_cells:
+        measured["parts"] = part_labels(geo)[0]
+        noise = surface_noise(geo)
+        if noise > 0:
+            measured["normal noise / mean edge"] = round(noise / geo.spacing, 4)
+        weld = welded(geo)
+        measured["welded copies"] = 0 if weld is None else int((weld != np.arange(len(weld))).sum())
+    if operator == "auto":
+        if opts.get("correction") == "none":
+            operator, reason = "paper", _REASONS["options"].format("correction='none'")
+        elif opts.get("quadrature") == "galerkin":
+            operator, reason = "galerkin", _REASONS["options"].format("quadrature='galerkin'")
+        elif opts:
+            operator, reason = "kernel", _REASONS["options"].format(", ".join(sorted(opts)))
+        elif h is not None:
+            operator, reason = "kernel", _REASONS["h"]
+        else:
+            operator, reason = ("fem", _REASONS["cells"]) if has_cells else ("kernel", _REASONS["cloud"])
+    else:
+        reason = _REASONS["asked"].format(operator)
+    if operator in ("fem", "galerkin") and not has_cells:
+        raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
+                        "(use operator='kernel' or 'auto')")
+    pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
+        opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
+    return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured)

@@ -1,0 +1,190 @@
+"""The default of meshlap.laplacian: the policy's choices, the FEM pencil, parts and welded seams,
+and accuracy against linear FEM on refined meshes (issue 35)."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+import meshlap
+from meshlap import fem
+from meshlap.errors import MeshError
+
+DATA = Path(__file__).parent / "data"
+
+
+def _eig(K, M, k):
+    return np.sort(sla.eigsh(K, k, M, sigma=-1e-8, return_eigenvectors=False))
+
+
+def _refine(V, F):
+    # each triangle cut in 4 at its edge midpoints
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    u, inv = np.unique(E, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    n, m = len(V), len(F)
+    W = np.vstack([V, 0.5 * (V[u[:, 0]] + V[u[:, 1]])])
+    a, b, c = n + inv[:m], n + inv[m:2 * m], n + inv[2 * m:]
+    return W, np.vstack([np.c_[F[:, 0], a, c], np.c_[F[:, 1], b, a], np.c_[F[:, 2], c, b], np.c_[a, b, c]])
+
+
+def _fem(V, F, mass):
+    # linear FEM on the mesh as given: the cotangent stiffness with the lumped or consistent mass
+    K, C, _ = fem.cell_matrices(V, F)
+    K, C = fem._scatter(F, K, len(V)), fem._scatter(F, C, len(V))
+    return K, (sp.diags(np.asarray(C.sum(axis=1)).ravel()) if mass == "lumped" else C)
+
+
+def _reference(V, F, k):
+    # linear FEM on the 4x and 16x refinements, extrapolated (O(e^2): each refinement halves e)
+    V1, F1 = _refine(V, F)
+    V2, F2 = _refine(V1, F1)
+    l4 = _eig(*_fem(V1, F1, "consistent"), k)
+    l16 = _eig(*_fem(V2, F2, "consistent"), k)
+    return (4 * l16 - l4) / 3
+
+
+def _error(lam, ref, zeros=1):
+    return float(np.max(np.abs(lam[zeros:] - ref[zeros:]) / ref[zeros:]))
+
+
+def test_policy_decisions():
+    V, F = meshlap.shapes.sphere(400, seed=0)
+    assert meshlap.laplacian(V, F).decision.operator == "fem"
+    assert meshlap.laplacian(V, F, h=0.02).decision.operator == "kernel"
+    assert meshlap.laplacian(V, F, correction="none").decision.operator == "paper"
+    assert meshlap.laplacian(V, F, quadrature="galerkin").decision.operator == "galerkin"
+    cloud = meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(600, noise=0))
+    assert cloud.decision.operator == "kernel"
+    assert "cloud" in meshlap.laplacian(meshlap.geometry.point_cloud_geometry(V)).decision.reason
+    with pytest.raises(MeshError, match="operator must be one of"):
+        meshlap.laplacian(V, F, operator="cot")
+    with pytest.raises(MeshError, match="has none"):
+        meshlap.laplacian(meshlap.geometry.point_cloud_geometry(V), operator="fem")
+    with pytest.raises(MeshError, match="FEM pencil"):
+        meshlap.laplacian(V, F, operator="fem", pointwise=True)
+
+
+def test_paper_operator_bit_for_bit():
+    V, F = meshlap.shapes.sphere(500, seed=1)
+    a = meshlap.laplacian(V, F, operator="paper", h=0.02)
+    b = meshlap.MeshLaplacian(V, F, h=0.02, correction="none")
+    assert (a.L != b.L).nnz == 0 and (a.S != b.S).nnz == 0
+
+
+def test_signature_is_small():
+    sig = inspect.signature(meshlap.laplacian)
+    named = [p for p in sig.parameters.values() if p.kind == p.KEYWORD_ONLY]
+    assert len(named) <= 8
+    doc = meshlap.laplacian.__doc__
+    assert all(f"{p.name} :" in doc for p in named)
+
+
+def test_fem_pencil_properties():
+    V, F = meshlap.shapes.sphere(600, kind="random", seed=2)
+    g = meshlap.geometry.from_mesh(V, F)
+    S, m = fem.fem_pencil(g)
+    assert abs(S - S.T).max() < 1e-12 * abs(S).max()
+    assert np.abs(S @ np.ones(len(V))).max() < 1e-10 * abs(S).max()
+    assert m.sum() == pytest.approx(g.mass.sum(), rel=1e-12)       # flips keep the area
+    w = np.linalg.eigvalsh(-S.toarray())
+    assert w.min() > -1e-10 * w.max()                                # -S semidefinite
+
+
+def test_blended_mass_between_lumped_and_consistent():
+    # C <= (C + D)/2 <= D, so each eigenvalue of the blend lies between the lumped and consistent ones
+    V, F = meshlap.shapes.sphere(300, kind="random", seed=3)
+    K, C, _ = fem.cell_matrices(V, F)
+    K, C = fem._scatter(F, K, len(V)).toarray(), fem._scatter(F, C, len(V)).toarray()
+    D = np.diag(C.sum(axis=1))
+    import scipy.linalg as sl
+
+    lumped, consistent, blend = (sl.eigh(K, B, eigvals_only=True)[:30] for B in (D, C, 0.5 * (C + D)))
+    assert np.all(lumped[1:] <= blend[1:] * (1 + 1e-9)) and np.all(blend[1:] <= consistent[1:] * (1 + 1e-9))
+
+
+def test_intrinsic_delaunay_flips_obtuse_edges():
+    V, F = meshlap.shapes.plane(400, seed=0)                  # a random plane: many obtuse pairs
+    T, lengths = fem.intrinsic_delaunay(V, F)
+    twin = fem._halfedge_twins(T)
+    cot = np.empty(T.shape)
+    for c in range(3):
+        a, b, d = lengths[:, c], lengths[:, (c + 1) % 3], lengths[:, (c + 2) % 3]
+        s = 0.5 * (a + b + d)
+        cot[:, c] = (b**2 + d**2 - a**2) / (4 * np.sqrt(s * (s - a) * (s - b) * (s - d)))
+    f, c = np.nonzero(twin >= 0)
+    t = twin[f, c]
+    weights = cot[f, c] + cot[t // 3, t % 3]
+    assert weights.min() > -1e-9
+    # a flat mesh's intrinsic triangulation is a planar one: the same total area
+    area = lambda L: np.sqrt(np.prod([(L.sum(1) / 2 - L[:, i]) for i in range(3)], axis=0) * L.sum(1) / 2)
+    assert area(lengths).sum() == pytest.approx(meshlap.face_areas(V, F).sum(), rel=1e-12)
+
+
+def test_parts_are_parts():
+    # two unit spheres 0.02 apart: two zero eigenvalues, whichever pencil (the kernel reached
+    # across the gap: lambda_1 = 0.248 before)
+    V, F = meshlap.shapes.sphere(1500, seed=0)
+    V2 = np.vstack([V, V + [2.02, 0, 0]])
+    F2 = np.vstack([F, F + len(V)])
+    for operator in ("fem", "kernel"):
+        lam, _ = meshlap.spectral.eigs(meshlap.laplacian(V2, F2, operator=operator), 6)
+        assert np.abs(lam[:2]).max() < 1e-8 and lam[2] > 1.9, operator
+    assert meshlap.laplacian(V2, F2).decision.measured["parts"] == 2
+
+
+def test_unwelded_seam_is_welded():
+    # the same sphere with every vertex of one half duplicated into the faces there: the spectrum
+    # of the welded mesh, not of a cut one
+    V, F = meshlap.shapes.sphere(1200, seed=4)
+    half = F[:, 0] * 0 + (V[F].mean(axis=1)[:, 2] > 0)
+    n = len(V)
+    Vd = np.vstack([V, V])
+    Fd = np.where(half[:, None].astype(bool), F + n, F)
+    with pytest.warns(meshlap.MeshWarning, match="duplicate"):
+        op = meshlap.laplacian(Vd, Fd)
+    welded, _ = meshlap.spectral.eigs(meshlap.laplacian(V, F), 10)
+    seam, _ = meshlap.spectral.eigs(op, 10)
+    assert op.decision.measured["welded copies"] > 0
+    np.testing.assert_allclose(seam, welded, atol=1e-7)
+
+
+def test_unreferenced_vertex_keeps_the_spectrum():
+    V, F = meshlap.shapes.sphere(800, seed=5)
+    with pytest.warns(meshlap.MeshWarning, match="unreferenced"):
+        op = meshlap.laplacian(np.vstack([V, [[5.0, 5, 5]]]), F)
+    lam, _ = meshlap.spectral.eigs(op, 8)
+    ref, _ = meshlap.spectral.eigs(meshlap.laplacian(V, F), 8)
+    np.testing.assert_allclose(lam, ref, atol=1e-7)
+
+
+def test_coarse_decimated_mesh_within_fem():
+    # spot decimated to about 500 vertices, a coarse closed mesh of skinny triangles: the default's
+    # first 9 nonzero eigenvalues against linear FEM refined 16x (extrapolated) are within 1.5x of
+    # the better of the lumped (cotangent) and consistent FEM on the same mesh
+    igl = pytest.importorskip("igl")
+    V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
+    V, F = igl.decimate(V, F, 1000)[1:3]
+    V, F = np.asarray(V, float), np.asarray(F, np.int64)
+    assert len(V) < 600
+    ref = _reference(V, F, 10)
+    lam, _ = meshlap.spectral.eigs(meshlap.laplacian(V, F), 10)
+    peers = [_error(_eig(*_fem(V, F, mass), 10), ref) for mass in ("lumped", "consistent")]
+    assert _error(lam, ref) <= 1.5 * min(peers), (_error(lam, ref), peers)
+
+
+def test_tetrahedral_mesh_within_fem():
+    # the unit cube's Neumann spectrum pi^2 (a^2 + b^2 + c^2): the default against P1 with the
+    # consistent mass (LaPy's pencil) on the same tetrahedra
+    V, T = meshlap.samples.cube_tetrahedra(6)
+    exact = np.sort([np.pi**2 * (a * a + b * b + c * c) for a in range(4) for b in range(4) for c in range(4)])[:10]
+    lam, _ = meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 10)
+    K, C, _ = fem.cell_matrices(V, T)
+    lapy_like = _eig(fem._scatter(T, K, len(V)), fem._scatter(T, C, len(V)), 10)
+    assert _error(lam, exact) <= 1.5 * _error(lapy_like, exact)
+    assert _error(lam, exact) < 0.1
