@@ -145,3 +145,8 @@ def test_old_meaning_warns(sphere):
     assert delta_error(Lp @ V[:, 0], V[:, 0]) < TOL
     with pytest.raises(meshlap.MeshError, match="form must be"):
         meshlap.mesh_laplacian(V, F, form="strong")
+    P = meshlap.samples.sphere_points(1000, "uniform")
+    with pytest.warns(DeprecationWarning, match="point_cloud_matrices"):
+        Lp, M = meshlap.point_cloud_matrices(P, form="pointwise")
+    op = meshlap.point_cloud_laplacian(P)
+    assert abs(Lp - op.L).max() == 0 and abs(M - op.M).max() == 0
