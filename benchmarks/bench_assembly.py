@@ -355,11 +355,11 @@ HAND_WRITTEN = "<!-- written by hand below this line; --default-vs-paper keeps i
 
 
 def _kept_notes(title: str) -> list[str]:
-    # the hand-written part of the section ``title``, from its marker to the next section
+    # the hand-written part of the subsection ``### title``, from its marker to the next heading
     text = RESULTS.read_text() if RESULTS.exists() else ""
-    start = text.find(f"## {title}\n")
-    end = text.find("\n## ", start + 1) if start >= 0 else -1
-    section = text[start:end if end >= 0 else len(text)] if start >= 0 else ""
+    start = text.find(f"### {title}\n")
+    ends = [e for e in (text.find("\n### ", start + 1), text.find("\n## ", start + 1)) if e >= 0]
+    section = text[start:min(ends, default=len(text))] if start >= 0 else ""
     if HAND_WRITTEN not in section:
         return []
     return ["", HAND_WRITTEN, "", *section.split(HAND_WRITTEN, 1)[1].strip("\n").splitlines()]

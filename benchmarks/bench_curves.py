@@ -86,7 +86,7 @@ def main() -> int:
             "(2πm/ℓ)² (closed) or (πm/ℓ)² (open, Neumann); G: the Galerkin pencil on the segments; a "
             "correction in parentheses: the vertex pencil fell back to it; linear FEM: "
             "`meshlap.baselines.cotangent(V, E)`; FEM predicted: `op.resolution.fem_error`.", ""] + lines
-    write_section("Curves: the Galerkin pencil on segments (issue 18)", body)
+    write_section("Curves: the Galerkin pencil on segments", body)
     return 0
 
 

@@ -334,7 +334,7 @@ def main() -> None:
             sys.path.insert(0, str(HERE))
             from results_file import write_section
 
-            title = "Distributed eigensolver (issue 19)"
+            title = "Distributed eigensolver"
             write_section(title + (f", {args.eigs:,} points" if args.eigs >= 1_000_000 else ""), lines)
         return
     per_rank = 5_000 if args.quick else args.per_rank

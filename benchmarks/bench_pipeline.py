@@ -94,7 +94,7 @@ def main(argv=None) -> int:
              "ones against the exact values; E2 of `op @ f`, f = x² on the sphere, cos 2θ on the circle, "
              "cos πx in the cube, cos θ cos φ on the torus).", ""] + rows
     if not args.quick:
-        write_section("One default for every input (issue 17)", lines)
+        write_section("One default for every input", lines)
     return 0
 
 

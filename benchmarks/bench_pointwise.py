@@ -2,7 +2,7 @@
 in the same process, and the convergence order of the new rows on clean spheres and tori.
 
     python benchmarks/bench_pointwise.py             # 16,000 points; writes RESULTS.md's
-                                                     # section "Point-wise accuracy (issue 20)"
+                                                     # section "Point-wise accuracy"
     python benchmarks/bench_pointwise.py --n 4000 --no-write    # a quick look
     python benchmarks/bench_pointwise.py --build-ratios         # the build-time table only
 
@@ -437,7 +437,7 @@ def main() -> None:
         *conv,
     ]
     if not args.no_write:
-        write_section("Point-wise accuracy (issue 20)", lines)
+        write_section("Point-wise accuracy", lines)
     sys.stdout.flush()
     del kokkos
     os._exit(0)  # pycompadre's Kokkos objects abort the interpreter's own shutdown

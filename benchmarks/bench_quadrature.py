@@ -91,7 +91,7 @@ def main() -> int:
     body = ["Command: `python benchmarks/bench_quadrature.py` (2 cores). Largest relative error of "
             "eigenvalues 1-9; C: the consistent mass; h = 0.5 ē² unless the column says otherwise; the "
             "references are bench_spectra's.", ""] + lines
-    write_section("Galerkin pencil: what each ingredient buys (issue 18)", body)
+    write_section("Galerkin pencil: what each ingredient buys", body)
     return 0
 
 

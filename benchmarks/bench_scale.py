@@ -103,7 +103,7 @@ def main(argv=None) -> int:
             f"{args.k})` at its default tol; the cotangent: `igl.cotmatrix`, Voronoi mass, scipy eigsh "
             "shift-invert. Error: the largest relative error of eigenvalues 1 to k - 1 against l(l + 1).",
             "", *lines]
-    write_section("Eigenpairs at scale (issue 19)", body)
+    write_section("Eigenpairs at scale", body)
     return 0
 
 

@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
                 "to unit area; implicit steps of `smoothing.mean_curvature_flow`; best dt searched over "
                 f"{', '.join(f'{c:g}' for c in GRID)} ē².", ""] + lines + ["", "Default against the "
                 "cotangent flow's best single step:", ""] + [f"* {v}" for v in verdict]
-        write_section("Denoising by mean curvature flow (issue 18)", body)
+        write_section("Denoising by mean curvature flow", body)
     return 0
 
 

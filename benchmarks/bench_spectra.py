@@ -323,7 +323,7 @@ def main(argv=None) -> int:
             "pencil is the Galerkin one (`op.quadrature`); the time is the default's build and eigs "
             "(wall clock).", ""] + lines
     if not (args.quick or args.rows):
-        write_section("Spectra on every input (issue 18)", body)
+        write_section("Spectra on every input", body)
     return 0
 
 

@@ -33,7 +33,13 @@ from . import (
     spectral,
     widths,
 )
-from .builders import laplacian, mesh_laplacian, point_cloud_laplacian, point_cloud_matrices
+from .builders import (
+    laplacian,
+    mesh_laplacian,
+    point_cloud_laplacian,
+    point_cloud_matrices,
+    pointwise_laplacian,
+)
 from .errors import MeshError, MeshWarning, OperatorTooLargeError
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
@@ -67,6 +73,7 @@ __all__ = [
     "policy",
     "point_cloud_laplacian",
     "point_cloud_matrices",
+    "pointwise_laplacian",
     "reproduce",
     "resolution",
     "samples",

@@ -1,23 +1,30 @@
 """The builders: from a mesh or a point cloud to a :class:`~meshlap.MeshLaplacian`.
 
 ``laplacian`` and ``mesh_laplacian`` take vertices and cells (faces of any size, edges of a
-curve, tetrahedra); ``point_cloud_laplacian`` and ``point_cloud_matrices`` take points alone.
-All of them run the same pipeline (:mod:`meshlap.pipeline`) with the same default.
+curve, tetrahedra); ``point_cloud_laplacian`` and ``point_cloud_matrices`` take points alone;
+``pointwise_laplacian`` takes either. All of them run the same pipeline (:mod:`meshlap.pipeline`)
+with the same default. ``laplacian`` and ``point_cloud_laplacian`` return the operator
+(``op @ f`` ≈ Δf); ``mesh_laplacian`` and ``point_cloud_matrices`` return robust-laplacian's pair
+(L positive semidefinite and symmetric, M the mass: for ``eigsh``); ``pointwise_laplacian``
+returns the matrix that ``op @ f`` applies.
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse as sp
 
+from .errors import MeshError
 from .geometry import Geometry, point_cloud_geometry
 from .operator import MeshLaplacian, as_geometry
 from .policy import Operator, decide
 from .progress import ProgressLike
 
-__all__ = ["laplacian", "mesh_laplacian", "point_cloud_laplacian", "point_cloud_matrices"]
+__all__ = ["laplacian", "mesh_laplacian", "point_cloud_laplacian", "point_cloud_matrices",
+           "pointwise_laplacian"]
 
 
 def laplacian(
@@ -108,26 +115,91 @@ def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:
     return V, F, k if k is not None else k_cells
 
 
-def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | None = None,
+def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | None = None, *,
+                   form: Literal["weak", "pointwise"] = "weak",
                    **kwargs: Any) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """The pair ``(L, M)``: the Belkin–Sun–Wang Laplacian and its lumped mass matrix.
+    """The pair ``(L, M)`` in robust-laplacian's convention: for ``eigsh`` and heat flow.
 
-    A shortcut for ``op = laplacian(V, F, h, tol); (op.L, op.M)``: ``L @ f`` is the accurate
-    Δf at every vertex (what ``op @ f`` gives). For spectra and heat flow use the symmetric
-    pencil ``(op.S, op.M)`` of :func:`laplacian` (``op.L`` is not symmetric in M). Note the
-    sign: L ≈ +Δ is negative semidefinite, like libigl's ``cotmatrix`` and unlike
-    robust-laplacian's positive weak form.
+    ``L = -op.S`` is the symmetric positive semidefinite weak stiffness and ``M = op.M`` the
+    diagonal mass of ``op = laplacian(V, F, h, tol)``, so robust-laplacian's idiom
+    ``eigsh(L, k, M, sigma=1e-8)`` gives the spectrum of −Δ (0, then l(l+1) on the unit
+    sphere) and ``(M + t L) u = M u0`` is an implicit heat step. ``L`` is not Δ: the accurate
+    Δf at every point is ``laplacian(V, F) @ f`` (or :func:`pointwise_laplacian`).
+
+    Parameters
+    ----------
+    V, F, h, tol, **kwargs
+        As for :func:`laplacian`.
+    form : {"weak", "pointwise"}, default "weak"
+        ``"pointwise"`` returns what this function returned in 0.1.0, ``(op.L, op.M)`` with
+        ``op.L @ f`` ≈ +Δf (not symmetric: not for ``eigsh``); deprecated, it goes in the next
+        release: use :func:`pointwise_laplacian` or ``laplacian(V, F).L``.
+
+    Returns
+    -------
+    L : (n, n) csr_matrix
+        Symmetric positive semidefinite; ``L @ 1 = 0``.
+    M : (n, n) csr_matrix
+        Diagonal, positive: the vertex areas.
 
     Examples
     --------
-    >>> import meshlap
-    >>> V, F = meshlap.shapes.sphere(300, seed=0)
-    >>> L, M = meshlap.mesh_laplacian(V, F, h=0.02)
-    >>> bool(abs(M.diagonal().sum() - 4 * 3.14159) < 0.2)
+    >>> import meshlap, numpy as np, scipy.sparse.linalg as sla
+    >>> V, F = meshlap.shapes.sphere(500, seed=0)
+    >>> L, M = meshlap.mesh_laplacian(V, F)
+    >>> lam = sla.eigsh(L, 4, M, sigma=1e-8)[0]          # robust-laplacian's idiom
+    >>> print(np.abs(lam).round(1))                      # 0, then l(l+1) = 2 three times
+    [0. 2. 2. 2.]
+    """
+    return _pair(laplacian(V, F, h, tol, **kwargs), form, "mesh_laplacian")
+
+
+def _pair(op: MeshLaplacian, form: str, name: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    if form == "weak":
+        return sp.csr_matrix(-op.S), op.M
+    if form == "pointwise":
+        warnings.warn(f"{name}(..., form='pointwise') is deprecated and goes in the next release: it returns "
+                      "(op.L, op.M), op.L @ f ≈ +Δf, not symmetric. Use meshlap.pointwise_laplacian for "
+                      f"Δf, and {name}'s default pair (L = -op.S, M) for eigsh and heat flow",
+                      DeprecationWarning, stacklevel=3)
+        return op.L, op.M
+    raise MeshError(f"form must be 'weak' or 'pointwise'; got {form!r}")
+
+
+def pointwise_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | None = None,
+                        **kwargs: Any) -> sp.csr_matrix:
+    """The point-wise Laplacian: ``Lp @ f`` ≈ +Δf at every vertex (or point).
+
+    The matrix ``op.L`` that ``op @ f`` applies (the fitted rows by default), for meshes as
+    :func:`laplacian` builds them and, with ``F`` None and an array of points, for point clouds
+    as :func:`point_cloud_laplacian` does. Its rows are not symmetric in any mass: for
+    ``eigsh``, heat flow and smoothing take the pair of :func:`mesh_laplacian` (or
+    :func:`point_cloud_matrices`), or :func:`meshlap.spectral.eigs` on the operator.
+
+    Parameters
+    ----------
+    V, F, h, tol, **kwargs
+        As for :func:`laplacian`; ``F`` None with an (n, d) array: a point cloud (``k`` and the
+        cloud's options as for :func:`point_cloud_laplacian`).
+
+    Returns
+    -------
+    (n, n) csr_matrix
+        ≈ +Δ (the sign of libigl's ``cotmatrix``, without its mass): ``Lp @ x`` ≈ −2x on the
+        unit sphere.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(1000, seed=0)
+    >>> Lp = meshlap.pointwise_laplacian(V, F)
+    >>> x = V[:, 0]
+    >>> bool(np.linalg.norm(Lp @ x + 2 * x) < 1e-3 * np.linalg.norm(2 * x))   # Δx = -2x
     True
     """
-    op = MeshLaplacian(V, F, h=h, tol=tol, **kwargs)
-    return op.L, op.M
+    if F is None and isinstance(V, (np.ndarray, list)):
+        return point_cloud_laplacian(V, h, tol=tol, **kwargs).L
+    return laplacian(V, F, h, tol, **kwargs).L
 
 
 def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float | None = None, *,
@@ -188,20 +260,31 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)
 
 
-def point_cloud_matrices(P: Any, h: float | None = None, k: int = 2, **kwargs: Any
+def point_cloud_matrices(P: Any, h: float | None = None, k: int = 2, *,
+                         form: Literal["weak", "pointwise"] = "weak", **kwargs: Any
                          ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """The pair ``(L, M)`` of :func:`point_cloud_laplacian`: ``L @ f`` is the accurate Δf at
-    every point (what ``op @ f`` gives).
+    """The pair ``(L, M)`` of a point cloud in robust-laplacian's convention.
 
-    Note the sign: L ≈ +Δ; robust-laplacian's L is the positive weak form, which corresponds
-    to ``-op.S`` here (the symmetric pencil of :func:`point_cloud_laplacian`).
+    What ``robust_laplacian.point_cloud_laplacian(P)`` returns, in meaning: ``L = -op.S``
+    symmetric positive semidefinite and ``M = op.M`` the diagonal point masses of
+    ``op = point_cloud_laplacian(P, h, k)``, for ``eigsh(L, k, M, sigma=1e-8)`` and heat flow.
+    meshlap's own :func:`point_cloud_laplacian` returns the operator (``op @ f`` ≈ Δf).
+
+    Parameters
+    ----------
+    P, h, k, **kwargs
+        As for :func:`point_cloud_laplacian`.
+    form : {"weak", "pointwise"}, default "weak"
+        ``"pointwise"``, deprecated, returns 0.1.0's ``(op.L, op.M)``: use
+        :func:`pointwise_laplacian` (``pointwise_laplacian(P)``) for Δf.
 
     Examples
     --------
     >>> import meshlap
-    >>> L, M = point_cloud_matrices(meshlap.samples.sphere_points(1000), h=0.02)
+    >>> L, M = meshlap.point_cloud_matrices(meshlap.samples.sphere_points(1000), h=0.02)
     >>> L.shape, bool(abs(M.diagonal().sum() - 4 * 3.1416) < 0.2)     # the sphere's area
     ((1000, 1000), True)
+    >>> bool(abs(L - L.T).max() < 1e-12 and abs(L.sum(axis=1)).max() < 1e-9)   # symmetric, L @ 1 = 0
+    True
     """
-    op = point_cloud_laplacian(P, h=h, k=k, **kwargs)
-    return op.L, op.M
+    return _pair(point_cloud_laplacian(P, h=h, k=k, **kwargs), form, "point_cloud_matrices")

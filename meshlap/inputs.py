@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
 from .geometry.validation import check_faces, check_vertices, existing_file
@@ -155,7 +156,8 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
 
     Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces,
     .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
-    lines), TetGen's .node/.ele, and with meshio installed every format meshio reads.
+    lines), TetGen's .node/.ele, legacy ASCII VTK POLYDATA (LaPy's tetrahedra: polygons of 4
+    corners spanning a volume), and with meshio installed every format meshio reads.
 
     Examples
     --------
@@ -183,6 +185,9 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
         return V, F, 2
     if suffix in POINT_FORMATS:
         return read_points(path), None, None
+    polydata = read_polydata(path) if suffix == ".vtk" else None  # LaPy's tetrahedra, legacy surfaces
+    if polydata is not None:
+        return polydata
     try:
         import meshio
     except ImportError as exc:

@@ -6,8 +6,8 @@
   libigl as triangles.
 * :func:`read_points` reads point clouds (PLY with or without faces, XYZ/CSV/TXT columns,
   ``.npy``), :func:`read_polyline` the ``l`` lines of an OBJ file, and
-  :func:`read_tetrahedra` TetGen's ``.node``/``.ele`` pair (other volume formats through
-  meshio, when it is installed: it is optional, since meshlap needs no more than these).
+  :func:`read_tetrahedra` TetGen's ``.node``/``.ele`` pair and LaPy's ``.vtk`` (other volume
+  formats through meshio, when it is installed: it is optional, since meshlap needs no more).
 * :func:`as_mesh` turns whatever the user holds (a path, a ``(V, F)`` pair, a
   ``trimesh.Trimesh`` or anything else with ``vertices`` and ``faces``) into ``(V, F)``.
 * :func:`save_operator` / :func:`load_operator` (from :mod:`meshlap.store`) save a built
@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
 from .geometry.validation import check_faces, check_vertices, existing_file
@@ -419,8 +420,9 @@ def read_polyline(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
-    """Read a tetrahedral mesh: TetGen's ``.node`` + ``.ele`` pair, or any volume format that
-    meshio reads (``.vtk``, ``.vtu``, ``.msh``, ...) when meshio is installed.
+    """Read a tetrahedral mesh: TetGen's ``.node`` + ``.ele`` pair, LaPy's ``.vtk`` (legacy
+    ASCII POLYDATA whose polygons are tetrahedra, as ``lapy.TetMesh.write_vtk`` writes them), or
+    any volume format that meshio reads (``.vtk``, ``.vtu``, ``.msh``, ...) when it is installed.
 
     Pass either file of the TetGen pair. Returns ``(V, T)`` for
     ``meshlap.laplacian(V, T, k=3)``.
@@ -465,11 +467,16 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
                             f"exist (the nodes are numbered {first} to {len(V) - 1 + first})")
         return check_vertices(V, name=f"vertices of {node.name}"), T
     existing_file(path, "mesh")
+    polydata = read_polydata(path) if suffix == ".vtk" else None
+    if polydata is not None:  # LaPy's TetMesh.write_vtk: POLYGONS of 4 corners
+        if polydata[2] != 3:
+            raise MeshError(f"{path.name}: no tetrahedra in the file (its POLYGONS are a surface's)")
+        return check_vertices(polydata[0], name=f"vertices of {path.name}"), polydata[1]
     try:
         import meshio
     except ImportError as exc:
-        raise MeshError(f"{path.name}: meshlap reads TetGen .node/.ele itself; for {suffix} files "
-                        "install meshio (pip install meshio)") from exc
+        raise MeshError(f"{path.name}: meshlap reads TetGen .node/.ele and LaPy's .vtk itself; for "
+                        f"{suffix} files install meshio (pip install meshio)") from exc
     mesh = meshio.read(path)
     T = [c.data for c in mesh.cells if c.type == "tetra"]
     if not T:

@@ -129,3 +129,35 @@ def test_read_input_kinds(tmp_path, cloud, tets):
     assert T.shape == (1296, 4) and k == 3
     (tmp_path / "c.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n")
     assert read_input(tmp_path / "c.obj")[1].tolist() == [[0, 1], [1, 2]]
+
+
+def test_eigs_of_lapys_tetrahedral_vtk(capsys, tets, tmp_path):
+    """LaPy's TetMesh.write_vtk: legacy POLYDATA whose POLYGONS are tetrahedra (meshio refuses it);
+    meshlap reads it as the same volume as the TetGen pair, and LaPy's TriaMesh file as a surface."""
+    lapy = pytest.importorskip("lapy", reason="LaPy absent (pip install lapy)")
+    V, T = meshlap.samples.cube_tetrahedra(6)
+    lapy.TetMesh(V, T).write_vtk(str(tmp_path / "cubeTetra.vtk"))
+    code, out, err = run(capsys, "eigs", tmp_path / "cubeTetra.vtk", "-k", "4")
+    assert code == 0, err
+    _, ref, _ = run(capsys, "eigs", tets, "-k", "4")
+    np.testing.assert_allclose(eigenvalues(out), eigenvalues(ref), rtol=1e-5, atol=1e-12)
+    Vr, Tr = meshlap.io.read_tetrahedra(tmp_path / "cubeTetra.vtk")
+    assert np.array_equal(Tr, T) and np.abs(Vr - V).max() < 1e-6
+    Vs, Fs = meshlap.shapes.sphere(300, seed=0)
+    lapy.TriaMesh(Vs, Fs).write_vtk(str(tmp_path / "sphere.vtk"))
+    P, cells, k = read_input(tmp_path / "sphere.vtk")
+    assert k == 2 and np.array_equal(cells, Fs) and np.abs(P - Vs).max() < 1e-6
+
+
+def test_legacy_vtk_quads_stay_a_surface_and_bad_ones_end_in_one_line(capsys, tmp_path):
+    head = "# vtk DataFile Version 3.0\nquads\nASCII\nDATASET POLYDATA\n"
+    grid = "POINTS 6 double\n0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0\n"
+    (tmp_path / "quads.vtk").write_text(head + grid + "POLYGONS 2 10\n4 0 1 4 3\n4 1 2 5 4\nPOINT_DATA 6\n")
+    V, cells, k = read_input(tmp_path / "quads.vtk")
+    assert k == 2 and cells.tolist() == [[0, 1, 4, 3], [1, 2, 5, 4]] and V.shape == (6, 3)
+    with pytest.raises(meshlap.MeshError, match="no tetrahedra in the file"):
+        meshlap.io.read_tetrahedra(tmp_path / "quads.vtk")
+    (tmp_path / "short.vtk").write_text(head + grid + "POLYGONS 2 10\n4 0 1 4 3\n4 1 2\n")
+    fails(capsys, "malformed POLYGONS block", "info", tmp_path / "short.vtk")
+    (tmp_path / "none.vtk").write_text(head + grid)
+    fails(capsys, "a VTK POLYDATA file without POLYGONS", "info", tmp_path / "none.vtk")

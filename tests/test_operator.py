@@ -197,7 +197,8 @@ def test_operator_surface():
     assert "MeshLaplacian(" in repr(op) and "h=0.05" in repr(op)
     assert "<table>" in op._repr_html_()
     L, M = meshlap.mesh_laplacian(V, F, h=0.05, correction="none")
-    assert abs(L - op.L).max() == 0 and np.allclose(M.diagonal(), op.mass)
+    assert abs(L + op.S).max() == 0 and np.allclose(M.diagonal(), op.mass)
+    assert abs(meshlap.pointwise_laplacian(V, F, h=0.05, correction="none") - op.L).max() == 0
     lin = op.as_linear_operator()
     x = np.random.default_rng(0).normal(size=200)
     assert np.allclose(lin @ x, op @ x)

@@ -47,7 +47,7 @@ def test_clean_sphere_mesh_and_cloud(sphere):
     assert mesh.pointwise_choice is not None and np.median(mesh.pointwise_choice.degree) == 6
     # a compact stencil: op @ f costs less than the kernel's rows
     assert mesh.L.nnz < 0.1 * mesh.L_sym.nnz
-    assert "fitted rows (52 entries per row; degree 6: 100%" in repr(mesh)
+    assert mesh.L.nnz == 52 * len(V) and (mesh.pointwise_choice.degree == 6).all()
 
 
 def test_noisy_sphere_mesh_beats_the_paper(sphere):
@@ -120,7 +120,7 @@ def test_options_keep_the_other_rows(sphere):
     assert off.L is off.L_sym and not off.pointwise
     assert meshlap.laplacian(V, F, correction="none").pointwise_choice is None
     fixed = meshlap.laplacian(V, F, pointwise_degree=4)
-    assert fixed.pointwise_choice is None and "degree 4" in repr(fixed)
+    assert fixed.pointwise_choice is None and fixed.options.pointwise_degree == 4
 
 
 def test_mean_curvature_from_the_same_rows():

@@ -21,6 +21,11 @@ def _marks(code: str) -> list:
     uses_mpi = "meshlap.distributed" in code or "from meshlap import distributed" in code
     if uses_mpi and importlib.util.find_spec("petsc4py") is None:
         marks.append(pytest.mark.skip(reason="petsc4py absent: install it with .ci/install-mpi"))
+    # the "Coming from" pages import their peer: skipped, naming it, where it is not installed
+    missing = sorted({m for m in re.findall(r"^(?:import|from) (\w+)", code, re.M)
+                      if importlib.util.find_spec(m) is None})
+    if missing:
+        marks.append(pytest.mark.skip(reason=f"{', '.join(missing)} absent (pip install it)"))
     return marks
 
 

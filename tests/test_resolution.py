@@ -203,7 +203,7 @@ def test_narrow_cloud_warns_and_names_robust_laplacian():
     r = op.resolution
     assert r.too_coarse and r.alternative == CLOUD_PEER and r.fem_error is None and r.cloud
     assert 0.036 < r.peer_error < 0.12 and r.cloud_noise < 0.01  # a clean cloud
-    assert "robust-laplacian's point_cloud_laplacian 6." in repr(r) and "σ̂²/a²" in repr(r)
+    assert r.peer_error == pytest.approx(0.067, abs=0.005)  # predicted; measured 6.1%
     err = error(op, SPHERE)
     assert err > 5 * RATIO_LIMIT * 0.061 and 0.5 < r.predicted_error / err < 2
     try:  # the peer itself where installed (the report needs only its model)
@@ -254,7 +254,7 @@ def test_creases_are_found_and_warned():
     assert op.psd_margin is not None and op.psd_margin > -1e-6  # checked on the narrowed pencil
     assert 0.1 < r.shortcuts < 0.25 and 0.002 < r.thin < 0.01
     assert 2 * r.fem_error < r.predicted_error < 8 * r.fem_error
-    assert "too coarse" in repr(r) and "use instead: meshlap.baselines.cotangent" in repr(r)
+    assert r.too_coarse and r.alternative == "meshlap.baselines.cotangent(V, F)"
     Vr, Fr = igl.upsample(*igl.upsample(V, F))
     ref = spectral.eigs(baselines.cotangent(Vr, Fr), 10, tol=1e-8)[0]
     err = float(np.abs(spectral.eigs(op, 10, tol=1e-8)[0][1:] / ref[1:] - 1).max())
