@@ -435,7 +435,19 @@ class MeshLaplacian(LumpedLaplacian):
         return self @ f
 
     def as_linear_operator(self) -> LinearOperator:
-        """L as a :class:`scipy.sparse.linalg.LinearOperator` (matrix-free when not stored)."""
+        """``op @ f`` (the point-wise L) as a :class:`scipy.sparse.linalg.LinearOperator`
+        (matrix-free when not stored). It is not symmetric: for ``eigsh`` or ``lobpcg`` use the
+        symmetric pencil, ``eigsh(-op.S, k, op.M, sigma=...)`` or :func:`meshlap.mesh_laplacian`,
+        or :func:`meshlap.spectral.eigs`.
+
+        Examples
+        --------
+        >>> import meshlap, numpy as np
+        >>> V, F = meshlap.shapes.sphere(800, seed=0)
+        >>> A = meshlap.laplacian(V, F).as_linear_operator()
+        >>> bool(np.allclose(A @ V[:, 2], -2 * V[:, 2], atol=0.02))   # Δz = -2z
+        True
+        """
         if not self.matrix_free:
             return sp.linalg.aslinearoperator(self.L)
         free = self._built.assemble().matrix_free
