@@ -1,0 +1,462 @@
+"""meshlap's default against its peers on real meshes, all in one run (issue 35).
+
+    python benchmarks/bench_real.py                      # the whole corpus; RESULTS.md and the CSV
+    python benchmarks/bench_real.py --only cow,spot --no-write
+    python benchmarks/bench_real.py --max-n 3000 --corpus /path/to/corpus
+
+The corpus (benchmarks/corpus.toml; files written by build_corpus.py, outside the repository)
+is read from ``--corpus``, else $MESHLAP_CORPUS, else ../shared/corpus, else /work/corpus;
+a missing file or one whose sha256 differs from the manifest is skipped with a line saying so.
+
+Per mesh, error = the largest relative error of eigenvalues 1-9 after the zero ones (one per
+connected part of the welded mesh) against linear FEM on the mesh's midpoint refinements,
+Richardson-extrapolated (real_corpus.reference; cached by sha256 under the corpus folder).
+Columns: meshlap's default (``spectral.eigs(meshlap.laplacian(V, F), 10 + parts)`` on the mesh
+as published), libigl's cotangent Laplacian with the Voronoi mass (COT), LaPy (linear FEM)
+and robust-laplacian, the peers on the welded, triangulated mesh; each with the CPU time of
+its build and eigenpairs (process time: all threads). Also: the vertices alone as a point
+cloud (meshlap.point_cloud_laplacian against robust-laplacian's), tetrahedral meshes (meshlap
+with k=3 against LaPy's TetMesh, Neumann), and Gaussian noise along the normals of a few
+meshes (0.1 and 0.3 mean edges, seeded) against the clean mesh's reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime
+import json
+import platform
+import subprocess
+import sys
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import igl  # noqa: E402
+import real_corpus as rc  # noqa: E402
+import robust_laplacian  # noqa: E402
+from lapy import Solver, TetMesh, TriaMesh  # noqa: E402
+from numba.core import event  # noqa: E402
+from results_file import write_section  # noqa: E402
+
+import meshlap  # noqa: E402
+from meshlap import spectral  # noqa: E402
+
+CSV = Path(__file__).resolve().parent / "results" / "bench_real.csv"
+NOISY = ["spot", "cow", "bunny-igl", "fertility", "homer"]
+NOISE = (0.1, 0.3)  # noise along the normals, in mean edge lengths
+PEERS = ("COT", "LaPy", "robust")
+#: bump when the reference's computation changes, so that cached ones are recomputed
+REF_VERSION = 1
+#: a reference whose finer level is within this of the extrapolation is settled: some CAD parts and
+#: multi-part models (surfaces touching at single vertices, slivers) converge slowly under refinement
+SETTLED = 0.01
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def timed(fn: Callable[[], np.ndarray]) -> tuple[np.ndarray | None, float, str]:
+    """fn's eigenvalues, its CPU seconds, and the warnings it emitted (or the error it raised)."""
+    t = time.process_time()
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        try:
+            lam = np.sort(np.asarray(fn(), dtype=np.float64))
+            note = ""
+        except Exception as e:  # a failure is a row's result, not the run's end
+            lam, note = None, f"error: {type(e).__name__}: {str(e)[:80]}"
+    names = sorted({w.category.__name__ for w in seen})
+    return lam, time.process_time() - t, "; ".join(filter(None, [note, ", ".join(names)]))
+
+
+def decision_text(op: object) -> str:
+    """A one-line summary of ``op.decision`` (what the default built), if the operator has one."""
+    d = getattr(op, "decision", None)
+    if d is None:
+        return ""
+    if isinstance(d, dict):
+        return ", ".join(f"{k}={v}" for k, v in list(d.items())[:2])[:70]
+    for name in ("summary", "built", "builder"):
+        if hasattr(d, name):
+            v = getattr(d, name)
+            return str(v() if callable(v) else v)[:70]
+    return str(d).splitlines()[0][:70]
+
+
+# -- the operators ------------------------------------------------------------------------------
+def meshlap_default(V: np.ndarray, faces: object, n_eigs: int,
+                    **kw: object) -> tuple[np.ndarray | None, float, str, str]:
+    """Eigenvalues, CPU seconds, warnings and decision of the default; timed a second time
+    where the first call compiled kernels (a one-time cost that numba then caches on disk)."""
+    box: dict[str, object] = {}
+
+    def run() -> np.ndarray:
+        op = meshlap.laplacian(V, faces, **kw)
+        box["op"] = op
+        return spectral.eigs(op, n_eigs)[0]
+
+    with event.install_recorder("numba:compile") as compiled:
+        lam, cpu, warn = timed(run)
+    if compiled.buffer:
+        lam, cpu, warn = timed(run)
+    return lam, cpu, warn, decision_text(box.get("op"))
+
+
+def cot(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
+    L = igl.cotmatrix(V, F)
+    M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+    return rc.pencil_eigs(-L, M, k)
+
+
+def lapy_tria(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
+    return Solver(TriaMesh(V, F)).eigs(k)[0]
+
+
+def lapy_tet(V: np.ndarray, T: np.ndarray, k: int) -> np.ndarray:
+    return Solver(TetMesh(V, T)).eigs(k)[0]
+
+
+def robust_mesh(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
+    L, M = robust_laplacian.mesh_laplacian(V, F)
+    return rc.pencil_eigs(L, M, k)
+
+
+def robust_cloud(P: np.ndarray, k: int) -> np.ndarray:
+    L, M = robust_laplacian.point_cloud_laplacian(P)
+    return rc.pencil_eigs(L, M, k)
+
+
+def meshlap_cloud(P: np.ndarray, k: int) -> np.ndarray:
+    return spectral.eigs(meshlap.point_cloud_laplacian(P), k)[0]
+
+
+def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | None, float, str]]:
+    return {"COT": timed(lambda: cot(V, F, k)), "LaPy": timed(lambda: lapy_tria(V, F, k)),
+            "robust": timed(lambda: robust_mesh(V, F, k))}
+
+
+def warm_up() -> None:
+    """Build and solve once on a small sphere, so that no row pays meshlap's first-use compilation."""
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    V, F = rc.refine(V, F, 3, project=lambda X: X / np.linalg.norm(X, axis=1, keepdims=True))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        spectral.eigs(meshlap.laplacian(V, F), 10)
+        spectral.eigs(meshlap.point_cloud_laplacian(V), 10)
+
+
+# -- references, cached -------------------------------------------------------------------------
+class RefCache:
+    """References keyed by the file's sha256 and k, in ``reference-cache.json`` of the corpus."""
+
+    def __init__(self, folder: Path) -> None:
+        self.path = folder / "reference-cache.json"
+        self.data = json.loads(self.path.read_text()) if self.path.exists() else {}
+
+    def get(self, sha: str, mesh: rc.Mesh, k: int) -> dict:
+        key = f"{sha}:k{k}:v{REF_VERSION}"
+        if key not in self.data:
+            t = time.time()
+            r = rc.reference(mesh.Vw, mesh.Cw, k)
+            self.data[key] = {**{a: (b.tolist() if isinstance(b, np.ndarray) else b) for a, b in r.items()},
+                              "seconds": time.time() - t}
+            try:
+                self.path.write_text(json.dumps(self.data))
+            except OSError as e:  # a read-only corpus: recompute next time
+                log(f"  (reference cache not written: {e})")
+        return self.data[key]
+
+
+# -- one mesh -----------------------------------------------------------------------------------
+def err(lam: np.ndarray | None, ref: np.ndarray, n_parts: int) -> float:
+    return float("inf") if lam is None else rc.spectrum_error(lam, ref, n_parts)
+
+
+def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> tuple[dict, dict]:
+    V, F = mesh.Vw, mesh.Cw
+    R = np.array(ref["ref"])
+    faces = mesh.faces
+    if len({len(f) for f in faces}) == 1:
+        faces = np.array(faces)  # as a user passes a uniform mesh
+    lam, cpu, warn, dec = meshlap_default(mesh.V, faces, k)
+    row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.V), "parts": n_parts,
+           "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn}
+    for name, (plam, pcpu, pwarn) in peers(V, F, k).items():
+        row[f"err_{name}"] = err(plam, R, n_parts)
+        row[f"cpu_{name}"] = pcpu
+        if pwarn.startswith("error"):
+            row["warnings"] += f" [{name} {pwarn}]"
+    finish(row, [row[f"err_{p}"] for p in PEERS], row["cpu_COT"])
+    with event.install_recorder("numba:compile") as compiled:
+        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k))
+    if compiled.buffer:  # as for the mesh: time it again without the one-time compilation
+        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k))
+    rlam, rcpu, _ = timed(lambda: robust_cloud(V, k))
+    cloud = {"name": entry["name"], "kind": entry["kind"], "n": len(V), "parts": n_parts,
+             "err_default": err(clam, R, n_parts), "cpu_default": ccpu, "warnings": cwarn,
+             "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu}
+    finish(cloud, [cloud["err_robust"]], rcpu)
+    return row, cloud
+
+
+def tet_row(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> dict:
+    R = np.array(ref["ref"])
+    lam, cpu, warn, dec = meshlap_default(mesh.Vw, mesh.Cw, k, k=3)
+    plam, pcpu, _ = timed(lambda: lapy_tet(mesh.Vw, mesh.Cw, k))
+    row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.Vw), "parts": n_parts,
+           "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
+           "err_LaPy": err(plam, R, n_parts), "cpu_LaPy": pcpu}
+    finish(row, [row["err_LaPy"]], pcpu)
+    return row
+
+
+def noisy_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> list[dict]:
+    R = np.array(ref["ref"])
+    V, F = mesh.Vw, mesh.Cw
+    N = rc.vertex_normals(V, F)
+    e = rc.mean_edge(V, F)
+    rows = []
+    for sigma in NOISE:
+        rng = np.random.default_rng(35)
+        Vn = V + (sigma * e * rng.standard_normal(len(V)))[:, None] * N
+        lam, cpu, warn, dec = meshlap_default(Vn, F, k)
+        row = {"name": entry["name"], "noise": sigma, "n": len(V), "err_default": err(lam, R, n_parts),
+               "cpu_default": cpu, "decision": dec, "warnings": warn}
+        for name, (plam, pcpu, _) in peers(Vn, F, k).items():
+            row[f"err_{name}"], row[f"cpu_{name}"] = err(plam, R, n_parts), pcpu
+        finish(row, [row[f"err_{p}"] for p in PEERS], row["cpu_COT"])
+        rows.append(row)
+    return rows
+
+
+def finish(row: dict, peer_errs: list[float], cpu_base: float) -> None:
+    row["best_peer"] = min(peer_errs)
+    row["ratio"] = row["err_default"] / row["best_peer"] if row["best_peer"] > 0 else float("inf")
+    row["cpu_ratio"] = row["cpu_default"] / cpu_base if cpu_base > 0 else float("inf")
+
+
+# -- tables -------------------------------------------------------------------------------------
+def pct(x: float) -> str:
+    return "fail" if not np.isfinite(x) else f"{100 * x:.3g}%"
+
+
+def summary(rows: list[dict], peer: str) -> str:
+    if not rows:
+        return "(no rows)"
+    r = np.array([x["ratio"] for x in rows])
+    c = np.array([x["cpu_ratio"] for x in rows])
+    return (f"within 1.5× of {peer} in **{int((r <= 1.5).sum())} of {len(r)}**, ahead (≤ 1×) in "
+            f"{int((r <= 1).sum())}; error ratio median {np.median(r):.3g}×, worst {r.max():.3g}×; "
+            f"CPU ratio median {np.median(c):.3g}×, worst {c.max():.3g}×")
+
+
+def by_kind(rows: list[dict], peer: str) -> list[str]:
+    kinds = sorted({t for x in rows for t in x["kind"].split()})
+    out = ["| kind | rows | summary |", "|---|---|---|"]
+    for t in kinds:
+        sel = [x for x in rows if t in x["kind"].split()]
+        out.append(f"| {t} | {len(sel)} | {summary(sel, peer)} |")
+    return out
+
+
+def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[dict],
+           refs: dict[str, dict]) -> list[str]:
+    def lv(name: str) -> str:
+        r = refs[name]
+        grow = 8 if r["tet"] else 4
+        return f"{grow ** r['levels'][0]}×/{grow ** r['levels'][1]}×"
+
+    settled = [x for x in surf if refs[x["name"]]["spread"] <= SETTLED]
+    out = ["### Surfaces: meshlap's default against COT, LaPy, robust-laplacian", "",
+           "Summary: " + summary(surf, "the best peer") + " (CPU against COT + eigsh).", "",
+           f"On the {len(settled)} rows whose reference is settled (ref Δ ≤ {SETTLED:.0%}): "
+           + summary(settled, "the best peer") + ".", "",
+           *by_kind(surf, "the best peer"), "",
+           "| mesh | kind | n | parts | ref | ref Δ | default | COT | LaPy | robust | ratio | "
+           "CPU default s | CPU COT s | CPU ratio | decision | warnings |",
+           "|" + "---|" * 16]
+    for x in surf:
+        out.append(f"| {x['name']} | {x['kind']} | {x['n']} | {x['parts']} | {lv(x['name'])} | "
+                   f"{pct(refs[x['name']]['spread'])} | {pct(x['err_default'])} | {pct(x['err_COT'])} | "
+                   f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
+                   f"{x['cpu_default']:.2f} | {x['cpu_COT']:.3f} | {x['cpu_ratio']:.3g} | {x['decision']} | "
+                   f"{x['warnings']} |")
+    out += ["", "### The vertices alone as a point cloud: meshlap.point_cloud_laplacian against "
+            "robust_laplacian.point_cloud_laplacian", "", "Summary: " + summary(cloud, "robust-laplacian")
+            + " (CPU against robust-laplacian's).", "",
+            "| mesh | n | parts | default | robust | ratio | CPU default s | CPU robust s | warnings |",
+            "|" + "---|" * 9]
+    for x in cloud:
+        out.append(f"| {x['name']} | {x['n']} | {x['parts']} | {pct(x['err_default'])} | "
+                   f"{pct(x['err_robust'])} | {x['ratio']:.3g} | {x['cpu_default']:.2f} | "
+                   f"{x['cpu_robust']:.3f} | {x['warnings']} |")
+    out += ["", "### Tetrahedral meshes (Neumann): meshlap (k=3) against LaPy's TetMesh", "",
+            "Summary: " + summary(tets, "LaPy") + " (CPU against LaPy's).", "",
+            "| mesh | n | ref | ref Δ | default | LaPy | ratio | CPU default s | CPU LaPy s | decision | "
+            "warnings |", "|" + "---|" * 11]
+    for x in tets:
+        out.append(f"| {x['name']} | {x['n']} | {lv(x['name'])} | {pct(refs[x['name']]['spread'])} | "
+                   f"{pct(x['err_default'])} | {pct(x['err_LaPy'])} | {x['ratio']:.3g} | "
+                   f"{x['cpu_default']:.2f} | {x['cpu_LaPy']:.3f} | {x['decision']} | {x['warnings']} |")
+    out += ["", "### Noise along the normals, against the clean mesh's reference", ""]
+    for s in NOISE:
+        out.append(f"- {s} mean edges: " + summary([x for x in noisy if x["noise"] == s], "the best peer"))
+    out += ["", "| mesh | noise (mean edges) | default | COT | LaPy | robust | ratio | CPU ratio | "
+            "warnings |", "|" + "---|" * 9]
+    for x in noisy:
+        out.append(f"| {x['name']} | {x['noise']} | {pct(x['err_default'])} | {pct(x['err_COT'])} | "
+                   f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
+                   f"{x['cpu_ratio']:.3g} | {x['warnings']} |")
+    return out
+
+
+def write_csv(path: Path, sections: dict[str, list[dict]]) -> None:
+    keys: list[str] = []
+    for rows in sections.values():
+        for r in rows:
+            keys += [k for k in r if k not in keys]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=["section", *keys])
+        w.writeheader()
+        for sec, rows in sections.items():
+            for r in rows:
+                w.writerow({"section": sec, **r})
+
+
+def meshlap_commit() -> str:
+    """The commit that last changed the measured meshlap package, and whether it has changes since."""
+    pkg = Path(meshlap.__file__).resolve().parent
+    git = ["git", "-C", str(pkg)]
+    try:
+        head = subprocess.run([*git, "log", "-1", "--format=%h", "--", "."], capture_output=True, text=True,
+                              check=True).stdout.strip()
+        dirty = subprocess.run([*git, "status", "--porcelain", "--", "."], capture_output=True,
+                               text=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return f"meshlap {meshlap.__version__} (not a git checkout)"
+    return f"meshlap/ as of commit {head}{' + uncommitted changes' if dirty else ''}"
+
+
+# -- the run --------------------------------------------------------------------------------------
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--corpus", default=None, help="corpus folder (default: $MESHLAP_CORPUS, "
+                    "../shared/corpus, /work/corpus)")
+    ap.add_argument("--only", default="", help="comma-separated mesh names")
+    ap.add_argument("--max-n", type=int, default=0, help="skip meshes with more vertices")
+    ap.add_argument("--no-write", action="store_true", help="print the table; leave RESULTS.md and the CSV")
+    ap.add_argument("--render", action="store_true", help="rewrite RESULTS.md's section from the CSV and "
+                    "the cached references, running nothing")
+    args = ap.parse_args()
+    folder = rc.corpus_dir(args.corpus)
+    if args.render:
+        render(folder)
+        return
+    only = {s for s in args.only.split(",") if s}
+    cache = RefCache(folder)
+    warm_up()
+    surf: list[dict] = []
+    cloud: list[dict] = []
+    tets: list[dict] = []
+    noisy: list[dict] = []
+    refs: dict[str, dict] = {}
+    start = time.time()
+    for entry in rc.manifest():
+        name = entry["name"]
+        if (only and name not in only) or (args.max_n and entry["vertices"] > args.max_n):
+            continue
+        path = folder / entry["file"]
+        if not path.exists():
+            log(f"{name}: skipped, {path} is missing (python benchmarks/build_corpus.py writes it)")
+            continue
+        if rc.sha256(path) != entry["sha256"]:
+            log(f"{name}: skipped, {path}'s sha256 differs from corpus.toml's")
+            continue
+        mesh = rc.load(path, entry["format"])
+        n_parts = rc.parts(mesh.Cw, len(mesh.Vw))
+        k = 10 + n_parts
+        ref = cache.get(entry["sha256"], mesh, k)
+        R, fine = np.array(ref["ref"]), np.array(ref["fine"])
+        ref["spread"] = rc.spectrum_error(fine, R, n_parts)
+        ref["tet"] = mesh.tet
+        refs[name] = ref
+        if mesh.tet:
+            tets.append(tet_row(entry, mesh, ref, n_parts, k))
+            x = tets[-1]
+            log(f"{name}: n {x['n']}, default {pct(x['err_default'])}, LaPy {pct(x['err_LaPy'])}"
+                f" ({time.time() - start:.0f} s)")
+            continue
+        row, crow = surface_rows(entry, mesh, ref, n_parts, k)
+        surf.append(row)
+        cloud.append(crow)
+        log(f"{name}: n {row['n']}, parts {n_parts}, default {pct(row['err_default'])}, best peer "
+            f"{pct(row['best_peer'])} ({row['ratio']:.3g}×), cloud {pct(crow['err_default'])} vs "
+            f"{pct(crow['err_robust'])}, CPU {row['cpu_default']:.2f} s vs COT {row['cpu_COT']:.3f} s "
+            f"({time.time() - start:.0f} s)")
+        if name in NOISY:
+            noisy += noisy_rows(entry, mesh, ref, n_parts, k)
+            log("  noisy: " + ", ".join(f"{x['noise']}: {pct(x['err_default'])} vs {pct(x['best_peer'])}"
+                                         for x in noisy[-len(NOISE):]))
+    lines = tables(surf, cloud, tets, noisy, refs)
+    if args.no_write:
+        print("\n".join(lines))
+        return
+    first = (f"`python benchmarks/bench_real.py` on {datetime.date.today()}, {platform.machine()}, 2 cores "
+             f"(shared), {time.time() - start:.0f} s; meshlap measured: {meshlap_commit()}.")
+    write_section("bench_real.py", header(first) + lines)
+    write_csv(CSV, {"surface": surf, "cloud": cloud, "tet": tets, "noisy": noisy})
+    log(f"wrote {CSV} and the RESULTS.md section")
+
+
+def render(folder: Path) -> None:
+    """RESULTS.md's section again from the CSV, the reference cache and the section's first line."""
+    rows: dict[str, list[dict]] = {"surface": [], "cloud": [], "tet": [], "noisy": []}
+    with open(CSV, newline="") as fh:
+        for r in csv.DictReader(fh):
+            row: dict = {}
+            for key, v in r.items():
+                if key in ("n", "parts"):
+                    row[key] = int(v) if v else 0
+                elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise"):
+                    row[key] = float(v) if v else float("nan")
+                else:
+                    row[key] = v
+            rows[row.pop("section")].append(row)
+    cache = RefCache(folder)
+    entries = {e["name"]: e for e in rc.manifest()}
+    refs = {}
+    for sec in ("surface", "tet"):
+        for x in rows[sec]:
+            ref = cache.data[f"{entries[x['name']]['sha256']}:k{10 + x['parts']}:v{REF_VERSION}"]
+            spread = rc.spectrum_error(np.array(ref["fine"]), np.array(ref["ref"]), x["parts"])
+            refs[x["name"]] = {**ref, "spread": spread, "tet": sec == "tet"}
+    old = write_section.__globals__["RESULTS"].read_text().split("## bench_real.py\n\n", 1)[1]
+    lines = tables(rows["surface"], rows["cloud"], rows["tet"], rows["noisy"], refs)
+    write_section("bench_real.py", header(old.splitlines()[0]) + lines)
+    log("rewrote the RESULTS.md section from the CSV")
+
+
+def header(first: str) -> list[str]:
+    return [first, "",
+            "Error = largest relative error of eigenvalues 1–9 after the zero ones (one per connected part), "
+            "against linear FEM on the 4× and 16× midpoint refinement (tetrahedra: 8× and 64×; where the "
+            "finer would exceed 400,000 vertices, 120,000 for tetrahedra, the mesh itself and its 4× "
+            "(8×): the `ref` column), Richardson-extrapolated; `ref Δ` is the finer raw level's distance "
+            "from the extrapolation (about that level's own error; the extrapolation's is smaller). "
+            "Ratio = default / best peer. The default gets the mesh as published (polygons, seams); the "
+            "peers the welded, triangulated mesh. CPU = process time of build + eigenpairs (meshlap's "
+            "timed again where its first call compiled kernels). CSV: benchmarks/results/"
+            "bench_real.csv. Corpus: benchmarks/corpus.toml.", ""]
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,166 @@
+"""Write bench_real.py's corpus of real meshes, and its manifest corpus.toml.
+
+    python benchmarks/build_corpus.py --mirrors /work/.mirror --out /work/corpus
+
+Each mesh is taken, as published, from a clone of its public repository at the commit named
+below (``--mirrors`` holds them as ``owner+name/repo``, bare or with a ``.git``), from
+pyvista's bundled examples, or from ``../shared/meshes``; the few larger than about 12,000
+vertices are decimated with VTK's quadric decimation (``pyvista.PolyData.decimate``) and
+written as OBJ. The files go to ``--out`` (never into this repository: they belong to their
+authors); corpus.toml records where each came from, its licence or attribution, what it
+exercises, its size and its sha256, which bench_real.py checks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import real_corpus as rc  # noqa: E402
+
+REPOS = {
+    "mikedh/trimesh": ("a513c0e2cfa6dfbd3121a6dfd8ceb002b9ef55d8",
+                       "trimesh's test models (repository MIT licence; models from their authors)"),
+    "sgsellan/gpytoolbox": ("8dbc5f98efe108f7d8c8923fa9a3bb308cb2d4e9",
+                            "gpytoolbox's unit-test data (repository MIT licence)"),
+    "Deep-MI/LaPy": ("d74c8dbe08c89db1d63abce20891b82e18a6e4a1", "LaPy's data (MIT licence)"),
+    "libigl/libigl-tutorial-data": ("c1f9ede366d02e3531ecbaec5e3769312f31cccd",
+                                    "libigl tutorial data; original source per its README"),
+    "alecjacobson/common-3d-test-models": ("8a4f8642acaf43f9cd7b67858a1502e1055ef202",
+                                           "common-3d-test-models; original source per its README"),
+    "pyvista": ("0.49.2", "pyvista's bundled example data (MIT licence)"),
+    "shared": ("8a4f8642acaf43f9cd7b67858a1502e1055ef202",
+               "../shared/meshes (from common-3d-test-models, see its README)"),
+}
+PYVISTA = Path(sys.prefix) / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" / \
+    "site-packages" / "pyvista" / "examples"
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
+T, G, LP = "mikedh/trimesh", "sgsellan/gpytoolbox", "Deep-MI/LaPy"
+IG, C3, PV, SH = "libigl/libigl-tutorial-data", "alecjacobson/common-3d-test-models", "pyvista", "shared"
+#: name, repository, path, kinds, attribution of the model, target vertices after decimation (0: as is)
+SOURCES: list[tuple[str, str, str, str, str, int]] = [
+    ("stanford-bunny", SH, "stanford-bunny.obj", "scan open decimated", "Stanford 3D Scanning Repo.", 9000),
+    ("bunny-igl", IG, "bunny.off", "scan decimated", "Stanford 3D Scanning Repository", 0),
+    ("bunny-trimesh", T, "models/bunny.ply", "scan open", "Stanford 3D Scanning Repository", 0),
+    ("face", IG, "face.obj", "scan open decimated", "libigl tutorial data (source unknown)", 9000),
+    ("camelhead", IG, "camelhead.off", "open", "Sorkine et al. 2004 (libigl README)", 0),
+    ("lion", IG, "lion.off", "scan open", "libigl tutorial data (source unknown)", 0),
+    ("fertility", IG, "fertility.off", "scan", "AIM@SHAPE repository", 0),
+    ("homer", C3, "data/homer.obj", "closed", "unknown (Pierre Alliez), per the README", 0),
+    ("elephant", IG, "elephant.obj", "closed", "libigl tutorial data", 0),
+    ("rocker-arm", C3, "data/rocker-arm.obj", "scan CAD", "INRIA via AIM@SHAPE", 0),
+    ("cheburashka", C3, "data/cheburashka.obj", "closed", "Ilya Baran (Cosmic Blobs)", 0),
+    ("cow", C3, "data/cow.obj", "closed", "Viewpoint Animation Engineering / Sun Microsystems", 0),
+    ("spot", SH, "spot.obj", "closed", "Keenan Crane, public domain", 0),
+    ("spot-quads", SH, "spot-quads.obj", "quad", "Keenan Crane, public domain", 0),
+    ("fandisk", SH, "fandisk.obj", "CAD", "Hugues Hoppe", 0),
+    ("fandisk-coarse", G, "test/unit_tests_data/fandisk.obj", "CAD decimated", "Hugues Hoppe", 0),
+    ("decimated-knight", IG, "decimated-knight.off", "decimated", "Cosmic Blobs (libigl README)", 0),
+    ("decimated-max", IG, "decimated-max.obj", "decimated", "Max Planck bust, MPI (libigl README)", 0),
+    ("fuze", T, "models/fuze.obj", "decimated", "trimesh test model", 0),
+    ("tray-bottom", T, "models/1002_tray_bottom.STL", "CAD", "trimesh test model", 0),
+    ("adis16480", T, "models/ADIS16480.STL", "CAD", "trimesh test model", 0),
+    ("busted", T, "models/busted.STL", "CAD", "trimesh test model", 0),
+    ("featuretype", T, "models/featuretype.STL", "CAD seams", "trimesh test model", 0),
+    ("idler-riser", T, "models/idler_riser.STL", "CAD seams", "trimesh test model", 0),
+    ("octagonal-pocket", T, "models/octagonal_pocket.ply", "CAD seams", "trimesh test model", 0),
+    ("plate-holes", T, "models/plate_holes.STL", "CAD", "trimesh test model", 0),
+    ("torus-cad", T, "models/torus.STL", "CAD", "trimesh test model", 0),
+    ("nut", PV, "nut.ply", "CAD", "pyvista example", 0),
+    ("box-parts", T, "models/box.STL", "CAD multi-part", "trimesh test model", 0),
+    ("screwdriver", IG, "screwdriver.off", "CAD", "libigl tutorial data (source unknown)", 0),
+    ("horse-quad", IG, "horse_quad.obj", "quad", "libigl tutorial data (source unknown)", 0),
+    ("quadknot", T, "models/quadknot.obj", "quad", "trimesh test model", 0),
+    ("cylinder-ngon", IG, "cylinder.obj", "quad polygon", "libigl tutorial data", 0),
+    ("target", T, "models/target.obj", "quad open", "trimesh test model", 0),
+    ("halftunnel", IG, "halftunnel.off", "quad open", "libigl tutorial data (source unknown)", 0),
+    ("suzanne", C3, "data/suzanne.obj", "quad open", "Blender Foundation", 0),
+    ("alligator", C3, "data/alligator.obj", "open", "Alec Jacobson", 0),
+    ("woody", C3, "data/woody.obj", "open", "Scott Schaefer", 0),
+    ("lilium", IG, "lilium.obj", "open", "libigl tutorial data (source unknown)", 0),
+    ("airplane-gpy", G, "test/unit_tests_data/airplane.obj", "open", "gpytoolbox test data", 0),
+    ("mountain", G, "test/unit_tests_data/mountain.obj", "open decimated", "gpytoolbox test data", 6000),
+    ("teapot", C3, "data/teapot.obj", "seams multi-part open", "Martin Newell", 0),
+    ("camel", IG, "camel_b.obj", "seams", "libigl tutorial data (source unknown)", 0),
+    ("capsule", T, "models/capsule.obj", "seams", "trimesh test model", 0),
+    ("globe", PV, "globe.vtk", "seams", "pyvista example", 0),
+    ("truck", IG, "truck.obj", "multi-part open", "libigl tutorial data (source unknown)", 0),
+    ("ant", PV, "ant.ply", "multi-part", "pyvista example", 0),
+    ("airplane-parts", PV, "airplane.ply", "multi-part open", "pyvista example", 0),
+    ("rabbit", T, "models/rabbit.obj", "multi-part polygon", "trimesh test model", 0),
+    ("3holes", IG, "3holes.off", "closed", "libigl tutorial data (source unknown)", 0),
+    ("cube-tet", LP, "data/cubeTetra.vtk", "tet", "LaPy data", 0),
+    ("bunny-tet", IG, "bunny.mesh", "tet", "Stanford bunny, tetrahedralised (libigl README)", 0),
+    ("hand-tet", IG, "hand.mesh", "tet", "libigl tutorial data (source unknown)", 0),
+    ("octopus-tet", IG, "octopus-low.mesh", "tet", "Mark Pauly (libigl README)", 0),
+]
+
+
+def _git_dir(mirrors: Path, repo: str) -> Path:
+    base = mirrors / repo.replace("/", "+") / "repo"
+    return base / ".git" if (base / ".git").is_dir() else base
+
+
+def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> None:
+    if repo == PV:
+        shutil.copyfile(PYVISTA / path, out)
+    elif repo == SH:
+        shutil.copyfile(SHARED / path, out)
+    else:
+        blob = subprocess.run(["git", "--git-dir", str(_git_dir(mirrors, repo)), "show",
+                               f"{REPOS[repo][0]}:{path}"], check=True, capture_output=True).stdout
+        out.write_bytes(blob)
+
+
+def _decimate(src: Path, out: Path, target: int) -> None:
+    import pyvista as pv
+
+    m = rc.load(src)
+    faces = np.column_stack([np.full(len(m.Cw), 3), m.Cw]).ravel()
+    pd = pv.PolyData(m.Vw, faces).decimate(1 - target / len(m.Vw))
+    V = np.asarray(pd.points)
+    F = np.asarray(pd.regular_faces)
+    with open(out, "w") as fh:
+        fh.write(f"# {src.name} decimated to {len(V)} vertices by vtkQuadricDecimation (pyvista)\n")
+        fh.writelines(f"v {x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in V)
+        fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mirrors", default="/work/.mirror")
+    ap.add_argument("--out", default=None, help="corpus folder (default as bench_real.py)")
+    args = ap.parse_args()
+    out = rc.corpus_dir(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = ["# bench_real.py's corpus, written by build_corpus.py (the files are not in the repo).", ""]
+    for name, repo, path, kinds, author, target in SOURCES:
+        suffix = Path(path).suffix.lower()
+        raw = out / f"{name}.published{suffix}" if target else out / f"{name}{suffix}"
+        _fetch(Path(args.mirrors), repo, path, raw)
+        fmt = "lapy-tet" if repo == LP else ""
+        file = raw
+        if target:
+            file = out / f"{name}.obj"
+            _decimate(raw, file, target)
+            raw.unlink()
+        m = rc.load(file, fmt)
+        n_cells = len(m.faces)
+        note = f"decimated to {len(m.V)} vertices by VTK quadric decimation (pyvista)" if target else ""
+        rows += ["[[mesh]]", f'name = "{name}"', f'file = "{file.name}"', f'format = "{fmt}"',
+                 f'source = "{repo}"', f'path = "{path}"', f'commit = "{REPOS[repo][0]}"',
+                 f'licence = "{REPOS[repo][1]}"', f'author = "{author}"', f'kind = "{kinds}"',
+                 f"vertices = {len(m.V)}", f"cells = {n_cells}", f'derived = "{note}"',
+                 f'sha256 = "{rc.sha256(file)}"', ""]
+        print(f"{name}: {len(m.V)} vertices, {n_cells} cells", file=sys.stderr)
+    rc.MANIFEST.write_text("\n".join(rows))
+
+
+if __name__ == "__main__":
+    main()
