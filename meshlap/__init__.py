@@ -19,7 +19,10 @@ from . import (
     baselines,
     corrections,
     curvature,
+    descriptors,
+    geodesics,
     geometry,
+    gradients,
     heat,
     io,
     pipeline,
@@ -28,14 +31,17 @@ from . import (
     samples,
     shapes,
     smoothing,
+    solve,
     spectral,
     widths,
 )
 from .builders import laplacian, mesh_laplacian, point_cloud_laplacian, point_cloud_matrices
 from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .geodesics import HeatDistance, geodesic_distance
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
 from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian, truncation_bound
+from .solve import harmonic, poisson
 from .widths import default_h
 
 __version__ = "0.1.0"
@@ -44,6 +50,7 @@ __all__ = [
     "CORRECTED_TOL",
     "DEFAULT_TOL",
     "Geometry",
+    "HeatDistance",
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
@@ -54,8 +61,13 @@ __all__ = [
     "corrections",
     "curvature",
     "default_h",
+    "descriptors",
     "face_areas",
+    "geodesic_distance",
+    "geodesics",
     "geometry",
+    "gradients",
+    "harmonic",
     "heat",
     "io",
     "laplacian",
@@ -63,11 +75,13 @@ __all__ = [
     "pipeline",
     "point_cloud_laplacian",
     "point_cloud_matrices",
+    "poisson",
     "reproduce",
     "resolution",
     "samples",
     "shapes",
     "smoothing",
+    "solve",
     "spectral",
     "topology",
     "truncation_bound",

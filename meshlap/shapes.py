@@ -126,7 +126,8 @@ def disc(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     m = max(1, round(math.sqrt(n / math.pi)))
     rings = [np.zeros((1, 2))]
     for j in range(1, m + 1):
-        a = rng.uniform(0, 2 * np.pi) + np.linspace(0, 2 * np.pi, max(6, round(2 * np.pi * j)), endpoint=False)
+        count = max(6, round(2 * np.pi * j))
+        a = rng.uniform(0, 2 * np.pi) + np.linspace(0, 2 * np.pi, count, endpoint=False)
         rings.append(j / m * np.column_stack([np.cos(a), np.sin(a)]))
     xy = np.vstack(rings)
     return _flat_mesh(xy)
