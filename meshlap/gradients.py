@@ -12,7 +12,8 @@ n vertex values to one vector of R^d per *element*, with the elements' measures 
   triangles) in any dimension;
 * point clouds of intrinsic dimension 2 keep the local Delaunay triangles of their masses
   (:func:`~meshlap.geometry.point_cloud_geometry`): those are the elements by default
-  (``method="auto"``), as for a mesh;
+  (``method="auto"``), as for a mesh; a cloud along a curve (k = 1) is joined to each point's
+  nearest neighbour on either side along its tangent, the neighbours that set its mass;
 * other point clouds (and ``method="least squares"``): the elements are the points, with
   their masses; the gradient at a point is
   the weighted least-squares fit of a linear function to its 16 nearest neighbours'
@@ -89,7 +90,23 @@ def _simplices(geo: Geometry) -> np.ndarray | None:
         return np.asarray(geo.faces.triangles(), dtype=np.int64)
     if geo.cells is not None and len(geo.cells):  # curves, tetrahedra, a cloud's local triangles
         return np.asarray(geo.cells, dtype=np.int64)
+    if geo.dim == 1:  # a cloud along a curve: each point's nearest neighbours ahead and behind
+        return _curve_edges(geo)
     return None
+
+
+def _curve_edges(geo: Geometry) -> np.ndarray:
+    """Edges from each point to its nearest neighbour on either side along its tangent line (the
+    neighbours that set its mass), each edge once."""
+    T, idx = geo._pca()
+    P = geo.points
+    along = np.einsum("nkd,nd->nk", P[idx[:, 1:]] - P[:, None, :], T[:, :, 0])
+    dist = np.abs(along)
+    edges = [np.column_stack([np.arange(len(P)), idx[:, 1:][np.arange(len(P)), pick]])[ok]
+             for side in (along > 0, along < 0)
+             for pick, ok in [(np.argmin(np.where(side, dist, np.inf), axis=1), side.any(axis=1))]]
+    e = np.sort(np.vstack(edges), axis=1)
+    return np.unique(e[e[:, 0] != e[:, 1]], axis=0)
 
 
 def _simplex_gradient(P: np.ndarray, cells: np.ndarray) -> Gradient:

@@ -93,8 +93,12 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     [1.0, 1.0, 1.0, 1.0]
     """
     from .geometry import simplex_volumes
+    from .geometry import Geometry
 
     geo = getattr(geometry, "geometry", geometry)
+    if not isinstance(geo, Geometry):
+        raise MeshError("Neumann data need the geometry's boundary: pass an operator that carries it "
+                        "(op.geometry) or a Geometry")
     P, n = geo.points, geo.n_points
     if geo.faces is not None or (geo.cells is not None and geo.source != "point cloud"):
         cells = geo.faces.triangles() if geo.faces is not None else geo.cells
