@@ -37,6 +37,7 @@ from scipy.sparse.csgraph import connected_components
 
 from . import _lobpcg
 from .errors import MeshError, MeshWarning, user_stacklevel
+from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
 from .gradients import gradient_operator
 from .spectral import _SPARSE_ROW_MAX, _check_mass, _extend, _factor, _one_blas_thread
@@ -92,9 +93,6 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     >>> boundary_measure(meshlap.geometry.surface(V, [[0, 1, 2], [0, 2, 3]])).tolist()
     [1.0, 1.0, 1.0, 1.0]
     """
-    from .geometry import simplex_volumes
-    from .geometry import Geometry
-
     geo = getattr(geometry, "geometry", geometry)
     if not isinstance(geo, Geometry):
         raise MeshError("Neumann data need the geometry's boundary: pass an operator that carries it "
