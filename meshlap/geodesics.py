@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from pykdtree.kdtree import KDTree
 
 from .errors import MeshError
 from .gradients import Gradient, gradient_operator
@@ -149,7 +148,6 @@ class HeatDistance:
         self._heat = ImplicitHeat(heat_op, self.t, solver=solver)
         self._poisson = PoissonSolver(poisson_op, solver=solver)
         self._points = np.asarray(geo.points, dtype=np.float64)
-        self._tree = KDTree(self._points)
 
     def _sources(self, sources: Any) -> np.ndarray:
         idx = _indices(np.atleast_1d(np.asarray(sources)), self.n, "source")
@@ -165,7 +163,11 @@ class HeatDistance:
         delta = np.zeros((self.n, len(groups)))
         for j, g in enumerate(groups):
             delta[g, j] = 1.0 / self.mass[g]
-        u = self._heat.step(delta)
+        heat = self._heat
+        if heat.solver == "direct" and len(heat.Z) == 0:  # the step's solve, without its set-up per call
+            u = heat._lu.solve(np.asfortranarray(heat.m[:, None] * delta))
+        else:
+            u = heat.step(delta)
         cloud = self.grad.kind == "least squares"
         if cloud:  # the same direction, from a function that is nearly linear in the distance
             u = np.log(np.maximum(u, np.finfo(float).tiny))
@@ -185,10 +187,12 @@ class HeatDistance:
         """The constant that makes φ the straight-line distance to each source, on average over
         its nearest points (geodesic and chord agree to O(r³) there)."""
         near = min(_SHIFT_POINTS, self.n)
-        dist, idx = self._tree.query(self._points[grp], k=near)
-        dist = np.asarray(dist, dtype=np.float64).reshape(len(grp), near)
-        idx = np.asarray(idx, dtype=np.int64).reshape(len(grp), near)
-        return float(np.mean(phi[idx] - dist))
+        shifts = []
+        for s in grp:
+            dist = np.linalg.norm(self._points - self._points[s], axis=1)
+            idx = np.argpartition(dist, near - 1)[:near]
+            shifts.append(np.mean(phi[idx] - dist[idx]))
+        return float(np.mean(shifts))
 
     def compute(self, sources: Any) -> np.ndarray:
         """Distance to the nearest of ``sources`` (one vertex index or several): (n,).

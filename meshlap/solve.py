@@ -253,13 +253,13 @@ class PoissonSolver:
             phi[self.fixed] = g.reshape(len(self.fixed), -1)
         rhs = B[self.free] + (self._S @ phi)[self.free]
         self._compatible(rhs)
-        with _one_blas_thread():
-            if self.solver == "direct":
-                x = np.zeros_like(rhs)
-                x[self._keep] = self._lu.solve(np.asfortranarray(rhs[self._keep]))
-            else:
+        if self.solver == "direct":
+            x = np.zeros_like(rhs)
+            x[self._keep] = self._lu.solve(np.asfortranarray(rhs[self._keep]))
+        else:
+            with _one_blas_thread():
                 x, it = _block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000)
-                self.iterations.append(it)
+            self.iterations.append(it)
         m = self.mass[self.free]
         for c in self._floating:  # zero mean on each part without Dirichlet data
             sel = self._label == c
