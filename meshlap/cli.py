@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .cli_uses import add_distance_parser
 from .errors import MeshError
 from .geometry.validation import check_faces
 from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
@@ -557,6 +558,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="vertex counts (default 500 2000 8000)")
     _progress_option(p)
     p.set_defaults(func=cmd_demo)
+    add_distance_parser(sub, lambda q: (_kernel_options(q), _up_option(q), _progress_option(q)),
+                        _operator_from)
     return parser
 
 

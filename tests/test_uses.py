@@ -213,3 +213,17 @@ def test_projection_round_trip_and_low_pass(sphere_mesh_op):
     assert np.allclose(reconstruct(eig, project(op, eig[1][:, :16], eig=eig)), eig[1], atol=1e-8)
     coef = project(op, V[:, 2] + 0.1 * V[:, 0] ** 5, eig=eig)  # z and a little of degrees 1, 3, 5
     assert abs(coef[1:4] @ coef[1:4]) > 0.9 * (coef @ coef)
+
+
+def test_cli_distance(tmp_path, capsys):
+    from meshlap.cli import main
+
+    V, F = meshlap.shapes.sphere(800, seed=0)
+    path = tmp_path / "s.obj"
+    meshlap.io.write_mesh(path, V, F)
+    assert main(["distance", str(path), "--source", "0", "3", "--each", "-o", str(tmp_path / "d.npy")]) == 0
+    D = np.load(tmp_path / "d.npy")
+    assert D.shape == (2, 800) and _rel(D, _great_circle(V, [0, 3]))[0] < 0.03
+    assert "heat-method distance from vertex 0, 3" in capsys.readouterr().out
+    assert main(["distance", str(path), "--source", "800"]) == 1
+    assert "indices must lie in [0, 799]" in capsys.readouterr().err
