@@ -135,7 +135,7 @@ def geodesics(sizes: list[int]) -> list[str]:
             for who, fn in (("potpourri3d", _pp3d_mesh), ("LaPy", _lapy), ("libigl", _igl)):
                 D, setup, per = fn(V, F, src)
                 _row(lines, case, who, D, exact, setup, per)
-            P = meshlap.samples.sphere_points(n, noise=noise)
+            P = meshlap.samples.sphere_points(n, "noisy" if noise else "random", noise=noise)
             exact = _sphere_exact(P, src)
             case = f"sphere cloud {n:,}" + (" noise 0.5%" if noise else "")
             D, setup, per = _meshlap(lambda P=P: meshlap.point_cloud_laplacian(P), src)

@@ -148,11 +148,26 @@ class HeatDistance:
         self._heat = ImplicitHeat(heat_op, self.t, solver=solver)
         self._poisson = PoissonSolver(poisson_op, solver=solver)
         self._points = np.asarray(geo.points, dtype=np.float64)
+        # vertices in no element (a cloud point left out of every local triangle): their distance
+        # is their nearest covered neighbour's plus the step to it
+        lonely = np.asarray(abs(poisson_op.S).sum(axis=1)).ravel() == 0
+        if lonely.all():
+            raise MeshError("the geometry has no element with a positive measure to carry heat")
+        self._lonely = np.flatnonzero(lonely)
+        if len(self._lonely):
+            from pykdtree.kdtree import KDTree
+
+            covered = np.flatnonzero(~lonely)
+            step, near = KDTree(self._points[covered]).query(self._points[self._lonely], k=1)
+            self._fill = (covered[np.asarray(near, dtype=np.int64).ravel()], np.asarray(step).ravel())
 
     def _sources(self, sources: Any) -> np.ndarray:
         idx = _indices(np.atleast_1d(np.asarray(sources)), self.n, "source")
         if not len(idx):
             raise MeshError("no source vertex given")
+        if np.isin(idx, self._lonely).any():
+            raise MeshError(f"source vertex {int(idx[np.isin(idx, self._lonely)][0])} lies in no element "
+                            "of the geometry: heat cannot start there")
         if (self.mass[idx] == 0).any():
             raise MeshError(f"source vertex {int(idx[self.mass[idx] == 0][0])} has zero mass (an "
                             "unreferenced vertex or an outlier): heat cannot start there")
@@ -181,6 +196,9 @@ class HeatDistance:
         for j, grp in enumerate(groups):
             phi[:, j] -= self._offset(phi[:, j], grp)
             phi[grp, j] = 0.0
+        if len(self._lonely):
+            near, step = self._fill
+            phi[self._lonely] = phi[near] + step[:, None]
         return np.maximum(phi, 0.0)
 
     def _offset(self, phi: np.ndarray, grp: np.ndarray) -> float:

@@ -42,10 +42,13 @@ def test_sphere_mesh_distances(sphere_mesh_op):
     assert mean < 0.015 and worst < 0.05
 
 
-@pytest.mark.parametrize("noise, tol", [(0.0, (0.015, 0.05)), (0.005, (0.025, 0.1))])
+# measured: mean 0.009, max 0.028 (Fibonacci points); 0.009, 0.053 (random, 0.5% radial noise)
+@pytest.mark.parametrize("noise, tol", [(0.0, (0.015, 0.05)), (0.005, (0.015, 0.1))])
 def test_sphere_cloud_distances(noise, tol):
-    P = meshlap.samples.sphere_points(2000, noise=noise) if noise else meshlap.shapes.fibonacci_sphere(2000)
-    d = geodesic_distance(meshlap.point_cloud_laplacian(P), 0)  # measured 0.009/0.028, 0.013/0.059
+    P = meshlap.shapes.fibonacci_sphere(2000)
+    if noise:
+        P = meshlap.samples.sphere_points(2000, "noisy", noise=noise)
+    d = geodesic_distance(meshlap.point_cloud_laplacian(P), 0)
     mean, worst = _rel(d[None], _great_circle(P, [0]))
     assert mean < tol[0] and worst < tol[1]
 
