@@ -14,7 +14,17 @@ import numpy as np
 
 from .errors import MeshError
 
-__all__ = ["add_distance_parser", "cmd_distance"]
+__all__ = ["add_distance_parser", "cmd_distance", "save_values"]
+
+
+def save_values(path: str, values: np.ndarray) -> None:
+    """Write per-vertex values (one column per field) to .npy, or as comma-separated text."""
+    out = Path(path)
+    if out.suffix.lower() == ".npy":
+        np.save(out, values)
+    else:
+        np.savetxt(out, values, delimiter=",")
+    print(f"wrote {out}")
 
 
 def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Namespace], Any]) -> int:
@@ -43,12 +53,7 @@ def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Nam
     pct = np.percentile(far, [50, 90, 100])
     print(f"median {pct[0]:.6g}, 90% {pct[1]:.6g}, max {pct[2]:.6g} at vertex {int(np.argmax(far))}")
     if args.output:
-        out = Path(args.output)
-        if out.suffix.lower() == ".npy":
-            np.save(out, d)
-        else:
-            np.savetxt(out, np.atleast_2d(d).T, delimiter=",")
-        print(f"wrote {out}")
+        save_values(args.output, d.T)  # one column per source
     if args.png:
         if V is None:
             raise MeshError("--png needs the mesh: give a mesh or point cloud file")

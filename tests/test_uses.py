@@ -225,7 +225,7 @@ def test_cli_distance(tmp_path, capsys):
     path = tmp_path / "s.obj"
     meshlap.io.write_mesh(path, V, F)
     assert main(["distance", str(path), "--source", "0", "3", "--each", "-o", str(tmp_path / "d.npy")]) == 0
-    D = np.load(tmp_path / "d.npy")
+    D = np.load(tmp_path / "d.npy").T  # one column per source
     assert D.shape == (2, 800) and _rel(D, _great_circle(V, [0, 3]))[0] < 0.03
     assert "heat-method distance from vertex 0, 3" in capsys.readouterr().out
     assert main(["distance", str(path), "--source", "800"]) == 1
