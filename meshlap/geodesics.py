@@ -202,14 +202,19 @@ class HeatDistance:
         return np.maximum(phi, 0.0)
 
     def _offset(self, phi: np.ndarray, grp: np.ndarray) -> float:
-        """The constant that makes φ the straight-line distance to each source, on average over
-        its nearest points (geodesic and chord agree to O(r³) there)."""
+        """The constant that makes φ the distance to each source on its nearest points, measured
+        in their own k-dimensional principal plane (geodesic and planar distance agree to O(r³)
+        there, and the plane drops the noise across the surface)."""
         near = min(_SHIFT_POINTS, self.n)
+        k = self.op.geometry.dim
         shifts = []
         for s in grp:
-            dist = np.linalg.norm(self._points - self._points[s], axis=1)
+            diff = self._points - self._points[s]
+            dist = np.einsum("nd,nd->n", diff, diff)
             idx = np.argpartition(dist, near - 1)[:near]
-            shifts.append(np.mean(phi[idx] - dist[idx]))
+            local = diff[idx]
+            axes = np.linalg.svd(local - local.mean(axis=0), full_matrices=False)[2][:k]
+            shifts.append(np.mean(phi[idx] - np.linalg.norm(local @ axes.T, axis=1)))
         return float(np.mean(shifts))
 
     def compute(self, sources: Any) -> np.ndarray:
