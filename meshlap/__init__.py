@@ -19,8 +19,11 @@ from . import (
     baselines,
     corrections,
     curvature,
+    descriptors,
     fem,
+    geodesics,
     geometry,
+    gradients,
     heat,
     io,
     pipeline,
@@ -30,6 +33,7 @@ from . import (
     samples,
     shapes,
     smoothing,
+    solve,
     spectral,
     widths,
 )
@@ -41,9 +45,11 @@ from .builders import (
     pointwise_laplacian,
 )
 from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .geodesics import HeatDistance, geodesic_distance
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
 from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian, truncation_bound
+from .solve import harmonic, poisson
 from .widths import default_h
 
 __version__ = "0.1.0"
@@ -52,6 +58,7 @@ __all__ = [
     "CORRECTED_TOL",
     "DEFAULT_TOL",
     "Geometry",
+    "HeatDistance",
     "MeshError",
     "MeshLaplacian",
     "MeshWarning",
@@ -62,9 +69,14 @@ __all__ = [
     "corrections",
     "curvature",
     "default_h",
+    "descriptors",
     "face_areas",
     "fem",
+    "geodesic_distance",
+    "geodesics",
     "geometry",
+    "gradients",
+    "harmonic",
     "heat",
     "io",
     "laplacian",
@@ -74,11 +86,13 @@ __all__ = [
     "point_cloud_laplacian",
     "point_cloud_matrices",
     "pointwise_laplacian",
+    "poisson",
     "reproduce",
     "resolution",
     "samples",
     "shapes",
     "smoothing",
+    "solve",
     "spectral",
     "topology",
     "truncation_bound",

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .cli_uses import add_distance_parser, save_values
 from .errors import MeshError
 from .geometry.validation import check_faces
 from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
@@ -325,12 +326,7 @@ def cmd_curvature(args: argparse.Namespace) -> int:
     if missing:
         print(f"{missing:,} vertices in no face have no normal: H is NaN there")
     if args.output:
-        out = Path(args.output)
-        if out.suffix.lower() == ".npy":
-            np.save(out, H)
-        else:
-            np.savetxt(out, H, delimiter=",")
-        print(f"wrote {out}")
+        save_values(args.output, H)
     lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
     if args.html:
         from .viewer import save_html, show
@@ -557,6 +553,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="vertex counts (default 500 2000 8000)")
     _progress_option(p)
     p.set_defaults(func=cmd_demo)
+    add_distance_parser(sub, lambda q: (_kernel_options(q), _up_option(q), _progress_option(q)),
+                        _operator_from)
     return parser
 
 

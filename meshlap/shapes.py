@@ -29,6 +29,7 @@ __all__ = [
     "NONUNIFORM_RATIO",
     "PLANE_KINDS",
     "SPHERE_KINDS",
+    "disc",
     "fibonacci_sphere",
     "loop_limit",
     "mean_edge_estimate",
@@ -94,13 +95,42 @@ def plane(n: int, seed: int = 0, kind: str = "random") -> tuple[np.ndarray, np.n
         xy[inner] += rng.uniform(-step / 2, step / 2, size=(int(inner.sum()), 2))
     else:
         raise MeshError(f"unknown plane kind {kind!r}; use one of {', '.join(PLANE_KINDS)}")
-    n = len(xy)
+    return _flat_mesh(xy)
+
+
+def _flat_mesh(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The Delaunay triangulation of planar points, as a mesh in the plane z = 0."""
     F = Delaunay(xy).simplices.astype(np.int64)
     # counter-clockwise, so that normals point to +z
     a, b, c = xy[F[:, 0]], xy[F[:, 1]], xy[F[:, 2]]
     cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
     F[cw] = F[cw][:, ::-1]
-    return np.column_stack([xy, np.zeros(n)]), F
+    return np.column_stack([xy, np.zeros(len(xy))]), F
+
+
+def disc(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Delaunay triangulation of the unit disc from about n points on concentric rings.
+
+    Ring j of m = round(√(n/π)) holds round(2πj) points at radius j/m (the outer ring on
+    the unit circle), each ring turned by a random angle; the centre is vertex 0. Faces are
+    counter-clockwise seen from +z.
+
+    Examples
+    --------
+    >>> V, F = disc(300)
+    >>> bool(np.isclose(np.linalg.norm(V, axis=1).max(), 1.0)), bool(np.allclose(V[0], 0))
+    (True, True)
+    """
+    n = _check_count(n, 7, "disc")
+    rng = np.random.default_rng(seed)
+    m = max(1, round(math.sqrt(n / math.pi)))
+    rings = [np.zeros((1, 2))]
+    for j in range(1, m + 1):
+        count = max(6, round(2 * np.pi * j))
+        a = rng.uniform(0, 2 * np.pi) + np.linspace(0, 2 * np.pi, count, endpoint=False)
+        rings.append(j / m * np.column_stack([np.cos(a), np.sin(a)]))
+    xy = np.vstack(rings)
+    return _flat_mesh(xy)
 
 
 def fibonacci_sphere(n: int) -> np.ndarray:

@@ -32,7 +32,8 @@ def fails(capsys, expected, *argv, status=1):
 
 
 def test_every_subcommand_has_help(capsys):
-    assert set(SUBCOMMANDS) == {"info", "build", "eigs", "smooth", "curvature", "reproduce", "demo"}
+    assert set(SUBCOMMANDS) == {"info", "build", "eigs", "smooth", "curvature", "reproduce", "demo",
+                                "distance"}
     code, out, _ = run(capsys, "--help")
     assert code == 0 and all(name in out for name in SUBCOMMANDS)
     for name in SUBCOMMANDS:

@@ -1,0 +1,245 @@
+"""What users build on a Laplacian, against analytic answers: geodesic distance (heat method),
+Poisson and harmonic problems with Dirichlet and Neumann data, and spectral descriptors.
+
+Tolerances are relative errors over the vertices at least 0.3 from the source (a unit sphere's
+great-circle distance; the heat method's error near a point source is a fraction of the
+spacing, a large relative error there), each about 1.5-2× what was measured here.
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import meshlap
+from meshlap import HeatDistance, geodesic_distance, harmonic, poisson
+from meshlap.baselines import cotangent
+from meshlap.descriptors import project, reconstruct, shape_dna, wave_kernel_signature
+from meshlap.solve import PoissonSolver, boundary_measure
+
+
+def _rel(d, exact, near=0.3):
+    far = exact >= near
+    r = np.abs(d - exact)[far] / exact[far]
+    return r.mean(), r.max()
+
+
+def _great_circle(P, sources):
+    P = P / np.linalg.norm(P, axis=1, keepdims=True)
+    return np.arccos(np.clip(P[sources] @ P.T, -1.0, 1.0))
+
+
+@pytest.fixture(scope="module")
+def sphere_mesh_op():
+    V, F = meshlap.shapes.sphere(2000, seed=0)
+    return V, meshlap.laplacian(V, F)
+
+
+def test_sphere_mesh_distances(sphere_mesh_op):
+    V, op = sphere_mesh_op
+    D = HeatDistance(op).compute_many([0, 1])  # measured: mean 0.009, max 0.028
+    mean, worst = _rel(D, _great_circle(V, [0, 1]))
+    assert mean < 0.015 and worst < 0.05
+
+
+# measured: mean 0.009, max 0.028 (Fibonacci points); 0.009, 0.053 (random, 0.5% radial noise)
+@pytest.mark.parametrize("noise, tol", [(0.0, (0.015, 0.05)), (0.005, (0.015, 0.1))])
+def test_sphere_cloud_distances(noise, tol):
+    P = meshlap.shapes.fibonacci_sphere(2000)
+    if noise:
+        P = meshlap.samples.sphere_points(2000, "noisy", noise=noise)
+    d = geodesic_distance(meshlap.point_cloud_laplacian(P), 0)
+    mean, worst = _rel(d[None], _great_circle(P, [0]))
+    assert mean < tol[0] and worst < tol[1]
+
+
+def test_flat_square_is_euclidean():
+    V, F = meshlap.shapes.plane(2500, kind="stratified")
+    c = int(np.argmin(np.linalg.norm(V, axis=1)))
+    d = HeatDistance(meshlap.laplacian(V, F)).compute(c)
+    mean, worst = _rel(d[None], np.linalg.norm(V - V[c], axis=1)[None], near=0.1)
+    assert mean < 0.015 and worst < 0.15  # measured 0.009 / 0.088
+
+
+def test_curve_and_its_cloud_in_r5():
+    P, E, _ = meshlap.samples.circle(400, d=5)
+    exact = _great_circle(P, [0])  # arc length on the unit circle
+    for op in (meshlap.laplacian(P, E), meshlap.point_cloud_laplacian(P, k=1)):
+        mean, worst = _rel(geodesic_distance(op, 0)[None], exact)
+        assert mean < 0.01 and worst < 0.02  # the chords of 400 steps: 0.5%
+
+
+def test_tetrahedra_convex_is_euclidean():
+    V, T = meshlap.samples.cube_tetrahedra(10)
+    s = int(np.argmin(np.linalg.norm(V - 0.5, axis=1)))
+    d = geodesic_distance(meshlap.laplacian(V, T, k=3), s)  # measured 0.039 / 0.136
+    mean, worst = _rel(d[None], np.linalg.norm(V - V[s], axis=1)[None], near=0.2)
+    assert mean < 0.06 and worst < 0.2
+
+
+def test_many_sources_match_one_at_a_time_and_the_union_is_the_minimum(sphere_mesh_op):
+    V, op = sphere_mesh_op
+    hd = HeatDistance(op)
+    D = hd.compute_many([3, 7, 11], batch=2)
+    assert np.allclose(D[1], hd.compute(7), atol=1e-10)
+    union = hd.compute([3, 7])
+    # the union is one heat flow shifted once, not the minimum of two: measured 0.031
+    assert np.abs(union - D[:2].min(axis=0)).mean() < 0.05
+
+
+def test_distance_bad_input(sphere_mesh_op):
+    _, op = sphere_mesh_op
+    hd = HeatDistance(op)
+    with pytest.raises(meshlap.MeshError, match="indices must lie"):
+        hd.compute(op.n_vertices)
+    with pytest.raises(meshlap.MeshError, match="no source"):
+        hd.compute([])
+    with pytest.raises(meshlap.MeshError, match="batch"):
+        hd.compute_many([0], batch=0)
+    with pytest.raises(meshlap.MeshError, match="t must"):
+        HeatDistance(op, t=-1.0)
+
+
+def test_progress_reports_every_batch(sphere_mesh_op):
+    seen = []
+    HeatDistance(sphere_mesh_op[1]).compute_many([0, 1, 2], batch=2, progress=lambda f, s: seen.append(f))
+    assert seen == [2 / 3, 1.0, 1.0]
+
+
+@pytest.fixture(scope="module")
+def disc():
+    V, F = meshlap.shapes.disc(2000)
+    edge = np.flatnonzero(boundary_measure(meshlap.geometry.surface(V, F)))
+    return V, F, edge
+
+
+@pytest.mark.parametrize("kind, tol", [("cot", 5e-4), ("default", 0.03)])
+def test_harmonic_and_poisson_on_a_disc(disc, kind, tol):
+    V, F, edge = disc
+    op = cotangent(V, F) if kind == "cot" else meshlap.laplacian(V, F)
+    x, y = V[:, 0], V[:, 1]
+    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4, heat kernel 0.014
+    assert np.abs(u - (x**2 - y**2)).max() < tol
+    u = poisson(op, 4.0, dirichlet={int(i): x[i] ** 2 + y[i] ** 2 for i in edge})
+    assert np.abs(u - (x**2 + y**2)).max() < tol
+
+
+def test_neumann_problem_and_its_compatibility(disc):
+    V, F, edge = disc
+    op = meshlap.laplacian(V, F)
+    x = V[:, 0]
+    u = poisson(op, 0.0, neumann=(edge, x[edge]))  # ∂x/∂n = x on the unit circle; x has mean 0
+    assert np.abs(u - x).max() < 0.03  # measured 0.014
+    with pytest.warns(meshlap.MeshWarning, match="integrate to zero"):
+        poisson(op, 1.0)
+
+
+def test_harmonic_on_the_disc_s_cloud(disc):
+    V = disc[0]
+    x, y = V[:, 0], V[:, 1]
+    rim = np.flatnonzero(np.hypot(x, y) > 0.999)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        u = harmonic(meshlap.point_cloud_laplacian(V), rim, (x**2 - y**2)[rim])
+    err = np.abs(u - (x**2 - y**2))
+    # the cloud's heat-kernel operator has a boundary layer under Dirichlet data: measured 0.040
+    # within r ≤ 0.5, 0.20 at r = 0.96 (the mesh's operator: 0.014 everywhere, cotangent 2e-4)
+    assert err[np.hypot(x, y) <= 0.5].max() < 0.06 and err.max() < 0.3
+
+
+def test_solver_reuses_its_factorisation_for_many_right_hand_sides(disc):
+    V, F, edge = disc
+    op = cotangent(V, F)
+    solver = PoissonSolver(op, edge)
+    x, y = V[:, 0], V[:, 1]
+    both = solver.solve(np.zeros((len(V), 2)), np.column_stack([x, x * y])[edge])
+    assert np.allclose(both[:, 0], x, atol=1e-8) and np.abs(both[:, 1] - x * y).max() < 5e-4
+    with pytest.raises(meshlap.MeshError, match="one finite value per fixed"):
+        solver.solve(np.zeros(len(V)), np.zeros(3))
+
+
+def test_dirichlet_input_checks(disc):
+    V, F, _ = disc
+    op = cotangent(V, F)
+    with pytest.raises(meshlap.MeshError, match="repeat"):
+        harmonic(op, [1, 1], [0.0, 1.0])
+    with pytest.raises(meshlap.MeshError, match="one finite value"):
+        harmonic(op, [1, 2], [0.0, np.nan])
+    with pytest.raises(meshlap.MeshError, match="geometry"):
+        poisson(op, 0.0, neumann=([0], [1.0]))
+
+
+def _ellipsoid(n=1200):
+    V, F = meshlap.shapes.sphere(n, seed=1)
+    return V * [1.0, 1.3, 0.7], F
+
+
+def test_descriptors_invariant_to_rigid_motion_and_scale():
+    V, F = _ellipsoid()
+    Q, _ = np.linalg.qr(np.random.default_rng(0).normal(size=(3, 3)))
+    W = 2.5 * V @ Q.T + [1.0, -2.0, 3.0]
+    eig = [meshlap.spectral.eigs(cotangent(X, F), 30) for X in (V, W)]
+    mass = [cotangent(X, F).mass.sum() for X in (V, W)]
+    dna = [shape_dna(eig=e, measure=m) for e, m in zip(eig, mass, strict=True)]
+    assert np.allclose(dna[0], dna[1], rtol=1e-8, atol=1e-8)  # the same FEM, scaled: exact
+    wks = [wave_kernel_signature(eig=e, n_energies=20, area_normalize=True, measure=m)
+           for e, m in zip(eig, mass, strict=True)]
+    assert np.allclose(wks[0], wks[1], rtol=1e-6)
+
+
+def test_shape_dna_equals_lapy_on_the_same_eigenvalues():
+    lapy = pytest.importorskip("lapy")
+    from lapy.shapedna import normalize_ev, reweight_ev
+
+    V, F = _ellipsoid()
+    mesh = lapy.TriaMesh(V, F)
+    lam = meshlap.spectral.eigs(cotangent(V, F), 20)[0]
+    ours = shape_dna(eig=(lam, np.zeros((len(V), 20))), measure=mesh.area(), reweight=True)
+    assert np.allclose(ours, reweight_ev(normalize_ev(mesh, lam, method="geometry")), rtol=1e-12)
+
+
+def test_wks_matches_the_published_formula():
+    rng = np.random.default_rng(0)
+    lam = np.concatenate([[0.0], np.sort(rng.uniform(1, 50, 15))])
+    phi = rng.normal(size=(40, 16))
+    w = wave_kernel_signature(eig=(lam, phi), n_energies=8)
+    loglam = np.log(lam[1:])
+    sigma = 7 * (loglam[-1] - loglam[0]) / 8
+    e = np.linspace(loglam[0] + 2 * sigma, loglam[-1] - 2 * sigma, 8)
+    c = np.exp(-((e[:, None] - loglam) ** 2) / (2 * sigma**2))
+    assert np.allclose(w, (phi[:, 1:] ** 2 @ c.T) / c.sum(axis=1))
+
+
+def test_projection_round_trip_and_low_pass(sphere_mesh_op):
+    V, op = sphere_mesh_op
+    eig = meshlap.spectral.eigs(op, 16)
+    assert np.allclose(reconstruct(eig, project(op, eig[1][:, :16], eig=eig)), eig[1], atol=1e-8)
+    coef = project(op, V[:, 2] + 0.1 * V[:, 0] ** 5, eig=eig)  # z and a little of degrees 1, 3, 5
+    assert abs(coef[1:4] @ coef[1:4]) > 0.9 * (coef @ coef)
+
+
+def test_cli_distance(tmp_path, capsys):
+    from meshlap.cli import main
+
+    V, F = meshlap.shapes.sphere(800, seed=0)
+    path = tmp_path / "s.obj"
+    meshlap.io.write_mesh(path, V, F)
+    assert main(["distance", str(path), "--source", "0", "3", "--each", "-o", str(tmp_path / "d.npy")]) == 0
+    D = np.load(tmp_path / "d.npy").T  # one column per source
+    assert D.shape == (2, 800) and _rel(D, _great_circle(V, [0, 3]))[0] < 0.03
+    assert "heat-method distance from vertex 0, 3" in capsys.readouterr().out
+    assert main(["distance", str(path), "--source", "800"]) == 1
+    assert "indices must lie in [0, 799]" in capsys.readouterr().err
+
+
+def test_unreferenced_vertex_gets_its_neighbour_s_distance():
+    V, F = meshlap.shapes.sphere(800, seed=0)
+    V = np.vstack([V, [[0.0, 0.0, 1.01]]])  # in no face
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        op = meshlap.laplacian(V, F)
+    d = geodesic_distance(op, 0)
+    exact = _great_circle(V, [0])[0]
+    assert np.isfinite(d).all() and abs(d[-1] - exact[-1]) < 0.1  # measured 0.02 at n = 1500
+    with pytest.raises(meshlap.MeshError, match="no element"):
+        geodesic_distance(op, 800)
