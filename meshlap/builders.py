@@ -38,6 +38,7 @@ def laplacian(
     matrix_free: bool = False,
     dtype: Literal["float64", "float32"] | type = np.float64,
     progress: ProgressLike = None,
+    denoise: bool = False,
     **kernel_options: Any,
 ) -> MeshLaplacian:
     """The Laplacian of a mesh, curve, volume or point cloud, chosen by :mod:`meshlap.policy`.
@@ -73,6 +74,12 @@ def laplacian(
         Value type of the stored matrices.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
+    denoise : bool, default False
+        "fem" on a surface: FEM on the positions after a heat step of time (2σ̂)², σ̂ the normal
+        noise measured on the vertices (``op.decision.measured``; :mod:`meshlap.denoise`). For
+        a noisy scan of a smooth shape (0.3 mean edges of noise: 16% → 4% on eigenvalues 1-9
+        against the clean shape); off by default, since a real scan's fine detail reads as
+        noise too and is part of the mesh as given.
     **kernel_options
         Options of the kernel builder (:class:`MeshLaplacian`: ``correction``, ``quadrature``,
         ``pointwise``, ``neumann``, ...); giving one asks for the kernel.
@@ -103,7 +110,7 @@ def laplacian(
     if chosen.operator == "kernel" and kernel_options.get("quadrature") is None:
         named = {"quadrature": "vertex"}
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
-                       **{**kernel_options, **named})
+                       denoise=denoise, **{**kernel_options, **named})
     op._decision = chosen
     return op
 

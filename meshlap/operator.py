@@ -155,6 +155,9 @@ class MeshLaplacian(LumpedLaplacian):
         3 widths (:mod:`meshlap.corrections.features`; fandisk 0.142% → 0.087%, spot 1.32% →
         0.96%). Default: where h is automatic and the normals are not noise; False: one
         width; True: also at an explicit h.
+    denoise : bool, default False
+        With the FEM pencil (``quadrature="fem"``): FEM on the positions after one heat step of
+        time (2σ̂)², σ̂ the normal noise measured by :func:`meshlap.denoise.normal_noise`.
     k : {1, 2, 3}, optional
         Intrinsic dimension of the mesh, inferred from ``F`` when not given; the kernel's
         normalization is 1/(h (4πh)^{k/2}) (1/(4πh²) on surfaces).
@@ -230,13 +233,15 @@ class MeshLaplacian(LumpedLaplacian):
         pointwise_degree: int | None = None,
         quadrature: str | None = None,
         feature_width: bool | None = None,
+        denoise: bool = False,
     ) -> None:
         self.geometry = as_geometry(V, F, k)
         self.options = pipeline.Options.resolve(
             self.geometry, h, correction=correction, adaptive=adaptive, arc_distance=arc_distance,
             pointwise=pointwise, neumann=neumann, curvature_limit=curvature_limit, check_psd=check_psd,
             matrix_free=matrix_free, tol=tol, exact=exact, dtype=dtype, max_memory=max_memory,
-            pointwise_degree=pointwise_degree, quadrature=quadrature, feature_width=feature_width)
+            pointwise_degree=pointwise_degree, quadrature=quadrature, feature_width=feature_width,
+            denoise=denoise)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
         # the symmetric pencil and the fitted rows are made on first use, each once (assemble,

@@ -75,6 +75,8 @@ class Options:
     #: the Galerkin pencil's width narrower next to creases and on thin parts
     #: (:mod:`meshlap.corrections.features`): None where its width is automatic
     feature_width: bool | None = None
+    #: the FEM pencil on positions denoised by a heat step (:mod:`meshlap.denoise`)
+    denoise: bool = False
 
     @property
     def plain(self) -> bool:
@@ -88,7 +90,7 @@ class Options:
                 check_psd: bool = True, matrix_free: bool = False, tol: float | None = None,
                 exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
                 pointwise_degree: int | None = None, quadrature: str | None = None,
-                feature_width: bool | None = None) -> Options:
+                feature_width: bool | None = None, denoise: bool = False) -> Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         pencil_tol = DEFAULT_TOL if tol is None else tol
@@ -144,6 +146,9 @@ class Options:
             if matrix_free or pointwise is True or pointwise_degree is not None:
                 raise MeshError("the FEM pencil stores S and has no kernel stencil: not with matrix_free, "
                                 "pointwise=True or pointwise_degree (use operator='kernel')")
+        if denoise and quadrature != "fem":
+            raise MeshError("denoise=True smooths the positions of the FEM pencil (operator='fem'); a point "
+                            "cloud's kernel denoises with meshlap.point_cloud_laplacian(P, denoise=True)")
         if quadrature == "galerkin":
             if corrections.galerkin.simplices(geo) is None:
                 raise MeshError("quadrature='galerkin' integrates over simplices: a triangle mesh, a curve's "
@@ -164,4 +169,4 @@ class Options:
                    int(available_memory() * 0.8) if max_memory is None
                    else int(check_positive(max_memory, "max_memory")),
                    None if pointwise_degree is None else int(pointwise_degree), quadrature,
-                   0.0 if exact else check_tol(pencil_tol), feature_width)
+                   0.0 if exact else check_tol(pencil_tol), feature_width, bool(denoise))

@@ -232,8 +232,8 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
     if report is not None:
         report(0.5, "FEM pencil")
     S, m = fem.fem_pencil(geo, weld=fem.welded(geo))
-    sigma = fem.surface_noise(geo)
-    if sigma > 0:  # normal noise: FEM on the positions after a heat step that averages it out
+    sigma = fem.surface_noise(geo) if opts.denoise else 0.0
+    if sigma > 0:  # asked for: FEM on the positions after a heat step that averages the noise out
         if report is not None:
             report(0.7, "denoised positions")
         S, m = fem.fem_pencil(geo, weld=fem.welded(geo), points=denoise.denoised(geo.points, S, m, sigma))
