@@ -128,7 +128,7 @@ def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | N
     """The pair ``(L, M)`` in robust-laplacian's convention: for ``eigsh`` and heat flow.
 
     ``L = -op.S`` is the symmetric positive semidefinite weak stiffness and ``M = op.M`` the
-    diagonal mass of ``op = laplacian(V, F, h, tol)``, so robust-laplacian's idiom
+    diagonal mass of ``op = laplacian(V, F, h, tol=tol)``, so robust-laplacian's idiom
     ``eigsh(L, k, M, sigma=1e-8)`` gives the spectrum of −Δ (0, then l(l+1) on the unit
     sphere) and ``(M + t L) u = M u0`` is an implicit heat step. ``L`` is not Δ: the accurate
     Δf at every point is ``laplacian(V, F) @ f`` (or :func:`pointwise_laplacian`).
@@ -158,7 +158,7 @@ def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | N
     >>> print(np.abs(lam).round(1))                      # 0, then l(l+1) = 2 three times
     [0. 2. 2. 2.]
     """
-    return _pair(laplacian(V, F, h, tol, **kwargs), form, "mesh_laplacian")
+    return _pair(laplacian(V, F, h, tol=tol, **kwargs), form, "mesh_laplacian")
 
 
 def _pair(op: MeshLaplacian, form: str, name: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
@@ -206,7 +206,7 @@ def pointwise_laplacian(V: Any, F: Any = None, h: float | None = None, tol: floa
     """
     if F is None and isinstance(V, (np.ndarray, list)):
         return point_cloud_laplacian(V, h, tol=tol, **kwargs).L
-    return laplacian(V, F, h, tol, **kwargs).L
+    return laplacian(V, F, h, tol=tol, **kwargs).L
 
 
 def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float | None = None, *,

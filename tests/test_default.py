@@ -188,3 +188,20 @@ def test_tetrahedral_mesh_within_fem():
     lapy_like = _eig(fem._scatter(T, K, len(V)), fem._scatter(T, C, len(V)), 10)
     assert _error(lam, exact) <= 1.5 * _error(lapy_like, exact)
     assert _error(lam, exact) < 0.1
+
+
+def test_denoise_takes_normal_noise_out_of_the_metric():
+    # a unit sphere with 0.3 mean edges of noise along the normals: the measured noise is within
+    # 30% of it, and FEM on the denoised positions is at least 3x closer to l(l+1) than on the
+    # noisy ones (measured 0.54% against 4.1% at 3,000 vertices)
+    V, F = meshlap.shapes.sphere(3000, seed=0)
+    edge = meshlap.geometry.from_mesh(V, F).spacing
+    noisy = V * (1 + 0.3 * edge * np.random.default_rng(1).standard_normal((len(V), 1)))
+    exact = np.array([0] + [2] * 3 + [6] * 5 + [12])
+    plain = meshlap.laplacian(noisy, F)
+    assert plain.decision.measured["normal noise / mean edge"] == pytest.approx(0.3, rel=0.3)
+    err_plain = _error(meshlap.spectral.eigs(plain, 10)[0], exact)
+    err_denoised = _error(meshlap.spectral.eigs(meshlap.laplacian(noisy, F, denoise=True), 10)[0], exact)
+    assert err_denoised < err_plain / 3, (err_denoised, err_plain)
+    with pytest.raises(MeshError, match="denoise=True"):
+        meshlap.laplacian(noisy, F, operator="kernel", denoise=True)
