@@ -312,8 +312,8 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
         out.append(f"- {s} mean edges: " + summary([x for x in noisy if x["noise"] == s], "the best peer"))
     out += ["", "`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a heat "
             "step of time (2σ̂)² (meshlap.denoise).", "",
-            "| mesh | noise (mean edges) | default | denoise=True | COT | LaPy | robust | ratio | CPU ratio | "
-            "warnings |", "|" + "---|" * 10]
+            "| mesh | noise (mean edges) | default | denoise=True | COT | LaPy | robust | ratio | "
+            "CPU ratio | warnings |", "|" + "---|" * 10]
     for x in noisy:
         out.append(f"| {x['name']} | {x['noise']} | {pct(x['err_default'])} | "
                    f"{pct(x.get('err_denoise', float('nan')))} | {pct(x['err_COT'])} | "

@@ -85,7 +85,8 @@ def warm_up() -> None:
         meshlap.point_cloud_laplacian(meshlap.samples.sphere_points(500)).fit_rows()
         V, F = meshlap.shapes.sphere(1500, seed=0)
         V[:, 2] = np.maximum(V[:, 2], -0.3)
-        meshlap.spectral.eigs(meshlap.laplacian(V, F).fit_rows(), 6)
+        meshlap.spectral.eigs(meshlap.laplacian(V, F).fit_rows(), 6)  # the FEM pencil's flips
+        meshlap.laplacian(V, F, operator="kernel").assemble()  # the kernel's rows and checks
         meshlap.laplacian(V, F, correction="none")
         _ = meshlap.laplacian(V, F, h=0.01, correction="none", matrix_free=True) @ V
         meshlap.laplacian(*meshlap.samples.cube_tetrahedra(6), k=3).fit_rows()

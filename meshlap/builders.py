@@ -107,8 +107,6 @@ def laplacian(
     chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None})
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
-    if chosen.operator == "kernel" and kernel_options.get("quadrature") is None:
-        named = {"quadrature": "vertex"}
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
                        denoise=denoise, **{**kernel_options, **named})
     op._decision = chosen

@@ -117,7 +117,8 @@ def _flip(F, L, twin, max_passes):  # pragma: no cover - compiled
     return flips
 
 
-def intrinsic_delaunay(P: np.ndarray, tri: np.ndarray, max_passes: int = 1000) -> tuple[np.ndarray, np.ndarray]:
+def intrinsic_delaunay(P: np.ndarray, tri: np.ndarray, max_passes: int = 1000
+                       ) -> tuple[np.ndarray, np.ndarray]:
     """The intrinsic Delaunay triangulation of a triangle mesh, by edge flips on edge lengths.
 
     Each interior edge whose opposite angles sum to more than π is replaced by the other
@@ -279,7 +280,8 @@ def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
         i, j = np.repeat(c[:, :1], c.shape[1] - 1, axis=1).ravel(), c[:, 1:].ravel()
         if rep is not None:
             i, j = np.r_[i, np.arange(n)], np.r_[j, rep]
-        _, label = connected_components(sp.coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)), directed=False)
+        graph = sp.coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
+        _, label = connected_components(graph, directed=False)
         used = np.zeros(n, dtype=bool)
         used[c.ravel()] = True
         return int(len(np.unique(label[used]))), label

@@ -158,7 +158,8 @@ class HeatDistance:
         self._points = np.asarray(geo.points, dtype=np.float64)
         # vertices in no element (a cloud point left out of every local triangle): their distance
         # is their nearest covered neighbour's plus the step to it
-        lonely = np.asarray(abs(poisson_op.S).sum(axis=1)).ravel() == 0
+        # (no gradient reads them: the FEM pencil's own diagonal entry there holds no element)
+        lonely = np.asarray(abs(self.grad.G).sum(axis=0)).ravel() == 0
         if lonely.all():
             raise MeshError("the geometry has no element with a positive measure to carry heat")
         self._lonely = np.flatnonzero(lonely)

@@ -255,19 +255,10 @@ class MeshLaplacian(LumpedLaplacian):
     # -- what the stages decided ---------------------------------------------------------
     dim = property(lambda self: self.geometry.dim, doc="Intrinsic dimension k.")
     faces = property(lambda self: self.geometry.faces, doc="The faces of a surface mesh, else None.")
-    @property
-    def mass(self) -> np.ndarray:
-        """Lumped masses m_p: the geometry's, or the FEM pencil's (built on first read)."""
-        if self.options.quadrature == "fem":
-            return self._built.assemble().mass
-        return self.geometry.mass
-
-    @property
-    def decision(self) -> policy.Decision:
-        """Which operator was built and why (:mod:`meshlap.policy`)."""
-        if self._decision is None:
-            self._decision = policy.decide(self.geometry, _named(self.options))
-        return self._decision
+    mass = property(lambda self: self._built.assemble().mass if self.options.quadrature == "fem"
+                    else self.geometry.mass, doc="Lumped masses m_p: the geometry's, or the FEM pencil's.")
+    decision = property(lambda self: self._decision or policy.decide(self.geometry, _named(self.options)),
+                        doc="Which operator was built and why (:mod:`meshlap.policy`).")
 
     h = property(lambda self: self.widths.h, doc="Kernel width (the base width with per-point widths).")
     h_vertex = property(lambda self: self.widths.h_vertex, doc="Per-point widths, when they differ.")
@@ -346,10 +337,12 @@ class MeshLaplacian(LumpedLaplacian):
         --------
         >>> import meshlap
         >>> op = meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0))
-        >>> "pencil=on first use" in repr(op), "pencil=on first use" in repr(op.assemble())
-        (True, False)
-        >>> op.correction
-        'richardson'
+        >>> op.assemble() is op
+        True
+        >>> "pencil=on first use" in repr(meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0)))
+        True
+        >>> op.correction          # the default's pencil: linear FEM on the faces
+        'fem'
         """
         self._built.assemble()
         return self

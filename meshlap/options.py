@@ -124,7 +124,8 @@ class Options:
             "fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
         if curvature_limit is None:  # the kernel's widths; the FEM pencil reads none
-            curvature_limit = CURVATURE_LIMIT if (on and h is None and has_normals and quadrature != "fem") else 0.0
+            kernel_widths = on and h is None and has_normals and quadrature != "fem"
+            curvature_limit = CURVATURE_LIMIT if kernel_widths else 0.0
         elif curvature_limit:
             check_positive(curvature_limit, "curvature_limit")
         if matrix_free and (adaptive or arc_distance or pointwise or neumann or curvature_limit

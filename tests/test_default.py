@@ -122,8 +122,9 @@ def test_intrinsic_delaunay_flips_obtuse_edges():
     weights = cot[f, c] + cot[t // 3, t % 3]
     assert weights.min() > -1e-9
     # a flat mesh's intrinsic triangulation is a planar one: the same total area
-    area = lambda L: np.sqrt(np.prod([(L.sum(1) / 2 - L[:, i]) for i in range(3)], axis=0) * L.sum(1) / 2)
-    assert area(lengths).sum() == pytest.approx(meshlap.face_areas(V, F).sum(), rel=1e-12)
+    s = lengths.sum(axis=1) / 2
+    area = np.sqrt(s * np.prod([s - lengths[:, i] for i in range(3)], axis=0))
+    assert area.sum() == pytest.approx(meshlap.face_areas(V, F).sum(), rel=1e-12)
 
 
 def test_parts_are_parts():
@@ -169,7 +170,7 @@ def test_coarse_decimated_mesh_within_fem():
     # the better of the lumped (cotangent) and consistent FEM on the same mesh
     igl = pytest.importorskip("igl")
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
-    V, F = igl.decimate(V, F, 1000)[1:3]
+    V, F = igl.decimate(V, F, 1000)[:2]
     V, F = np.asarray(V, float), np.asarray(F, np.int64)
     assert len(V) < 600
     ref = _reference(V, F, 10)
@@ -182,7 +183,8 @@ def test_tetrahedral_mesh_within_fem():
     # the unit cube's Neumann spectrum pi^2 (a^2 + b^2 + c^2): the default against P1 with the
     # consistent mass (LaPy's pencil) on the same tetrahedra
     V, T = meshlap.samples.cube_tetrahedra(6)
-    exact = np.sort([np.pi**2 * (a * a + b * b + c * c) for a in range(4) for b in range(4) for c in range(4)])[:10]
+    exact = np.sort([np.pi**2 * (a * a + b * b + c * c)
+                     for a in range(4) for b in range(4) for c in range(4)])[:10]
     lam, _ = meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 10)
     K, C, _ = fem.cell_matrices(V, T)
     lapy_like = _eig(fem._scatter(T, K, len(V)), fem._scatter(T, C, len(V)), 10)
@@ -193,7 +195,7 @@ def test_tetrahedral_mesh_within_fem():
 def test_denoise_takes_normal_noise_out_of_the_metric():
     # a unit sphere with 0.3 mean edges of noise along the normals: the measured noise is within
     # 30% of it, and FEM on the denoised positions is at least 3x closer to l(l+1) than on the
-    # noisy ones (measured 0.54% against 4.1% at 3,000 vertices)
+    # noisy ones (measured: noise 0.235, 4.2% against 15.2% at 3,000 vertices)
     V, F = meshlap.shapes.sphere(3000, seed=0)
     edge = meshlap.geometry.from_mesh(V, F).spacing
     noisy = V * (1 + 0.3 * edge * np.random.default_rng(1).standard_normal((len(V), 1)))

@@ -85,7 +85,8 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     # Galerkin pencil's short cuts, and the geometry's one-pass sums (edge lengths, normals, the
     # curvature cap's sums: a few tenths of a second together); the time bound below is what
     # matters
-    assert 1 <= len(out["mesh"]) <= 8 and len(out["cloud"]) <= 3, kernels
+    # the cloud then compiles the kernel's rows, which the mesh's default FEM pencil does not use
+    assert 1 <= len(out["mesh"]) <= 8 and len(out["cloud"]) <= 6, kernels
     # the frames' eigenvectors and the metric's inverse are hand-written (meshlap._dense):
     # numba's np.linalg.eigh and inv compiled 7 more functions, 2 s of CPU on a busy machine
     assert not out["lapack"], out["lapack"]

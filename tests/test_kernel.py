@@ -15,6 +15,11 @@ from meshlap import assembly, shapes
 from meshlap.assembly import grid as kernel
 
 
+def kernel_laplacian(*args, **kwargs):
+    # the heat-kernel operator these tests are about (the default of meshes is the FEM pencil)
+    return meshlap.laplacian(*args, **{"operator": "kernel", **kwargs})
+
+
 def brute_force_L(V, mass, h, tol):
     """L row by row from all pairs: coef * m_p * exp(-d²/4h) for p ≠ w with mass within r."""
     n = len(V)
@@ -66,7 +71,7 @@ def test_csr_equals_brute_force(n, h, tol):
     V, F = messy_mesh(n)
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
-        op = meshlap.laplacian(V, F, h=h, tol=tol, correction="none")
+        op = kernel_laplacian(V, F, h=h, tol=tol, correction="none")
     ref, pattern = brute_force_L(op.V, op.mass, h, tol)
     L = op.L
     # every row stores its diagonal first, then exactly the pairs within the cut-off
@@ -86,11 +91,11 @@ def test_csr_equals_brute_force(n, h, tol):
 
 def test_int64_indices_give_the_same_matrix(monkeypatch):
     V, F = shapes.sphere(1500, kind="random", seed=3)
-    small = meshlap.laplacian(V, F, h=0.01, correction="none")
+    small = kernel_laplacian(V, F, h=0.01, correction="none")
     assert small.L.indptr.dtype == np.int32 and small.L.indices.dtype == np.int32
     # pretend int32 overflows: the int64 path must be taken and give identical arrays
     monkeypatch.setattr(assembly, "_INT32_MAX", small.nnz - 1)
-    big = meshlap.laplacian(V, F, h=0.01, correction="none")
+    big = kernel_laplacian(V, F, h=0.01, correction="none")
     assert big.L.indptr.dtype == np.int64 and big.L.indices.dtype == np.int64
     assert np.array_equal(big.L.indptr, small.L.indptr)
     assert np.array_equal(big.L.indices, small.L.indices)
@@ -104,20 +109,20 @@ def test_int64_indices_give_the_same_matrix(monkeypatch):
 def test_identical_under_any_schedule(monkeypatch):
     # an uneven mesh (dense and sparse regions) so that threads finish chunks out of order
     V, F = shapes.sphere(3000, kind="random", seed=4)
-    ref = meshlap.laplacian(V, F, h=0.003, correction="none").L
+    ref = kernel_laplacian(V, F, h=0.003, correction="none").L
     before = numba.get_num_threads()
     variants = []
     try:
         numba.set_num_threads(1)
-        variants.append(meshlap.laplacian(V, F, h=0.003, correction="none").L)
+        variants.append(kernel_laplacian(V, F, h=0.003, correction="none").L)
     finally:
         numba.set_num_threads(before)
     monkeypatch.setattr(kernel, "_CHUNK_ROWS", 1)
-    variants.append(meshlap.laplacian(V, F, h=0.003, correction="none").L)
+    variants.append(kernel_laplacian(V, F, h=0.003, correction="none").L)
     # progress splits the build into several compiled calls
     monkeypatch.setattr(kernel, "_PROGRESS_ENTRIES", ref.nnz // 7)
     seen = []
-    variants.append(meshlap.laplacian(V, F, h=0.003, progress=lambda f, s: seen.append(s),
+    variants.append(kernel_laplacian(V, F, h=0.003, progress=lambda f, s: seen.append(s),
             correction="none").L)
     assert seen.count("fill") >= 5 and seen.count("count") >= 5
     for L in variants:
@@ -132,8 +137,8 @@ def test_matrix_free_matches_the_matrix(dtype, n, h):
     V, F = messy_mesh(n)  # 1,500 at h = 0.05: rows longer than the first buffers
     with warnings.catch_warnings():  # the mesh is messy on purpose
         warnings.simplefilter("ignore")
-        op = meshlap.laplacian(V, F, h=h, dtype=dtype, correction="none")
-        free = meshlap.laplacian(V, F, h=h, matrix_free=True, correction="none")
+        op = kernel_laplacian(V, F, h=h, dtype=dtype, correction="none")
+        free = kernel_laplacian(V, F, h=h, matrix_free=True, correction="none")
     rng = np.random.default_rng(1)
     for f in (rng.normal(size=len(V)), rng.normal(size=(len(V), 1)), rng.normal(size=(len(V), 3))):
         ref = np.asarray(op.L.astype(np.float64) @ f)
@@ -149,7 +154,7 @@ def test_matrix_free_matches_the_matrix(dtype, n, h):
 
 def test_estimate_is_close_and_cheap_when_dense():
     V, F = shapes.sphere(4000, seed=0)
-    op = meshlap.laplacian(V, F, h=0.01, correction="none")
+    op = kernel_laplacian(V, F, h=0.01, correction="none")
     assert abs(op.estimate_nnz() - op.nnz) < 0.03 * op.nnz
     # a 200 x 200 grid of quads with h so large that L would be dense: 1.6e9 entries, 19 GB
     n = 200
@@ -157,7 +162,7 @@ def test_estimate_is_close_and_cheap_when_dense():
     V = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(n * n)])
     idx = np.arange(n * n).reshape(n, n)
     Q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1).reshape(-1, 4)
-    free = meshlap.laplacian(V, Q, h=100.0, matrix_free=True, correction="none")
+    free = kernel_laplacian(V, Q, h=100.0, matrix_free=True, correction="none")
     t = time.perf_counter()
     assert free.estimate_nnz() == n**4  # every sampled row is full
     assert time.perf_counter() - t < 5.0
@@ -167,7 +172,7 @@ def test_estimate_is_close_and_cheap_when_dense():
     monkey.setattr(kernel, "count_entries", lambda *a, **k: calls.append(k.get("rows")) or original(*a, **k))
     try:
         with pytest.raises(meshlap.OperatorTooLargeError, match=r"at least about .* entries.*matrix_free"):
-            meshlap.laplacian(V, Q, h=100.0, max_memory=1 << 30, correction="none")
+            kernel_laplacian(V, Q, h=100.0, max_memory=1 << 30, correction="none")
     finally:
         monkey.undo()
     # it stopped after the sample, before counting every row
@@ -177,10 +182,10 @@ def test_estimate_is_close_and_cheap_when_dense():
 def test_peak_memory_of_a_build():
     V, F = shapes.sphere(4000, seed=1)
     # compile and warm up outside the measurement
-    meshlap.laplacian(V, F, h=0.01, correction="none").assemble()
+    kernel_laplacian(V, F, h=0.01, correction="none").assemble()
     tracemalloc.start()
     try:
-        op = meshlap.laplacian(V, F, h=0.01, correction="none").assemble()  # the pencil: on first use
+        op = kernel_laplacian(V, F, h=0.01, correction="none").assemble()  # the pencil: on first use
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
@@ -194,7 +199,7 @@ def test_unsorted_kernel_rows_and_sorted_shared_patterns():
     # sort cost as much as the fill); rows that share the kernel's index arrays (the moment
     # rows, pointwise=True) get them canonical, so an in-place sort of one cannot reorder the other
     V, F = meshlap.shapes.sphere(1500, kind="random", seed=1)
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     L = op.L_sym
     n = L.shape[0]
     assert (L.indices[L.indptr[:-1]] == np.arange(n)).all()
@@ -202,7 +207,7 @@ def test_unsorted_kernel_rows_and_sorted_shared_patterns():
     canon = L.copy()
     canon.sort_indices()
     assert np.abs(canon @ f - L @ f).max() <= 1e-12 * np.abs(L @ f).max()
-    moments = meshlap.laplacian(V, F, pointwise=True, quadrature="vertex")
+    moments = kernel_laplacian(V, F, pointwise=True, quadrature="vertex")
     R = moments.L
     rows = np.repeat(np.arange(n), np.diff(R.indptr))
     step = np.diff(R.indices.astype(np.int64))
@@ -351,7 +356,7 @@ def test_build_moment_scale_equals_the_product_after_the_fill():
     # a plane with a boundary: the band's rows are left out of the mean; the scale from the
     # product made during the fill is the scale of scipy's product with the free rows, to the bit
     V, F = shapes.plane(4000, seed=2)
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     geo, opts = op.geometry, op.options
     radius = assembly.cutoff_radius(op.widths.largest, opts.tol)
     free = assembly.assemble(geo.points, geo.mass, op.widths,

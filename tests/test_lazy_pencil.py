@@ -11,6 +11,11 @@ import pytest
 import meshlap
 from meshlap import assembly, pencil, shapes, spectral, store
 
+
+def kernel_laplacian(*args, **kwargs):
+    # the heat-kernel operator these tests are about (the default of meshes is the FEM pencil)
+    return meshlap.laplacian(*args, **{"operator": "kernel", **kwargs})
+
 pytestmark = pytest.mark.filterwarnings("ignore::meshlap.resolution.ResolutionWarning")
 
 
@@ -49,7 +54,7 @@ def sphere():
 
 def test_op_at_f_never_assembles_kernel_rows(sphere, kernel_rows):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     f = np.sin(3 * V[:, 0])
     Lf = op @ f
     assert kernel_rows == [] and op._built.pencil_pending and np.isfinite(Lf).all()
@@ -64,13 +69,13 @@ def test_op_at_f_never_assembles_kernel_rows(sphere, kernel_rows):
 def test_facts_of_the_pencil_build_it(sphere, kernel_rows):
     V, F = sphere
     for fact in ("correction", "psd_margin", "moment_scale", "quadrature", "resolution", "S", "nnz"):
-        op = meshlap.laplacian(V, F)
+        op = kernel_laplacian(V, F)
         assert op._built.pencil_pending
         getattr(op, fact)
         assert not op._built.pencil_pending and op._built.rows_pending, fact
     # the rows on the kernel's stencil and the paper's operator come with the pencil
     for kw in ({"pointwise": True}, {"h": 0.01, "correction": "none"}, {"h": 0.01, "matrix_free": True}):
-        op = meshlap.laplacian(V, F, **kw)
+        op = kernel_laplacian(V, F, **kw)
         assert op._built.pencil_pending
         op @ V[:, 0]
         assert not op._built.pencil_pending, kw
@@ -78,7 +83,7 @@ def test_facts_of_the_pencil_build_it(sphere, kernel_rows):
 
 def test_threads_asking_for_the_pencil_build_it_once(sphere, pencils):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     start, out = threading.Barrier(6), [None] * 6
     asks = [lambda: op.L_sym, lambda: op.S, lambda: spectral.eigs(op, 3)[0], lambda: op.correction,
             lambda: op.assemble().L_sym, lambda: op.psd_margin]
@@ -98,17 +103,17 @@ def test_threads_asking_for_the_pencil_build_it_once(sphere, pencils):
 
 def test_pickle_and_save_of_an_unassembled_operator_hold_both_parts(sphere, tmp_path):
     V, F = sphere
-    eager = meshlap.laplacian(V, F).assemble().fit_rows()
+    eager = kernel_laplacian(V, F).assemble().fit_rows()
     f = np.cos(2 * V)
-    copy = pickle.loads(pickle.dumps(meshlap.laplacian(V, F)))
+    copy = pickle.loads(pickle.dumps(kernel_laplacian(V, F)))
     assert not copy._built.pencil_pending and not copy._built.rows_pending
     assert copy._built._pencil._lock is not eager._built._pencil._lock
     assert same(copy.L_sym, eager.L_sym) and same(copy.L, eager.L) and np.array_equal(copy @ f, eager @ f)
     assert copy.resolution == eager.resolution and copy.psd_margin == eager.psd_margin
     # the rows first, then the pencil: the bits of the other order
-    rows_first = meshlap.laplacian(V, F)
+    rows_first = kernel_laplacian(V, F)
     assert np.array_equal(rows_first @ f, eager @ f) and same(rows_first.L_sym, eager.L_sym)
-    back = store.load_operator(store.save_operator(tmp_path / "op", meshlap.laplacian(V, F)))
+    back = store.load_operator(store.save_operator(tmp_path / "op", kernel_laplacian(V, F)))
     assert same(back.L_sym, eager.L_sym) and same(back.L, eager.L) and back.resolution == eager.resolution
 
 
@@ -118,7 +123,7 @@ def test_the_fallback_warns_at_first_use_pointing_at_the_user():
     h = 0.5 * meshlap.geometry.from_mesh(V, F).spacing ** 2
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        op = meshlap.laplacian(V, F, h=h)  # nothing said at construction
+        op = kernel_laplacian(V, F, h=h)  # nothing said at construction
     with pytest.warns(meshlap.MeshWarning, match="predicted less accurate than the plain kernel") as seen:
         spectral.eigs(op, 4)  # asked for deep in the package: the warning names this line
     assert {w.filename for w in seen} == {__file__}  # and the ResolutionWarning, too
@@ -130,13 +135,13 @@ def test_the_fallback_warns_at_first_use_pointing_at_the_user():
 
 def test_max_memory_is_refused_at_construction(sphere, kernel_rows, pencils):
     V, F = sphere
-    nnz = meshlap.laplacian(V, F).L_sym.nnz
+    nnz = kernel_laplacian(V, F).L_sym.nnz
     kernel_rows.clear()
     pencils.clear()
     with pytest.raises(meshlap.OperatorTooLargeError, match="at least about"):
-        meshlap.laplacian(V, F, max_memory=8 * nnz)
+        kernel_laplacian(V, F, max_memory=8 * nnz)
     assert kernel_rows == [] and pencils == []  # refused before any row
-    assert meshlap.laplacian(V, F, max_memory=64 * nnz).L_sym.nnz == nnz
+    assert kernel_laplacian(V, F, max_memory=64 * nnz).L_sym.nnz == nnz
 
 
 @pytest.mark.parametrize("kw", [{}, {"correction": "none"}, {"pointwise": True}, {"matrix_free": True}])
@@ -152,7 +157,7 @@ def test_an_operator_let_go_frees_its_matrices_at_once(sphere, kw):
     gc.collect()
     gc.disable()
     try:
-        op = meshlap.laplacian(V, F, **kw)
+        op = kernel_laplacian(V, F, **kw)
         op @ V[:, 0]
         op.assemble()
         parts = weakref.ref(op._built)

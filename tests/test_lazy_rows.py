@@ -10,6 +10,11 @@ import pytest
 import meshlap
 from meshlap import corrections, heat, spectral, store
 
+
+def kernel_laplacian(*args, **kwargs):
+    # the heat-kernel operator these tests are about (the default of meshes is the FEM pencil)
+    return meshlap.laplacian(*args, **{"operator": "kernel", **kwargs})
+
 pytestmark = pytest.mark.filterwarnings("ignore::meshlap.resolution.ResolutionWarning")
 
 
@@ -39,7 +44,7 @@ def sphere():
 
 def test_spectra_and_heat_flow_do_not_fit_the_rows(sphere, counted):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     lam, _ = spectral.eigs(op, 6)
     u = heat.heat_flow(op, V[:, 0], 1e-3)
     assert not counted and op._built.rows_pending and np.isfinite(u).all()
@@ -55,7 +60,7 @@ def test_spectra_and_heat_flow_do_not_fit_the_rows(sphere, counted):
 
 def test_lazy_rows_have_the_bits_of_a_fit_at_build_time(sphere):
     V, F = sphere
-    lazy, eager = meshlap.laplacian(V, F), meshlap.laplacian(V, F).fit_rows()
+    lazy, eager = kernel_laplacian(V, F), kernel_laplacian(V, F).fit_rows()
     spectral.eigs(lazy, 4)  # other work between the build and the first use
     L, choice = corrections.rowchoice.choose_rows(V, k=2)  # what the build fitted before (355b277)
     assert same(lazy.L, eager.L) and same(lazy.L, L) and same(lazy.L_sym, eager.L_sym)
@@ -63,13 +68,13 @@ def test_lazy_rows_have_the_bits_of_a_fit_at_build_time(sphere):
     f = np.sin(3 * V)
     assert np.array_equal(lazy @ f, eager @ f) and np.array_equal(lazy @ f, L @ f)
     # float32: the rows cast as at build time
-    single = meshlap.laplacian(V, F, dtype=np.float32)
+    single = kernel_laplacian(V, F, dtype=np.float32)
     assert single.L.dtype == np.float32 and np.array_equal(single.L.data, L.data.astype(np.float32))
 
 
 def test_threads_asking_at_once_fit_once(sphere, counted):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     f = V[:, 0] ** 2
     start, out = threading.Barrier(6), [None] * 6
 
@@ -88,7 +93,7 @@ def test_threads_asking_at_once_fit_once(sphere, counted):
 
 def test_repr_does_not_fit(sphere, counted):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     repr(op), op._repr_html_()
     assert not counted and op._fit_pending() and op._built.held_rows is None
     held = op.nbytes
@@ -99,7 +104,7 @@ def test_repr_does_not_fit(sphere, counted):
     assert len(counted) == 1
     # the paper's operator and the moment rows have nothing to fit
     for kw in ({"h": op.h, "correction": "none"}, {"pointwise": True}):
-        other = meshlap.laplacian(V, F, **kw)
+        other = kernel_laplacian(V, F, **kw)
         assert not other._fit_pending() and other._built.held_pencil is None
         # their rows come with the pencil: asking for them builds it
         assert other.fit_rows()._built.held_pencil is not None and not other._built.pencil_pending
@@ -108,13 +113,13 @@ def test_repr_does_not_fit(sphere, counted):
 
 def test_saving_and_pickling_fit_the_rows(sphere, counted, tmp_path):
     V, F = sphere
-    op = meshlap.laplacian(V, F)
+    op = kernel_laplacian(V, F)
     back = store.load_operator(store.save_operator(tmp_path / "op", op))
     assert len(counted) == 1 and same(back.L, op.L) and same(back.L_sym, op.L_sym)
     f = np.cos(2 * V)
     assert np.array_equal(back @ f, op @ f) and len(counted) == 1
     # a pickle, too, holds the rows (fitted before it is written), and the copy its own lock
-    fresh = meshlap.laplacian(V, F)
+    fresh = kernel_laplacian(V, F)
     again = pickle.loads(pickle.dumps(fresh))
     assert len(counted) == 2 and same(again.L, op.L) and not again._built.rows_pending
     assert again._built._rows._lock is not fresh._built._rows._lock and np.array_equal(again @ f, op @ f)
@@ -123,7 +128,7 @@ def test_saving_and_pickling_fit_the_rows(sphere, counted, tmp_path):
 def test_progress_reports_the_fit_at_first_use(sphere):
     V, F = sphere
     seen = []
-    op = meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
+    op = kernel_laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
     assert seen[-1] == (1.0, "done") and not [s for _, s in seen if s.startswith("point-wise")]
     seen.clear()
     op @ V

@@ -246,11 +246,14 @@ def test_progress_callback():
     fracs = [f for f, _ in seen]
     assert fracs == sorted(fracs) and fracs[-1] == 1.0
     assert {"count", "fill", "done"} <= {s for _, s in seen}
-    # the default reports each stage of the pipeline by name, in order (a stratified plane takes
-    # the Galerkin pencil; a random one, whose longest edges are 30 mean edges, would not)
     V, F = shapes.plane(1500, seed=0, kind="stratified")
     seen.clear()
-    op = meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage)))
+    meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage))).assemble()
+    assert [s for _, s in seen] == ["done", "FEM pencil", "done"]  # the default: no kernel
+    # the kernel reports each stage of the pipeline by name, in order (a stratified plane takes
+    # the Galerkin pencil; a random one, whose longest edges are 30 mean edges, would not)
+    seen.clear()
+    op = meshlap.laplacian(V, F, operator="kernel", progress=lambda frac, stage: seen.append((frac, stage)))
     assert seen == [(1.0, "done")]
     seen.clear()
     op.assemble()  # the pencil: on first use

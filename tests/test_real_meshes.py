@@ -99,7 +99,8 @@ def test_bunny(bunny):
     assert len(warned) == 1 and "1,113 unreferenced vertices" in str(warned[0].message)
     check_sound(op, V)
     unref = topology.unreferenced_vertices(V, F)
-    assert len(unref) == 1113 and np.all(op.mass[unref] == 0)
+    # the FEM pencil gives each a tiny mass (a mode of its own, far above the rest)
+    assert len(unref) == 1113 and np.all(op.mass[unref] <= 1e-5 * np.median(op.mass))
     # L is defined at the unreferenced vertices too: finite, averaging their neighbours
     f = V[:, 1]
     Lf = op @ f

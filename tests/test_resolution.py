@@ -16,6 +16,11 @@ from meshlap import baselines, samples, shapes, spectral
 from meshlap.resolution import CLOUD_PEER, RATIO_LIMIT, Resolution, ResolutionWarning
 from meshlap.store import load_operator, save_operator
 
+
+def kernel_laplacian(*args, **kwargs):
+    # the heat-kernel operator these tests are about (the default of meshes is the FEM pencil)
+    return meshlap.laplacian(*args, **{"operator": "kernel", **kwargs})
+
 SPHERE = np.array([deg * (deg + 1) for deg in range(4) for _ in range(2 * deg + 1)], float)  # 16 values
 SQUARE = (math.pi / 2) ** 2 * np.array([0, 1, 1, 2, 4, 4, 5, 5, 8, 9], float)  # Neumann on [-1, 1]²
 CUBE = math.pi**2 * np.array([0, 1, 1, 1, 2, 2, 2, 3, 4, 4], float)  # Neumann on the unit cube
@@ -62,7 +67,7 @@ def test_explicit_narrow_widths_are_warned(random_sphere):
     # the Richardson operator itself: the default takes the plain kernel at ē², which the model
     # predicts more accurate (tests/test_accuracy.py), and whose report is the fallback's
     with pytest.warns(ResolutionWarning, match=r"use meshlap\.baselines\.cotangent\(V, F\)"):
-        op = meshlap.laplacian(V, F, h=e2, check_psd=False).assemble()
+        op = kernel_laplacian(V, F, h=e2, check_psd=False).assemble()
     r = op.resolution
     assert r.too_coarse and r.alternative == "meshlap.baselines.cotangent(V, F)"
     assert 0.9 < r.width < 1.1 and "against the sampling" in r.reason
@@ -81,7 +86,7 @@ def test_fallback_to_the_plain_kernel_is_reported():
     V, T = samples.cube_tetrahedra(12)
     e2 = meshlap.geometry.from_mesh(V, T, 3).spacing ** 2
     with pytest.warns(ResolutionWarning, match="fell back to the plain kernel"):
-        op = meshlap.laplacian(V, T, h=e2 / 16, k=3).assemble()
+        op = kernel_laplacian(V, T, h=e2 / 16, k=3).assemble()
     r = op.resolution
     assert op.correction == "none" and r.fallback and r.too_coarse and "lapy" in r.alternative
     assert 0.12 < r.predicted_error < 0.48
@@ -90,8 +95,8 @@ def test_fallback_to_the_plain_kernel_is_reported():
 def _plain_and_richardson(V, F, h, exact):
     """The Richardson operator's and the plain kernel's (arc distances, as the model has it)
     measured errors at h, and the model's predictions of both."""
-    rich = meshlap.laplacian(V, F, h=h, check_psd=False, pointwise=False)
-    plain = meshlap.laplacian(V, F, h=h, correction="none", arc_distance=True, tol=meshlap.CORRECTED_TOL)
+    rich = kernel_laplacian(V, F, h=h, check_psd=False, pointwise=False)
+    plain = kernel_laplacian(V, F, h=h, correction="none", arc_distance=True, tol=meshlap.CORRECTED_TOL)
     fig = meshlap.resolution.assess(rich.geometry, rich.widths, "richardson")
     predicted = [sum(meshlap.resolution.default_terms(f).values())
                  for f in (fig, replace(fig, fallback=True))]
@@ -115,7 +120,7 @@ def test_narrow_width_takes_the_kernel_predicted_more_accurate(mesh, f, kernel):
     assert all(0.6 < p / m < 1.6 for p, m in zip(predicted, measured, strict=True))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", meshlap.MeshWarning)
-        op = meshlap.laplacian(V, F, h=h, pointwise=False)
+        op = kernel_laplacian(V, F, h=h, pointwise=False)
     assert op.correction == kernel and op.arc_distance == (kernel == "richardson")
     err = error(op, exact)
     assert err <= min(measured) * 1.001 if kernel == "richardson" else err < 0.9 * measured[0]
@@ -128,9 +133,9 @@ def test_plain_kernel_keeps_arcs_on_thin_parts():
     h = 0.5 * meshlap.geometry.from_mesh(V, F).spacing ** 2
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", meshlap.MeshWarning)
-        op = meshlap.laplacian(V, F, h=h, pointwise=False)
+        op = kernel_laplacian(V, F, h=h, pointwise=False)
     assert op.correction == "none" and op.arc_distance
-    chords = meshlap.laplacian(V, F, h=h, correction="none", tol=meshlap.CORRECTED_TOL)
+    chords = kernel_laplacian(V, F, h=h, correction="none", tol=meshlap.CORRECTED_TOL)
     lam, lam_c = (np.sort(spectral.eigs(o, 10, tol=1e-6)[0]) for o in (op, chords))
     Vr, Fr = igl.upsample(*igl.upsample(V, F))
     ref = np.sort(spectral.eigs(baselines.cotangent(Vr, Fr), 10, tol=1e-8)[0])
@@ -151,7 +156,7 @@ def test_coarse_torus_galerkin_default_and_vertex_warning():
     assert op.quadrature == "galerkin" and not warned and op.resolution.verdict == "resolved"
     assert error(op, ref) < min(0.015, cot)
     with pytest.warns(ResolutionWarning, match=r"baselines\.cotangent"):
-        op = meshlap.laplacian(V, F, quadrature="vertex").assemble()
+        op = kernel_laplacian(V, F, quadrature="vertex").assemble()
     r = op.resolution
     assert r.too_coarse and r.alternative == "meshlap.baselines.cotangent(V, F)"
     assert r.narrowed < 0.2  # the curvature cap narrowed the kernel far below the edges
@@ -286,7 +291,7 @@ def test_saved_operator_keeps_the_report(tmp_path):
     op, _ = build(meshlap.laplacian, *shapes.plane(400, seed=0, kind="stratified"), quadrature="vertex")
     back = load_operator(save_operator(tmp_path / "op", op))
     assert isinstance(back.resolution, Resolution) and back.resolution == op.resolution
-    plain = meshlap.laplacian(*shapes.sphere(300, seed=0), correction="none")
+    plain = kernel_laplacian(*shapes.sphere(300, seed=0), correction="none")
     assert plain.resolution is None  # the model covers the corrected kernel only
     assert load_operator(save_operator(tmp_path / "plain", plain)).resolution is None
 
