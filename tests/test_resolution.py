@@ -48,11 +48,11 @@ def random_sphere():
 def test_fine_and_noisy_spheres_are_resolved(random_sphere):
     # the default wins or ties here (0.18% against COT's 0.12%; noisy: 4.5% against 7.0%)
     V, F = random_sphere
-    op, warned = build(meshlap.laplacian, V, F)
+    op, warned = build(kernel_laplacian, V, F)
     assert not warned and op.resolution.verdict == "resolved" and op.resolution.alternative is None
     assert op.resolution.predicted_error < RATIO_LIMIT * op.resolution.fem_error
     noisy = V * (1 + 0.005 * np.random.default_rng(1).standard_normal((len(V), 1)))
-    op, warned = build(meshlap.laplacian, noisy, F)
+    op, warned = build(kernel_laplacian, noisy, F)
     # the noise is measured (0.15 mean edges), and counts against FEM more than the kernel
     assert not warned and 0.08 < op.resolution.noise < 0.2
 
@@ -74,9 +74,9 @@ def test_explicit_narrow_widths_are_warned(random_sphere):
     err, cot = error(op, SPHERE), error(baselines.cotangent(V, F), SPHERE)
     assert err > 10 * RATIO_LIMIT * cot
     assert 0.5 < r.predicted_error / err < 2 and 0.5 < r.fem_error / cot < 2
-    _, warned = build(meshlap.laplacian, V, F, h=2 * e2)
+    _, warned = build(kernel_laplacian, V, F, h=2 * e2)
     assert warned
-    op, warned = build(meshlap.laplacian, V, F)  # the default's own width: 0.18% against 0.12%, silent
+    op, warned = build(kernel_laplacian, V, F)  # the default's own width: 0.18% against 0.12%, silent
     assert not warned and op.resolution.predicted_error < RATIO_LIMIT * op.resolution.fem_error
 
 
@@ -152,7 +152,7 @@ def test_coarse_torus_galerkin_default_and_vertex_warning():
         W, G = igl.upsample(W, G)
     ref = spectral.eigs(baselines.cotangent(W, G), 10)[0]
     cot = error(baselines.cotangent(V, F), ref)
-    op, warned = build(meshlap.laplacian, V, F)
+    op, warned = build(kernel_laplacian, V, F)
     assert op.quadrature == "galerkin" and not warned and op.resolution.verdict == "resolved"
     assert error(op, ref) < min(0.015, cot)
     with pytest.warns(ResolutionWarning, match=r"baselines\.cotangent"):
@@ -172,7 +172,7 @@ def test_neumann_square(n, quadrature, warns, bound):
     # measured: at 400 vertices 0.57% with the default (Galerkin) pencil, 11.4% with the vertex
     # pencil, COT 2.5%; at 4,000, 0.12% (COT 0.23%)
     V, F = shapes.plane(n, seed=0, kind="stratified")
-    op, warned = build(meshlap.laplacian, V, F, quadrature=quadrature)
+    op, warned = build(kernel_laplacian, V, F, quadrature=quadrature)
     assert warned == warns == op.resolution.too_coarse
     assert error(op, SQUARE) < bound
     assert op.resolution.boundary > 0.1 and op.resolution.boundary_curvature == 0
@@ -181,10 +181,10 @@ def test_neumann_square(n, quadrature, warns, bound):
 def test_cube_of_tetrahedra():
     # 13³ vertices: the default 2.6% against LaPy's 2.8%, no warning; 9³: 9.5% against 6.2%, warned
     V, T = samples.cube_tetrahedra(12)
-    op, warned = build(meshlap.laplacian, V, T, k=3)
+    op, warned = build(kernel_laplacian, V, T, k=3)
     assert not warned and op.correction == "richardson"
     assert error(op, CUBE) < 0.03
-    op, warned = build(meshlap.laplacian, *samples.cube_tetrahedra(8), k=3)
+    op, warned = build(kernel_laplacian, *samples.cube_tetrahedra(8), k=3)
     assert warned and "lapy" in op.resolution.alternative
 
 
@@ -237,7 +237,7 @@ def test_clouds_losing_at_narrow_widths_are_warned(P, fraction, measured, peer):
         warnings.simplefilter("ignore", meshlap.MeshWarning)
         geo = meshlap.geometry.point_cloud_geometry(P)
     h = fraction * meshlap.widths.h_scale(geo) * geo.spacing**2
-    op, warned = build(meshlap.laplacian, geo, h=h)
+    op, warned = build(kernel_laplacian, geo, h=h)
     r = op.resolution
     assert warned and r.too_coarse and r.alternative == CLOUD_PEER and r.fallback == (fraction == 0.125)
     assert 0.5 < r.predicted_error / measured < 2 and 0.5 < r.peer_error / peer < 2
@@ -252,7 +252,7 @@ def test_creases_are_found_and_warned():
     # parts the short cuts do not separate (predicted 0.30%: an overestimate)
     V, F = igl.read_triangle_mesh("tests/data/fandisk.obj")
     V = V / math.sqrt(igl.doublearea(V, F).sum() / 2)
-    op, warned = build(meshlap.laplacian, V, F)
+    op, warned = build(kernel_laplacian, V, F)
     r = op.resolution
     assert op.quadrature == "galerkin" and warned and r.creases > 0.3
     assert 0.08 < op._built.assemble().narrowed < 0.2
@@ -273,7 +273,7 @@ def test_thin_parts_are_warned():
     # reference), so the build must warn
     V, F = igl.read_triangle_mesh("tests/data/spot.obj")
     V = V / math.sqrt(igl.doublearea(V, F).sum() / 2)
-    op, warned = build(meshlap.laplacian, V, F)
+    op, warned = build(kernel_laplacian, V, F)
     r = op.resolution
     assert op.quadrature == "galerkin" and warned and r.too_coarse
     assert 0.015 < r.thin < 0.03 and "thinner than 3 kernel widths" in r.reason
@@ -288,7 +288,7 @@ def test_thin_parts_are_warned():
 
 
 def test_saved_operator_keeps_the_report(tmp_path):
-    op, _ = build(meshlap.laplacian, *shapes.plane(400, seed=0, kind="stratified"), quadrature="vertex")
+    op, _ = build(kernel_laplacian, *shapes.plane(400, seed=0, kind="stratified"), quadrature="vertex")
     back = load_operator(save_operator(tmp_path / "op", op))
     assert isinstance(back.resolution, Resolution) and back.resolution == op.resolution
     plain = kernel_laplacian(*shapes.sphere(300, seed=0), correction="none")
