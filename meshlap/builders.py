@@ -39,12 +39,13 @@ def laplacian(
     dtype: Literal["float64", "float32"] | type = np.float64,
     progress: ProgressLike = None,
     denoise: bool = False,
+    mass: Literal["lumped", "blend"] = "lumped",
     **kernel_options: Any,
 ) -> MeshLaplacian:
     """The Laplacian of a mesh, curve, volume or point cloud, chosen by :mod:`meshlap.policy`.
 
     With cells, the symmetric pencil ``(op.S, op.M)`` (spectra, heat flow, smoothing) is linear
-    FEM on them (intrinsic Delaunay, blended mass: :mod:`meshlap.fem`), whose worst case is
+    FEM on them (intrinsic Delaunay, lumped mass: :mod:`meshlap.fem`), whose worst case is
     linear FEM on the same mesh; without cells it is the corrected heat kernel of Belkin, Sun
     and Wang (SoCG 2008, eq. 1). ``op @ f`` applies point-wise rows fitted to the points, exact
     for polynomials to degree 6 where the data are clean. ``op.decision`` says what was built
@@ -80,6 +81,10 @@ def laplacian(
         a noisy scan of a smooth shape (0.3 mean edges of noise: 16% → 4% on eigenvalues 1-9
         against the clean shape); off by default, since a real scan's fine detail reads as
         noise too and is part of the mesh as given.
+    mass : {"lumped", "blend"}, default "lumped"
+        "fem": the mass of the pencil. "blend", ½(consistent + lumped), puts every eigenvalue
+        between the lumped and the consistent FEM's: 5× more accurate on irregular fine meshes
+        (a random sphere), 1.2-2× less on coarse real ones (:mod:`meshlap.fem`).
     **kernel_options
         Options of the kernel builder (:class:`MeshLaplacian`: ``correction``, ``quadrature``,
         ``pointwise``, ``neumann``, ...); giving one asks for the kernel.
@@ -108,7 +113,7 @@ def laplacian(
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
-                       denoise=denoise, **{**kernel_options, **named})
+                       denoise=denoise, mass=mass, **{**kernel_options, **named})
     op._decision = chosen
     return op
 

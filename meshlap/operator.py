@@ -155,9 +155,8 @@ class MeshLaplacian(LumpedLaplacian):
         3 widths (:mod:`meshlap.corrections.features`; fandisk 0.142% → 0.087%, spot 1.32% →
         0.96%). Default: where h is automatic and the normals are not noise; False: one
         width; True: also at an explicit h.
-    denoise : bool, default False
-        With the FEM pencil (``quadrature="fem"``): FEM on the positions after one heat step of
-        time (2σ̂)², σ̂ the normal noise measured by :func:`meshlap.denoise.normal_noise`.
+    denoise, mass
+        Options of the FEM pencil (``quadrature="fem"``): :func:`meshlap.laplacian`.
     k : {1, 2, 3}, optional
         Intrinsic dimension of the mesh, inferred from ``F`` when not given; the kernel's
         normalization is 1/(h (4πh)^{k/2}) (1/(4πh²) on surfaces).
@@ -234,6 +233,7 @@ class MeshLaplacian(LumpedLaplacian):
         quadrature: str | None = None,
         feature_width: bool | None = None,
         denoise: bool = False,
+        mass: str = "lumped",
     ) -> None:
         self.geometry = as_geometry(V, F, k)
         self.options = pipeline.Options.resolve(
@@ -241,7 +241,7 @@ class MeshLaplacian(LumpedLaplacian):
             pointwise=pointwise, neumann=neumann, curvature_limit=curvature_limit, check_psd=check_psd,
             matrix_free=matrix_free, tol=tol, exact=exact, dtype=dtype, max_memory=max_memory,
             pointwise_degree=pointwise_degree, quadrature=quadrature, feature_width=feature_width,
-            denoise=denoise)
+            denoise=denoise, mass=mass)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
                                         curvature_limit=self.options.curvature_limit)
         # the symmetric pencil and the fitted rows are made on first use, each once (assemble,
@@ -533,7 +533,7 @@ class MeshLaplacian(LumpedLaplacian):
         if pencil is None:
             rows.append(("pencil", "on first use"))
         elif pencil.quadrature == "fem":
-            rows.append(("pencil", "linear FEM on the cells (intrinsic Delaunay, blended mass)"))
+            rows.append(("pencil", f"linear FEM on the cells (intrinsic Delaunay, {self.options.mass} mass)"))
         elif pencil.quadrature == "galerkin":
             narrow = pencil.narrowed
             rows.append(("pencil", f"Galerkin over the cells, h={pencil.quadrature_h:.4g}"

@@ -77,6 +77,8 @@ class Options:
     feature_width: bool | None = None
     #: the FEM pencil on positions denoised by a heat step (:mod:`meshlap.denoise`)
     denoise: bool = False
+    #: the FEM pencil's mass (:func:`meshlap.fem.fem_pencil`)
+    mass: str = "lumped"
 
     @property
     def plain(self) -> bool:
@@ -90,7 +92,7 @@ class Options:
                 check_psd: bool = True, matrix_free: bool = False, tol: float | None = None,
                 exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
                 pointwise_degree: int | None = None, quadrature: str | None = None,
-                feature_width: bool | None = None, denoise: bool = False) -> Options:
+                feature_width: bool | None = None, denoise: bool = False, mass: str = "lumped") -> Options:
         """Defaults for this geometry, and a clear error for a combination it cannot have."""
         correction = "richardson" if correction is None else correction
         pencil_tol = DEFAULT_TOL if tol is None else tol
@@ -147,9 +149,11 @@ class Options:
             if matrix_free or pointwise is True or pointwise_degree is not None:
                 raise MeshError("the FEM pencil stores S and has no kernel stencil: not with matrix_free, "
                                 "pointwise=True or pointwise_degree (use operator='kernel')")
-        if denoise and quadrature != "fem":
-            raise MeshError("denoise=True smooths the positions of the FEM pencil (operator='fem'); a point "
-                            "cloud's kernel denoises with meshlap.point_cloud_laplacian(P, denoise=True)")
+        if mass not in ("lumped", "blend", "consistent"):
+            raise MeshError(f"mass must be 'lumped', 'blend' or 'consistent'; got {mass!r}")
+        if (denoise or mass != "lumped") and quadrature != "fem":
+            raise MeshError("denoise=True and mass= are options of the FEM pencil (operator='fem'); a "
+                            "point cloud's kernel denoises with point_cloud_laplacian(P, denoise=True)")
         if quadrature == "galerkin":
             if corrections.galerkin.simplices(geo) is None:
                 raise MeshError("quadrature='galerkin' integrates over simplices: a triangle mesh, a curve's "
@@ -170,4 +174,4 @@ class Options:
                    int(available_memory() * 0.8) if max_memory is None
                    else int(check_positive(max_memory, "max_memory")),
                    None if pointwise_degree is None else int(pointwise_degree), quadrature,
-                   0.0 if exact else check_tol(pencil_tol), feature_width, bool(denoise))
+                   0.0 if exact else check_tol(pencil_tol), feature_width, bool(denoise), mass)

@@ -231,12 +231,13 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
     # no kernel: linear FEM on the cells, copies of a vertex welded (meshlap.fem)
     if report is not None:
         report(0.5, "FEM pencil")
-    S, m = fem.fem_pencil(geo, weld=fem.welded(geo))
+    S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass)
     sigma = fem.surface_noise(geo) if opts.denoise else 0.0
     if sigma > 0:  # asked for: FEM on the positions after a heat step that averages the noise out
         if report is not None:
             report(0.7, "denoised positions")
-        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), points=denoise.denoised(geo.points, S, m, sigma))
+        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass,
+                              points=denoise.denoised(geo.points, S, m, sigma))
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if report is not None:

@@ -3,7 +3,7 @@
 The builders are mechanisms, each deterministic and named (``operator=``):
 
 ========== =================================================================================
-"fem"      linear finite elements on the mesh's cells, intrinsic Delaunay, blended mass
+"fem"      linear finite elements on the mesh's cells, intrinsic Delaunay, lumped mass
            (:mod:`meshlap.fem`): the symmetric pencil ``(S, M)``
 "kernel"   the corrected heat kernel on the vertices (Richardson kernel, arc distances, mirror
            images; :class:`meshlap.MeshLaplacian`)
@@ -16,10 +16,9 @@ and ``op @ f`` of all but the paper's applies the fitted point-wise rows
 
 The policy for ``operator="auto"`` has no tuned threshold:
 
-- an input with cells gets the "fem" pencil: its eigenvalues lie between the lumped and the
-  consistent FEM's on the same mesh (:mod:`meshlap.fem`), so its worst case is linear FEM there,
-  and parts stay apart (one zero eigenvalue per connected part); a surface's normal noise is
-  measured and recorded (:func:`meshlap.denoise.normal_noise`), and ``denoise=True`` takes FEM on
+- an input with cells gets the "fem" pencil: linear FEM on the intrinsic Delaunay triangulation of
+  its cells (:mod:`meshlap.fem`), so its worst case is linear FEM there, and parts stay apart
+  (one zero eigenvalue per connected part); a surface's normal noise is measured and recorded (:func:`meshlap.denoise.normal_noise`), and ``denoise=True`` takes FEM on
   the positions after a heat step that averages it out (a scan's fine detail reads as noise too,
   so this is the user's call, not a threshold's); the kernel keeps what FEM cannot give:
   ``op @ f``, point-wise convergent rows;
@@ -48,8 +47,8 @@ OPERATORS = ("auto", "fem", "kernel", "galerkin", "paper")
 Operator = Literal["auto", "fem", "kernel", "galerkin", "paper"]
 
 _REASONS = {
-    "cells": "the input has cells: linear FEM on them, intrinsic Delaunay with the blended mass, whose "
-             "eigenvalues lie between the lumped and the consistent FEM's (worst case linear FEM)",
+    "cells": "the input has cells: linear FEM on them (intrinsic Delaunay, lumped mass), point-wise rows "
+             "fitted by the kernel",
     "cloud": "the input has no cells (a point cloud): the corrected heat kernel on the points",
     "h": "a kernel width h was given: the corrected heat kernel at that width",
     "options": "options of the kernel were given ({}): the kernel they configure",

@@ -167,7 +167,8 @@ def test_unreferenced_vertex_keeps_the_spectrum():
 def test_coarse_decimated_mesh_within_fem():
     # spot decimated to about 500 vertices, a coarse closed mesh of skinny triangles: the default's
     # first 9 nonzero eigenvalues against linear FEM refined 16x (extrapolated) are within 1.5x of
-    # the better of the lumped (cotangent) and consistent FEM on the same mesh
+    # the better of the lumped (cotangent) and consistent FEM on the same mesh (measured: 0.88%
+    # against 0.88% and 3.1%; mass="blend" 1.8%)
     igl = pytest.importorskip("igl")
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
     V, F = igl.decimate(V, F, 1000)[:2]
@@ -205,5 +206,5 @@ def test_denoise_takes_normal_noise_out_of_the_metric():
     err_plain = _error(meshlap.spectral.eigs(plain, 10)[0], exact)
     err_denoised = _error(meshlap.spectral.eigs(meshlap.laplacian(noisy, F, denoise=True), 10)[0], exact)
     assert err_denoised < err_plain / 3, (err_denoised, err_plain)
-    with pytest.raises(MeshError, match="denoise=True"):
+    with pytest.raises(MeshError, match="options of the FEM pencil"):
         meshlap.laplacian(noisy, F, operator="kernel", denoise=True)
