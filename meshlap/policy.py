@@ -18,10 +18,11 @@ The policy for ``operator="auto"`` has no tuned threshold:
 
 - an input with cells gets the "fem" pencil: linear FEM on the intrinsic Delaunay triangulation of
   its cells (:mod:`meshlap.fem`), so its worst case is linear FEM there, and parts stay apart
-  (one zero eigenvalue per connected part); a surface's normal noise is measured and recorded (:func:`meshlap.denoise.normal_noise`), and ``denoise=True`` takes FEM on
-  the positions after a heat step that averages it out (a scan's fine detail reads as noise too,
-  so this is the user's call, not a threshold's); the kernel keeps what FEM cannot give:
-  ``op @ f``, point-wise convergent rows;
+  (one zero eigenvalue per connected part); a surface's normal noise is measured and recorded
+  (:func:`meshlap.denoise.normal_noise`), and ``denoise=True`` takes FEM on the positions after
+  a heat step that averages it out (a scan's fine detail reads as noise too, so this is the
+  user's call, not a threshold's); the kernel keeps what FEM cannot give: ``op @ f``,
+  point-wise convergent rows;
 - an input without cells (a point cloud) gets the "kernel" pencil, the only one it can have;
 - a kernel width ``h`` or an option of the kernel (``correction``, ``quadrature``, ...) asks for
   the kernel: "paper" with ``correction="none"``, "galerkin" with ``quadrature="galerkin"``,
