@@ -32,7 +32,7 @@ from . import (
     widths,
 )
 from .builders import laplacian, mesh_laplacian, point_cloud_laplacian, point_cloud_matrices
-from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .errors import EigenError, MeshError, MeshWarning, OperatorTooLargeError
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
 from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian, truncation_bound
@@ -43,6 +43,7 @@ __version__ = "0.1.0"
 __all__ = [
     "CORRECTED_TOL",
     "DEFAULT_TOL",
+    "EigenError",
     "Geometry",
     "MeshError",
     "MeshLaplacian",

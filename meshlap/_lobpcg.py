@@ -428,11 +428,12 @@ class Ritz(NamedTuple):
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
            tol: float, maxiter: int, allsum=_local, *, on_values: bool = True,
            report: Callable[[int, float], None] | None = None, floor: float | None = None,
-           cheap: bool = False) -> Ritz:
+           cheap: bool = False, least: float = 0.0) -> Ritz:
     """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
 
-    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100)`` stop receiving new
-    directions; the iteration ends when the first k have. The measure is the eigenvalue
+    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100, least)`` stop receiving new
+    directions (``least``: the scale of a block whose first k values are all zero, as on a mesh
+    of k parts or more); the iteration ends when the first k have. The measure is the eigenvalue
     bound of :func:`eig_error` (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``.
     The rows may be a share of the problem's (an MPI rank's): ``allsum`` then adds the small
     Gram matrices and norms over the shares, so every share solves the same small problems.
@@ -470,7 +471,7 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
             err = eig_error(lam, res, gram)
         else:
             err = res = np.sqrt(allsum(np.sum(R * R / mc, axis=0)))
-        scale = np.maximum(np.abs(lam), 0.01 * max(abs(float(lam[k - 1])), 1e-300))
+        scale = np.maximum(np.abs(lam), max(0.01 * abs(float(lam[k - 1])), least, 1e-300))
         ratio = err / np.maximum(tol * scale, 1e-300)
         if report is not None:
             report(it, float(ratio[:k].max()))
