@@ -31,6 +31,7 @@ The factorization costs about what a shift-invert solve's does: affordable for s
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -183,8 +184,8 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     cluster goes on past them) runs again, asked for that many. ``must_count``: an attempt that
     cannot be counted fails. Raises :class:`meshlap.EigenError` with the best attempt's pairs
     when none passes. ``info`` is filled with ``method``, ``tried``, ``iterations``, ``residuals``,
-    ``bounds``, ``orthogonality``, ``count``, ``shift`` and ``complete`` (a count, or the method, showed
-    that the k values are the lowest).
+    ``bounds``, ``orthogonality``, ``count``, ``shift``, ``complete`` (a count, or the method,
+    showed that the k values are the lowest) and ``check_seconds`` (the time of the checks).
 
     Examples
     --------
@@ -199,7 +200,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     """
     from .errors import EigenError
 
-    want, tried, best = k, [], None
+    want, tried, best, spent = k, [], None, 0.0
     queue = list(attempts)
     while queue:
         attempt = queue.pop(0)
@@ -208,6 +209,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
         count = shift = None
         upper = float(lam[k]) if len(lam) > k else None
         j = k
+        began = time.perf_counter()
         if counter is not None and not attempt.exact:
             shift, j = count_shift(lam, k, floor)
             count = counter(shift)
@@ -219,11 +221,13 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
             if count == j:
                 upper = shift  # proven: λ_{j+1} ≥ σ
         verdict = verify(apply_A, m, lam[:j], X[:, :j], tol, floor, upper, allsum)
+        spent += time.perf_counter() - began
         complete = attempt.exact or (count is not None and count == j)
         ok = bool(verdict.passed.all()) and (complete or not (must_count or count is not None))
         record = dict(method=attempt.name, tried=list(tried), iterations=iterations,
                       residuals=verdict.residuals[:k], bounds=verdict.bounds[:k],
-                      orthogonality=verdict.orthogonality, count=count, shift=shift, complete=complete)
+                      orthogonality=verdict.orthogonality, count=count, shift=shift, complete=complete,
+                      check_seconds=spent)
         if best is None or verdict.passed[:k].sum() > best[2].passed[:k].sum():
             best = (lam[:k], X[:, :k], verdict, record)
         if ok:

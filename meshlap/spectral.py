@@ -378,10 +378,15 @@ def eigs(
     report = make_progress(progress)
     if report is not None and method != "lobpcg":
         report(0.0, method)
-    S_P = None if matrix_free else _restricted_S(op, P)
+    held: list[sp.csr_matrix] = []
+
+    def S_P() -> sp.csr_matrix:  # made on first use: LOBPCG and the check multiply with L_sym
+        if not held:
+            held.append(_restricted_S(op, P))
+        return held[0]
 
     def dense(want: int):
-        S = S_P.toarray()
+        S = S_P().toarray()
         lam, X = sla.eigh(-0.5 * (S + S.T), np.diag(m), subset_by_index=[0, min(want, n_p - 1)])
         return lam, X, 0
 
@@ -394,23 +399,23 @@ def eigs(
 
     ladder = [_eigcheck.Attempt("dense", dense, exact=True)] if method == "dense" else []
     if method == "shift-invert":
-        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P, m, w, tol)))
+        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P(), m, w, tol)))
     if method == "lobpcg":
         ladder += [_eigcheck.Attempt("lobpcg", lobpcg(False)),
                    _eigcheck.Attempt("lobpcg (wider)", lobpcg(True))]
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
-        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P, m, w, tol)))
+        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P(), m, w, tol)))
     if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
         ladder.append(_eigcheck.Attempt("dense", dense, exact=True))
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:
         ladder.append(_eigcheck.Attempt("lobpcg", lobpcg(True)))
     counted = (sparse if count is None else count) and not matrix_free
-    counter = (lambda sigma: _eigcheck.count_below(-S_P, m, sigma)) if counted else None
+    counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma)) if counted else None
     minus_m = -m
 
     def apply_A(X: np.ndarray) -> np.ndarray:
-        if S_P is not None:
-            return _lobpcg.csr_times(S_P, X, np.full(n_p, -1.0))
+        if n_p == op.n_vertices:
+            return minus_m[:, None] * apply_block(op, X)
         full = np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
         return minus_m[:, None] * apply_block(op, full)[P]
