@@ -414,11 +414,11 @@ def eigs(
     minus_m = -m
 
     def apply_A(X: np.ndarray) -> np.ndarray:
-        if n_p == op.n_vertices:
-            return minus_m[:, None] * apply_block(op, X)
-        full = np.zeros((op.n_vertices, X.shape[1]))
+        # a sparse pencil by scipy's product: no compiled kernel to load for the check alone
+        full = X if n_p == op.n_vertices else np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
-        return minus_m[:, None] * apply_block(op, full)[P]
+        LX = symmetric_L(op) @ full if sparse else apply_block(op, full)
+        return minus_m[:, None] * np.asarray(LX)[P]
 
     lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, 0.01 * _scale_shift(m), counter,
                                       bool(count), info=info)
