@@ -379,6 +379,14 @@ def eigs(
     if report is not None and method != "lobpcg":
         report(0.0, method)
     held: list[sp.csr_matrix] = []
+    # L_sym on the vertices with mass in spatial order (for LOBPCG's products and the check's),
+    # made on first use
+    kept: list = []
+
+    def spatial():
+        if not kept:
+            kept.append(None if sparse else _ordered_L(op, P))
+        return kept[0]
 
     def S_P() -> sp.csr_matrix:  # made on first use: LOBPCG and the check multiply with L_sym
         if not held:
@@ -394,7 +402,7 @@ def eigs(
         def run(want: int):
             more = max(extra, want - k + 4, k // 2) if wide else max(extra, want - k + 4)
             return _eigs_lobpcg(op, P, m, k, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
-                                adapt and not wide, report)
+                                adapt and not wide, spatial(), report)
         return run
 
     ladder = [_eigcheck.Attempt("dense", dense, exact=True)] if method == "dense" else []
@@ -414,14 +422,20 @@ def eigs(
     minus_m = -m
 
     def apply_A(X: np.ndarray) -> np.ndarray:
+        if spatial() is not None:  # the block's rows read from cache, as in LOBPCG
+            B, order = spatial()
+            out = np.empty_like(X)
+            out[order] = _lobpcg.csr_times(B, X[order], minus_m[order])
+            return out
         # a sparse pencil by scipy's product: no compiled kernel to load for the check alone
         full = X if n_p == op.n_vertices else np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
         LX = symmetric_L(op) @ full if sparse else apply_block(op, full)
         return minus_m[:, None] * np.asarray(LX)[P]
 
-    lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, 0.01 * _scale_shift(m), counter,
-                                      bool(count), info=info)
+    with _one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
+        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, 0.01 * _scale_shift(m), counter,
+                                          bool(count), info=info)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
@@ -464,7 +478,7 @@ def _block_size(theta: np.ndarray, k: int, least: int) -> int:
     return int(min(len(theta), max(least, near + 2)))
 
 
-def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=None):
+def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None):
     n, n_p = op.n_vertices, len(P)
     nb = k + extra
     full = n_p == n
@@ -472,7 +486,6 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, report=Non
         report(0.0, "preconditioner")
     # the iteration runs in spatial order where L is stored: the same problem, permuted, whose
     # block products read the block from cache
-    ordered = _ordered_L(op, P)
     order = slice(None) if ordered is None else ordered[1]
     m = m[order]
     minus_m = -m

@@ -440,8 +440,10 @@ def eigs(
     sparse = gathered is not None and gathered.nnz() <= spectral._SPARSE_ROW_MAX * op.n_vertices
     counted = gathered is not None and ((sparse and small) if count is None else bool(count))
     checked: dict = {}
-    lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, 0.01 * sigma,
-                                      gathered.count if counted else None, bool(count), allsum, info=checked)
+    with spectral._one_blas_thread():
+        lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, 0.01 * sigma,
+                                          gathered.count if counted else None, bool(count), allsum,
+                                          info=checked)
     if info is not None:
         info.update(facts, **checked)
     if report is not None:
