@@ -28,6 +28,7 @@ frequency. The iteration itself (and the meaning of ``tol``: the eigenvalues' ac
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 from typing import Any
 
@@ -378,20 +379,10 @@ def eigs(
     report = make_progress(progress)
     if report is not None and method != "lobpcg":
         report(0.0, method)
-    held: list[sp.csr_matrix] = []
-    # L_sym on the vertices with mass in spatial order (for LOBPCG's products and the check's),
-    # made on first use
-    kept: list = []
-
-    def spatial():
-        if not kept:
-            kept.append(None if sparse else _ordered_L(op, P))
-        return kept[0]
-
-    def S_P() -> sp.csr_matrix:  # made on first use: LOBPCG and the check multiply with L_sym
-        if not held:
-            held.append(_restricted_S(op, P))
-        return held[0]
+    # made on first use: -S on the vertices with mass, and L_sym there in spatial order (for
+    # LOBPCG's products and the check's)
+    S_P = functools.cache(lambda: _restricted_S(op, P))
+    spatial = functools.cache(lambda: None if sparse else _ordered_L(op, P))
 
     def dense(want: int):
         S = S_P().toarray()
@@ -405,33 +396,31 @@ def eigs(
                                 adapt and not wide, spatial(), report)
         return run
 
-    ladder = [_eigcheck.Attempt("dense", dense, exact=True)] if method == "dense" else []
-    if method == "shift-invert":
-        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P(), m, w, tol)))
-    if method == "lobpcg":
-        ladder += [_eigcheck.Attempt("lobpcg", lobpcg(False)),
-                   _eigcheck.Attempt("lobpcg (wider)", lobpcg(True))]
+    exact = _eigcheck.Attempt("dense", dense, exact=True)
+    shift = _eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P(), m, w, tol))
+    wider = _eigcheck.Attempt("lobpcg (wider)", lobpcg(True))
+    ladder = {"dense": [exact], "shift-invert": [shift],
+              "lobpcg": [_eigcheck.Attempt("lobpcg", lobpcg(False)), wider]}[method]
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
-        ladder.append(_eigcheck.Attempt("shift-invert", lambda w: _shift_invert(S_P(), m, w, tol)))
+        ladder.append(shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
-        ladder.append(_eigcheck.Attempt("dense", dense, exact=True))
+        ladder.append(exact)
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:
-        ladder.append(_eigcheck.Attempt("lobpcg", lobpcg(True)))
+        ladder.append(wider)
     counted = (sparse if count is None else count) and not matrix_free
     counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma)) if counted else None
-    minus_m = -m
 
     def apply_A(X: np.ndarray) -> np.ndarray:
         if spatial() is not None:  # the block's rows read from cache, as in LOBPCG
             B, order = spatial()
             out = np.empty_like(X)
-            out[order] = _lobpcg.csr_times(B, X[order], minus_m[order])
+            out[order] = _lobpcg.csr_times(B, X[order], -m[order])
             return out
         # a sparse pencil by scipy's product: no compiled kernel to load for the check alone
         full = X if n_p == op.n_vertices else np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
         LX = symmetric_L(op) @ full if sparse else apply_block(op, full)
-        return minus_m[:, None] * np.asarray(LX)[P]
+        return -m[:, None] * np.asarray(LX)[P]
 
     with _one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
         lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, 0.01 * _scale_shift(m), counter,
