@@ -391,8 +391,10 @@ def eigs(
 
     def lobpcg(wide: bool):
         def run(want: int):
-            more = max(extra, want - k + 4, k // 2) if wide else max(extra, want - k + 4)
-            return _eigs_lobpcg(op, P, m, k, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
+            # past k, all that the count asked for converge (λ_k's ties, or values skipped)
+            goal = max(k, min(want, n_p // 3 - extra))
+            more = max(extra, k // 2) if wide else extra
+            return _eigs_lobpcg(op, P, m, goal, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
                                 adapt and not wide, spatial(), report)
         return run
 

@@ -134,3 +134,43 @@ def test_returned_pairs_are_within_tol_on_the_test_meshes():
             assert info["method"] == "lobpcg" and (info["bounds"] <= 1).all()
             scale = np.maximum(np.abs(ref), ref[-1] / 100)
             assert (np.abs(lam - ref) <= tol * scale).all()
+
+
+def dumbbell(nz=120, nt=48, neck=0.06):
+    """Two unit lobes joined by a neck of radius 0.06 (a surface of revolution, closed at the
+    poles): a nearly cut-off part, λ₁ ≈ 0.08 against λ₂ ≈ 2."""
+    z = np.linspace(-2.2, 2.2, nz)[1:-1]
+    r = np.maximum(np.sqrt(np.clip(1 - (np.abs(z) - 1.2) ** 2, 0, None)), neck)
+    t = np.linspace(0, 2 * np.pi, nt, endpoint=False)
+    ring = np.stack([np.outer(r, np.cos(t)).ravel(), np.outer(r, np.sin(t)).ravel(), np.repeat(z, nt)], 1)
+    V = np.concatenate([ring, [[0, 0, -2.2], [0, 0, 2.2]]])
+    i, j = np.meshgrid(np.arange(len(z) - 1), np.arange(nt), indexing="ij")
+    a, b = i * nt + j, i * nt + (j + 1) % nt
+    c, d = a + nt, b + nt
+    F = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    s, n, last = len(V) - 2, len(V) - 1, (len(z) - 1) * nt
+    jj = np.arange(nt)
+    caps = [np.stack([np.full(nt, s), (jj + 1) % nt, jj], 1),
+            np.stack([np.full(nt, n), last + jj, last + (jj + 1) % nt], 1)]
+    return V, np.concatenate([F, *caps])
+
+
+def test_lobpcg_block_stays_orthonormal_with_a_poor_preconditioner():
+    """The cotangent pencil of a dumbbell, 14 eigenpairs, the diagonal preconditioner alone: 200
+    iterations drifted the block off M-orthonormality until it collapsed onto the constant
+    (|XᵀMX - I| = 1.0, fourteen Ritz values of 0, the issue's "ten zeros"); the audit every 10
+    iterations restarts it from its own span. Unconverged still, and the check says so."""
+    from meshlap import _lobpcg
+
+    V, F = dumbbell()
+    cot = cotangent(V, F)
+    m = cot.mass
+    A = sp.csr_matrix(-cot.S)
+    d = 0.5 / A.diagonal()
+    X0 = np.random.default_rng(0).standard_normal((len(m), 18))
+    out = _lobpcg.lobpcg(lambda Y: A @ Y, m, lambda R: d[:, None] * R, X0, 14, 1e-8, 200)
+    assert np.abs(out.X.T @ (m[:, None] * out.X) - np.eye(18)).max() < 1e-8
+    ref = dense_spectrum(cot)[:14]
+    assert (out.lam[:14] >= ref - 1e-9).all() and out.lam[1] > 0.05  # Ritz values: upper bounds
+    v = _eigcheck.verify(lambda Y: A @ Y, m, out.lam[:14], out.X[:, :14], 1e-8, 0.01, float(out.lam[14]))
+    assert not v.passed.all()
