@@ -4,6 +4,7 @@ of points per rank and a fixed number of entries per row, on 1 and 2 MPI ranks.
     python benchmarks/bench_distributed.py             # runs mpiexec -n 1 and -n 2, updates RESULTS.md
     python benchmarks/bench_distributed.py --quick     # 5,000 points per rank, prints only
     mpiexec -n 2 python benchmarks/bench_distributed.py --rank-job 40000   # one job, JSON on stdout
+    python benchmarks/bench_distributed.py --eigs 100000 --k 20 --default  # issue 38's eigensolver case
 
 The sphere has n = P · (points per rank) Fibonacci points and h = c/n, so that a row holds
 the same number of entries whatever P (r² = 4h ln 1e8 and the area per point both scale as
@@ -202,16 +203,19 @@ def _eigs_mesh(n: int):
     return meshlap.shapes.sphere(n, kind="random", seed=0)
 
 
-def eigs_job(n: int, k: int, serial: bool, matrix_free: bool, h_edges: float | None) -> None:
+def eigs_job(n: int, k: int, serial: bool, matrix_free: bool, h_edges: float | None,
+             default: bool = False) -> None:
     """One eigensolver run on a random n-vertex sphere, JSON on stdout: ``spectral.eigs`` on the
     single-machine operator (``serial``), or the distributed LOBPCG on all ranks of COMM_WORLD;
-    stored or ``matrix_free``; at the paper's default h, or h = h_edges · ē² (ē the mean edge)."""
+    stored or ``matrix_free``; at the paper's default h, or h = h_edges · ē² (ē the mean edge).
+    ``default``: the default operator, every argument left to the defaults, and
+    ``distributed.eigs(op, k)`` as a user calls it (issue 38)."""
     import igl
 
     import meshlap
 
     V, F = _eigs_mesh(n)
-    kw = {"correction": "none", "matrix_free": matrix_free}
+    kw = {} if default else {"correction": "none", "matrix_free": matrix_free}
     if h_edges is not None:
         kw["h"] = h_edges * float(igl.edge_lengths(V, F).mean()) ** 2
     t0 = time.perf_counter()
@@ -234,13 +238,17 @@ def eigs_job(n: int, k: int, serial: bool, matrix_free: bool, h_edges: float | N
     t1 = time.perf_counter()
     info: dict = {}
     if serial:
-        lam, _ = spectral.eigs(op, k)
+        lam, _ = spectral.eigs(op, k, info=info)
+    elif default:
+        lam, _ = distributed.eigs(op, k, info=info)
+        comm.Barrier()
     else:
         lam, _ = distributed_eigs.eigs(op, k, mesh=(V, F), info=info)
         comm.Barrier()
     t2 = time.perf_counter()
     row = {"n": n, "k": k, "ranks": size, "rank": rank, "h": float(op.h), "nnz": int(nnz), "t_build": t1 - t0,
            "t_eigs": t2 - t1, "iterations": info.get("iterations"), "block": info.get("block"),
+           "method": info.get("method"), "check": info.get("check_seconds"),
            "lam": [float(x) for x in lam],
            "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
     rows = [row] if serial else comm.gather(row)
@@ -249,12 +257,13 @@ def eigs_job(n: int, k: int, serial: bool, matrix_free: bool, h_edges: float | N
 
 
 def run_eigs(n: int, k: int, ranks: int, matrix_free: bool = False,
-             h_edges: float | None = None) -> list[dict]:
+             h_edges: float | None = None, default: bool = False) -> list[dict]:
     """``eigs_job`` in a subprocess: ranks = 0 for the single machine (numba on every core),
     else mpiexec with one numba thread per rank."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     job = [sys.executable, __file__, "--eigs-job", str(n), str(k)]
     job += ["--matrix-free"] if matrix_free else []
+    job += ["--default"] if default else []
     job += ["--h-edges", str(h_edges)] if h_edges is not None else []
     if ranks == 0:
         cmd = [*job, "--serial"]
@@ -266,10 +275,10 @@ def run_eigs(n: int, k: int, ranks: int, matrix_free: bool = False,
 
 
 def eigs_section(n: int, k: int, matrix_free: bool = False, h_edges: float | None = None,
-                 ranks: tuple[int, ...] = (0, 1, 2)) -> list[str]:
+                 ranks: tuple[int, ...] = (0, 1, 2), default: bool = False) -> list[str]:
     """Single machine, 1 and 2 ranks on the same operator: the table and the cost per iteration."""
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
-    runs = {r: run_eigs(n, k, r, matrix_free, h_edges) for r in ranks}
+    runs = {r: run_eigs(n, k, r, matrix_free, h_edges, default) for r in ranks}
     uptime_after = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     lam0 = np.array(runs[0][0]["lam"])
     scale = np.maximum(np.abs(lam0), lam0[1])
@@ -277,23 +286,31 @@ def eigs_section(n: int, k: int, matrix_free: bool = False, h_edges: float | Non
     flag, kind = (" --matrix-free", "matrix-free ") if matrix_free else ("", "")
     flag += f" --h-edges {h_edges:g}" if h_edges is not None else ""
     width = "default h" if h_edges is None else f"h = {h_edges:g} ē²"
-    lines = [f"`python benchmarks/bench_distributed.py --eigs {n} --k {k}{flag}`: {k} eigenpairs of the "
-             f"paper's {kind}operator (`correction=\"none\"`, {width} = {one['h']:.3g}) on a random "
-             f"{n:,}-vertex unit sphere, {nnz / n:.0f} entries per row ({nnz / 1e6:.0f} M). Single machine: "
-             "`spectral.eigs` with numba on both cores; distributed: `distributed.lobpcg.eigs(op, k, "
-             "mesh=(V, F))`, one numba thread per rank.", "",
+    what = (f"the paper's {kind}operator (`correction=\"none\"`, {width} = {one['h']:.3g})" if not default
+            else f"the default operator (`meshlap.laplacian(V, F)` and `distributed.laplacian(V, F)`, h = "
+            f"{one['h']:.3g})")
+    call = ("`distributed.eigs(op, k)` with every default (the mesh the operator was built from)" if default
+            else "`distributed.lobpcg.eigs(op, k, mesh=(V, F))`")
+    flag += " --default" if default else ""
+    lines = [f"`python benchmarks/bench_distributed.py --eigs {n} --k {k}{flag}`: {k} eigenpairs of "
+             f"{what} on a random {n:,}-vertex unit sphere, {nnz / n:.0f} entries per row "
+             f"({nnz / 1e6:.0f} M). "
+             f"Single machine: `spectral.eigs` with numba on both cores; distributed: {call}, one numba "
+             "thread per rank. Every run's pairs verified (issue 38); the method whose pairs were "
+             "returned and the check's time in the last columns.", "",
              f"Load: before `{uptime}`; after `{uptime_after}`.", "",
              "| run | rank | build | eigs | iterations | eigs per iteration | max rel. eigenvalue diff "
-             "vs single machine | peak RSS |", "|---|---|---|---|---|---|---|---|"]
+             "vs single machine | peak RSS | returned by | check |", "|---" * 10 + "|"]
     for r, res in runs.items():
         for row in res:
             err = float((np.abs(np.array(row["lam"]) - lam0) / scale).max())
             it = row["iterations"]
             per = f"{row['t_eigs'] / it:.2f} s" if it else "–"
             name = "single machine" if r == 0 else f"{r} rank" + ("s" if r > 1 else "")
+            check = f"{row['check']:.2f} s" if row.get("check") is not None else "–"
             lines.append(f"| {name} | {row['rank'] if r else '–'} | {row['t_build']:.1f} s | "
                          f"{row['t_eigs']:.1f} s | {it or '–'} | {per} | {err:.1e} | "
-                         f"{row['rss'] / 2**30:.2f} GiB |")
+                         f"{row['rss'] / 2**30:.2f} GiB | {row.get('method') or '–'} | {check} |")
     t0, t2 = one["t_eigs"], max(row["t_eigs"] for row in runs[2])
     it2 = runs[2][0]["iterations"]
     cost = t2 / it2 / (nnz / 2)
@@ -319,22 +336,25 @@ def main() -> None:
                     help="with --eigs: the runs, 0 = single machine (always), else ranks")
     ap.add_argument("--h-edges", type=float,
                     help="h = this times the squared mean edge (default: the paper's h)")
+    ap.add_argument("--default", action="store_true",
+                    help="with --eigs: the default operator and distributed.eigs(op, k) (issue 38)")
     args = ap.parse_args()
     if args.rank_job:
         rank_job(args.rank_job)
         return
     if args.eigs_job:
-        eigs_job(*args.eigs_job, serial=args.serial, matrix_free=args.matrix_free, h_edges=args.h_edges)
+        eigs_job(*args.eigs_job, serial=args.serial, matrix_free=args.matrix_free, h_edges=args.h_edges,
+                 default=args.default)
         return
     if args.eigs:
         lines = eigs_section(args.eigs, args.k, args.matrix_free, args.h_edges,
-                             tuple(sorted({0, 2, *args.runs})))
+                             tuple(sorted({0, 2, *args.runs})), args.default)
         print("\n".join(lines))
         if not args.quick:
             sys.path.insert(0, str(HERE))
             from results_file import write_section
 
-            title = "Distributed eigensolver"
+            title = "Distributed eigensolver" + (" (the default operator)" if args.default else "")
             write_section(title + (f", {args.eigs:,} points" if args.eigs >= 1_000_000 else ""), lines)
         return
     per_rank = 5_000 if args.quick else args.per_rank

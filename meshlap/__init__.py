@@ -44,7 +44,7 @@ from .builders import (
     point_cloud_matrices,
     pointwise_laplacian,
 )
-from .errors import MeshError, MeshWarning, OperatorTooLargeError
+from .errors import EigenError, MeshError, MeshWarning, OperatorTooLargeError
 from .geodesics import HeatDistance, geodesic_distance
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
@@ -57,6 +57,7 @@ __version__ = "0.1.0"
 __all__ = [
     "CORRECTED_TOL",
     "DEFAULT_TOL",
+    "EigenError",
     "Geometry",
     "HeatDistance",
     "MeshError",

@@ -68,6 +68,9 @@ __all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "combine", "csr_times", "
 _WINDOW = 0.05
 # rows per block of the products over the long dimension (module notes)
 _ROWS = 4096
+# every this many iterations the basis' M-orthonormality is audited; beyond _DRIFT, a restart
+_AUDIT = 10
+_DRIFT = 1e-8
 # blocks up to this many columns go to SuperLU's own solve (no compiled kernel needed: the
 # semidefiniteness check of a build uses 6)
 _NARROW = 8
@@ -334,35 +337,66 @@ def svqb(U: np.ndarray, m: np.ndarray, drop: float = 1e-10, allsum=_local) -> tu
     return matmul(U, T), T
 
 
-def _orthogonalize(W: np.ndarray, XP: np.ndarray, mc: np.ndarray, allsum, again: bool) -> None:
+def _orthogonalize(W: np.ndarray, XP: np.ndarray, mc: np.ndarray, allsum, again: bool) -> np.ndarray:
     """W ← W - XP XPᵀ M W in place (XP M-orthonormal) by classical Gram–Schmidt; with
     ``again``, a second pass for the columns that the first shrank below 1/√2 of their norm.
+    Returns the columns to keep: those left with more than 1e-10 of their norm (1e-6 after
+    one pass), the others being rounding error.
 
     Kahan and Parlett's criterion: a column that keeps most of its norm loses little to
     cancellation, and one pass leaves it orthogonal to about the rounding error; "twice is
     enough" for the others. LOBPCG's preconditioned residuals keep 0.66-1 of their norm (36
-    eigenpairs of a 16,000-vertex sphere), so the second pass is rare.
+    eigenpairs of a 16,000-vertex sphere), so the second pass is rare. A column that lies in
+    XP's span to within the rounding error is not: what is left of it is noise, far from
+    orthogonal relative to its own size, and normalized it would enter the basis as a
+    direction that is not M-orthogonal to the rest (issue 38: with the exact preconditioner of
+    a cotangent pencil, whose converged columns' corrections lie in the span, such columns
+    made the block collapse onto the constant function, ten Ritz values of 0).
 
     Examples
     --------
     >>> XP = np.eye(3)[:, :1]
     >>> W = np.array([[1.0, 1.0], [0.0, 1e-9], [0.0, 0.0]])
-    >>> _orthogonalize(W, XP, np.ones((3, 1)), _local, True)
+    >>> _orthogonalize(W, XP, np.ones((3, 1)), _local, True).tolist()   # the first: XP's own
+    [False, True]
     >>> W.tolist()
     [[0.0, 0.0], [0.0, 1e-09], [0.0, 0.0]]
     """
     MW = mc * W
     C = allsum(inner(XP, MW))
-    before = allsum(np.einsum("ij,ij->j", W, MW)) if again else None
+    before = allsum(np.einsum("ij,ij->j", W, MW))
     W -= matmul(XP, C)
-    if before is None:
-        return
     # the squared norms after the pass, by Pythagoras (inexact exactly where it cancelled)
     redo = np.flatnonzero(before - np.sum(C * C, axis=0) < 0.5 * before)
-    if len(redo):
-        Wr = W[:, redo]
+    keep = np.ones(W.shape[1], dtype=bool)
+    if not len(redo):
+        return keep
+    Wr = W[:, redo]
+    if again:
         Wr -= matmul(XP, allsum(inner(XP, mc * Wr)))
         W[:, redo] = Wr
+    after = allsum(np.einsum("ij,ij->j", Wr, mc * Wr))
+    keep[redo] = after > (1e-20 if again else 1e-12) * before[redo]
+    return keep
+
+
+def _drifted(X: np.ndarray, mc: np.ndarray, allsum) -> bool:
+    """Whether X has drifted from M-orthonormality by more than ``_DRIFT`` (any entry)."""
+    G = allsum(inner(X, mc * X))
+    return bool(np.abs(G - np.eye(len(G))).max() > _DRIFT)
+
+
+def _restart(X: np.ndarray, m: np.ndarray, apply_A, allsum, nb: int):
+    """M-orthonormal Ritz vectors from the span of X (nb of them: random directions, the same
+    on every share's rows of a seed, fill what the span lost) and their products."""
+    Y, _ = svqb(X, m, allsum=allsum)
+    if Y.shape[1] < nb:
+        extra = np.random.default_rng(Y.shape[1]).standard_normal((len(m), nb - Y.shape[1]))
+        _orthogonalize(extra, Y, m[:, None], allsum, True)
+        Y = np.hstack([Y, svqb(extra, m, allsum=allsum)[0]])[:, :nb]
+    AY = apply_A(Y)
+    lam, Q = np.linalg.eigh(allsum(inner(Y, AY)))
+    return matmul(Y, Q), matmul(AY, Q), lam
 
 
 def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None) -> np.ndarray:
@@ -428,11 +462,12 @@ class Ritz(NamedTuple):
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
            tol: float, maxiter: int, allsum=_local, *, on_values: bool = True,
            report: Callable[[int, float], None] | None = None, floor: float | None = None,
-           cheap: bool = False) -> Ritz:
+           cheap: bool = False, least: float = 0.0) -> Ritz:
     """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
 
-    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100)`` stop receiving new
-    directions; the iteration ends when the first k have. The measure is the eigenvalue
+    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100, least)`` stop receiving new
+    directions (``least``: the scale of a block whose first k values are all zero, as on a mesh
+    of k parts or more); the iteration ends when the first k have. The measure is the eigenvalue
     bound of :func:`eig_error` (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``.
     The rows may be a share of the problem's (an MPI rank's): ``allsum`` then adds the small
     Gram matrices and norms over the shares, so every share solves the same small problems.
@@ -463,6 +498,14 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     PAP = np.zeros((0, 0))  # P.T A P; no P yet
     for it in range(maxiter + 1):
         X, AX = XP[:, :nb], AXP[:, :nb]
+        if it and it % _AUDIT == 0 and _drifted(X, mc, allsum):
+            # the basis is no longer what the small problems assume (issue 38: with a poor
+            # preconditioner, 200 iterations on a cotangent pencil collapsed the block onto the
+            # constant): restart from the Ritz vectors, made M-orthonormal again, refilled with
+            # random directions where some were lost, and their products recomputed
+            XP, AXP, lam = _restart(X, m, apply_A, allsum, nb)
+            PAP = np.zeros((0, 0))
+            X, AX = XP, AXP
         R = AX - (mc * X) * lam
         if on_values:
             gram = allsum(inner(R, R / mc))
@@ -470,7 +513,7 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
             err = eig_error(lam, res, gram)
         else:
             err = res = np.sqrt(allsum(np.sum(R * R / mc, axis=0)))
-        scale = np.maximum(np.abs(lam), 0.01 * max(abs(float(lam[k - 1])), 1e-300))
+        scale = np.maximum(np.abs(lam), max(0.01 * abs(float(lam[k - 1])), least, 1e-300))
         ratio = err / np.maximum(tol * scale, 1e-300)
         if report is not None:
             report(it, float(ratio[:k].max()))
@@ -478,7 +521,9 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         if not active[:k].any() or it == maxiter or (floor is not None and lam[0] < floor):
             break
         W = precond(R[:, active])
-        _orthogonalize(W, XP, mc, allsum, not cheap)
+        W = W[:, _orthogonalize(W, XP, mc, allsum, not cheap)]
+        if not W.shape[1]:  # no direction left outside the basis: the iteration has stagnated
+            break
         W, _ = svqb(W, m, allsum=allsum)
         AW = apply_A(W)
         # the operator's Gram matrix of the basis [X, P, W], lower triangle (all eigh reads);

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .cli_uses import add_distance_parser, save_values
-from .errors import MeshError
+from .errors import EigenError, MeshError
 from .geometry.validation import check_faces
 from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
 
@@ -579,7 +579,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         warnings.showwarning = _one_line_warning
         try:
             return int(args.func(args) or 0)
-        except (MeshError, OSError, ImportError, MemoryError) as exc:
+        except (MeshError, EigenError, OSError, ImportError, MemoryError) as exc:
             print(f"{PROG}: error: {exc}", file=sys.stderr)
             return 1
         except KeyboardInterrupt:

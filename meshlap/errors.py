@@ -1,9 +1,9 @@
-"""The two exceptions every stage raises: below every other module, so all can import them."""
+"""The exceptions every stage raises: below every other module, so all can import them."""
 
 import os
 import sys
 
-__all__ = ["MeshError", "MeshWarning", "OperatorTooLargeError", "user_stacklevel"]
+__all__ = ["EigenError", "MeshError", "MeshWarning", "OperatorTooLargeError", "user_stacklevel"]
 
 
 class MeshError(ValueError):
@@ -16,6 +16,23 @@ class MeshWarning(UserWarning):
 
 class OperatorTooLargeError(MemoryError):
     """The assembled matrix would not fit in the memory the caller allows."""
+
+
+class EigenError(RuntimeError):
+    """No eigensolver could verify the eigenpairs asked for (:func:`meshlap.spectral.eigs`).
+
+    Carries the best partial result so that nothing is lost: ``eigenvalues`` (k,),
+    ``vectors`` (n, k) on the vertices with mass, ``residuals`` (‖-Sφ - λMφ‖ in the M⁻¹ norm,
+    per pair), ``bounds`` (each eigenvalue's error bound over ``tol`` times its scale: a pair
+    passed where ≤ 1), ``count`` (eigenvalues of the pencil below ``shift`` by Sylvester's
+    inertia, or None where none was counted), ``shift`` and ``tried`` (the methods run, in order).
+    """
+
+    def __init__(self, message: str, *, eigenvalues=None, vectors=None, residuals=None, bounds=None,
+                 count: int | None = None, shift: float | None = None, tried: tuple = ()) -> None:
+        super().__init__(message)
+        self.eigenvalues, self.vectors, self.residuals, self.bounds = eigenvalues, vectors, residuals, bounds
+        self.count, self.shift, self.tried = count, shift, tuple(tried)
 
 
 def user_stacklevel() -> int:

@@ -118,6 +118,14 @@ def test_lobpcg_matches_serial(n):
 
 @needs_mpi
 @pytest.mark.parametrize("n", [2, 3])
+def test_lobpcg_pairs_are_verified(n):
+    """Issue 38: pairs that fail the check are recomputed (the gathered solve) or raise
+    meshlap.EigenError on every rank; never returned."""
+    mpirun(n, "lobpcg_verified")
+
+
+@needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
 def test_lobpcg_global_preconditioner_iterations(n):
     """The global (MUMPS) cotangent preconditioner: on n ranks at most the 1-rank iteration
     count + 1 (8,000-vertex sphere, k = 20), fewer than block Jacobi's, the smoothed start in at

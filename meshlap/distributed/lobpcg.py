@@ -51,8 +51,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .. import _lobpcg, spectral
-from ..errors import MeshError
+from .. import _eigcheck, _lobpcg, baselines, spectral
+from ..errors import EigenError, MeshError
 from ..geometry.validation import check_faces, check_k, check_vertices
 from ..progress import ProgressLike, make_progress
 from .comm import _has_mumps
@@ -65,6 +65,8 @@ _NEIGHBOURS = 10
 # start is slower, and 10 was chosen for it: 2 ranks, random spheres, the operator's own
 # iterations after a start of 5, 7, 10 or 20: 8, 7, 6, 6 (8k, k = 20); 6 after 10 or 20 (16k)
 _START_ITERATIONS = 10
+# problems up to this many points with mass go to rank 0 when the ranks' own solves fail the check
+_GATHER = 50_000
 
 
 def _allsum(comm):
@@ -275,8 +277,9 @@ def eigs(
     seed: int = 0,
     info: dict | None = None,
     progress: ProgressLike = None,
+    count: bool | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    r"""The k smallest eigenpairs of ``-S φ = λ M φ`` by distributed LOBPCG (collective).
+    r"""The k smallest eigenpairs of ``-S φ = λ M φ`` by distributed LOBPCG (collective), verified.
 
     No factorization of the operator: it is only multiplied (stored or matrix-free); the
     preconditioner factors a sparse Laplacian of the same geometry (module notes).
@@ -298,6 +301,8 @@ def eigs(
     mesh : (V, F), optional
         The whole mesh in the caller's numbering (the same on every rank): the preconditioner
         is then its cotangent Laplacian; without it, a nearest-neighbour graph of the points.
+        Default: the mesh the operator was built from (``op.mesh``: ``laplacian(V, F)`` with
+        the whole faces), else none.
     preconditioner : {"global", "local"}, default "global"
         With a mesh, ``"global"`` factors the distributed cotangent K + σM with MUMPS (the
         single machine's preconditioner exactly, so about its iteration count); ``"local"``
@@ -306,9 +311,22 @@ def eigs(
     seed : int, default 0
         Seed of the random start vectors (with the rank).
     info : dict, optional
-        Filled with ``iterations``, the relative ``residuals`` ``‖r‖ / max(λ, λ_k)`` of the
-        k pairs, their eigenvalue ``error_bounds`` relative to tol's scale, the ``block``
-        width and the cotangent start's ``start_iterations`` (0 without a mesh).
+        Filled with the last LOBPCG run's ``iterations``, relative ``residuals``
+        ``‖r‖ / max(λ, λ_k)``, eigenvalue ``error_bounds`` relative to tol's scale, ``block``
+        width and cotangent start's ``start_iterations`` (0 without a mesh); and with the
+        check's ``method``, ``tried``, ``bounds``, ``orthogonality``, ``count``, ``shift`` and
+        ``complete``, as in :func:`meshlap.spectral.eigs`.
+    count : bool, optional
+        Count the eigenvalues below a shift above λ_k (on the pencil gathered on rank 0) to show
+        that none is missing. Default: for a sparse pencil (at most 40 entries per row) of at
+        most 50,000 points; ``True`` always (a result that cannot be counted then raises).
+
+    Raises
+    ------
+    meshlap.EigenError
+        On every rank, when no solver's pairs pass the check (:func:`meshlap.spectral.eigs`):
+        LOBPCG, LOBPCG with a wider block and twice the iterations, and, up to 50,000 points
+        with mass, :func:`meshlap.spectral.eigs` on the pencil gathered on rank 0.
     progress : bool or callable, optional
         As in :func:`meshlap.spectral.eigs`: ``True`` draws a bar on rank 0's stderr; a
         callable gets ``(fraction, stage)`` on every rank, the same calls everywhere.
@@ -347,6 +365,7 @@ def eigs(
         raise MeshError("every point has zero mass: the operator has no surface")
     k = check_k(k, n_p)
     nb = min(k + (max(4, k // 10) if extra is None else int(extra)), n_p)
+    mesh = getattr(op, "mesh", None) if mesh is None else mesh
     allsum = _allsum(comm)
     full = len(P) == op.n_local
     report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
@@ -380,34 +399,105 @@ def eigs(
             return glob.solve(R)
         return R / (sigma * m[:, None]) if T.lu is None else T.lu.solve(R)
     adapt = extra is None and Kg is not None
-    width = spectral._start_width(k, nb, n_p) if adapt else nb
-    X0 = np.random.default_rng([seed, comm.Get_rank()]).standard_normal((len(P), width))
-    start = None
+    rank = comm.Get_rank()
+    facts: dict = {}
+
+    def run_lobpcg(wide: bool):
+        def run(want: int):
+            # past k, all that the count asked for converge (λ_k's ties, or values skipped)
+            goal = max(k, min(want, n_p // 3 - (nb - k)))
+            more = (nb - k) + (max(4, k // 2) if wide else 0)
+            width = spectral._start_width(goal, goal + more, n_p) if adapt and not wide else goal + more
+            X0 = np.random.default_rng([seed + wide, rank]).standard_normal((len(P), min(width, n_p)))
+            start = None
+            with spectral._one_blas_thread():
+                if Kg is not None:
+                    # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as
+                    # preconditioner, after one step of inverse iteration on the random block, as on
+                    # the single machine
+                    X0 = local(m[:, None] * X0)
+                    start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, goal, spectral._START_TOL,
+                                           _START_ITERATIONS, allsum, on_values=False,
+                                           report=_lobpcg.lobpcg_progress(report, "cotangent start",
+                                                                          0.05, 0.2))
+                    X0 = start.X[:, :spectral._block_size(start.lam, goal, goal + more) if adapt and not wide
+                                 else goal + more]
+                out = _lobpcg.lobpcg(apply_A, m, T, X0, goal, tol, 2 * maxiter if wide else maxiter, allsum,
+                                     least=0.01 * sigma,
+                                     report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
+            lam = out.lam
+            scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
+            facts.update(iterations=out.iterations, residuals=out.residuals[:k] / scale,
+                         error_bounds=out.ratio[:k], block=X0.shape[1],
+                         start_iterations=0 if start is None else start.iterations)
+            return out.lam, out.X, out.iterations
+        return run
+
+    attempts = [_eigcheck.Attempt("lobpcg", run_lobpcg(False)),
+                _eigcheck.Attempt("lobpcg (wider)", run_lobpcg(True))]
+    gathered = _Gathered(op, P, tol) if not op.matrix_free else None
+    small = gathered is not None and n_p <= _GATHER
+    if small:
+        attempts.append(_eigcheck.Attempt("gathered", gathered.solve))
+    sparse = gathered is not None and gathered.nnz() <= spectral._SPARSE_ROW_MAX * op.n_vertices
+    counted = gathered is not None and ((sparse and small) if count is None else bool(count))
+    checked: dict = {}
     with spectral._one_blas_thread():
-        if Kg is not None:
-            # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as preconditioner,
-            # after one step of inverse iteration on the random block, as on the single machine
-            X0 = local(m[:, None] * X0)
-            start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, k, spectral._START_TOL,
-                                   _START_ITERATIONS,
-                                   allsum, on_values=False,
-                                   report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2))
-            nb = spectral._block_size(start.lam, k, nb) if adapt else nb
-            X0 = start.X[:, :nb]
-        out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, allsum,
-                             report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
-    lam, X, it = out.lam, out.X, out.iterations
-    if (out.ratio[:k] > 1).any():
-        warnings.warn(f"eigs: distributed LOBPCG stopped after {it} iterations with eigenvalue error bound "
-                      f"{float(out.ratio[:k].max()):.2g} times tol={tol:g}; raise maxiter or tol",
-                      RuntimeWarning, stacklevel=2)
+        lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, 0.01 * sigma,
+                                          gathered.count if counted else None, bool(count), allsum,
+                                          info=checked)
     if info is not None:
-        scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
-        info.update(iterations=it, residuals=out.residuals[:k] / scale, error_bounds=out.ratio[:k], block=nb,
-                    start_iterations=0 if start is None else start.iterations)
+        info.update(facts, **checked)
     if report is not None:
         report(1.0, "done")
-    return finish(op, P, lam[:k], X[:, :k])
+    return finish(op, P, lam, X)
+
+
+class _Gathered:
+    """The pencil gathered on rank 0 (collective calls): the count of its eigenvalues below a
+    shift (:func:`meshlap._eigcheck.count_below`), and :func:`meshlap.spectral.eigs` on it, a
+    fallback for problems small enough for one machine; the vectors' own rows go back to each
+    rank."""
+
+    def __init__(self, op: Any, P: np.ndarray, tol: float) -> None:
+        self.op, self.P, self.tol = op, P, tol
+        self._pencil = None
+
+    def nnz(self) -> int:
+        from petsc4py import PETSc
+
+        return int(self.op.L_sym.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"])
+
+    def pencil(self):
+        if self._pencil is None:
+            L = self.op.to_scipy(root=0, symmetric=True)
+            mass = self.op.gather(self.op.mass, root=0)
+            self._pencil = (None if L is None else baselines.SparseLaplacian(L, mass),)
+        return self._pencil[0]
+
+    def count(self, sigma: float) -> int | None:
+        pencil = self.pencil()
+        n = None
+        if pencil is not None:
+            P = np.flatnonzero(pencil.mass > 0)
+            n = _eigcheck.count_below(-spectral._restricted_S(pencil, P), pencil.mass[P], sigma)
+        return self.op.comm.bcast(n, root=0)
+
+    def solve(self, want: int):
+        pencil = self.pencil()
+        out = None
+        if pencil is not None:
+            try:
+                n_p = int((pencil.mass > 0).sum())
+                lam, phi = spectral.eigs(pencil, min(want + 1, n_p - 1), tol=self.tol)
+                out = (lam, phi)
+            except EigenError:
+                out = None
+        lam = self.op.comm.bcast(None if out is None else out[0], root=0)
+        phi = self.op.comm.bcast(None if out is None else out[1], root=0)
+        if lam is None:  # rank 0's solver failed too: pairs that fail the check
+            return np.zeros(want), np.zeros((len(self.P), want)), 0
+        return lam, phi[self.op.ids[self.P]], 0
 
 
 def finish(op: Any, P: np.ndarray, lam: np.ndarray, vecs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

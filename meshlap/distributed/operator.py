@@ -138,6 +138,7 @@ class DistributedLaplacian:
         else:
             self.L_sym, self.L = self._assemble_corrected(tell)
         self._S = None
+        self.mesh: tuple[np.ndarray, np.ndarray] | None = None  # the whole mesh, where it was given
         tell(1.0, "done")
 
     # -- setup: partition, halo, local grid ----------------------------------------------
@@ -521,6 +522,7 @@ def laplacian(
         if scattered:
             return _scattered_corrected(comm, V, F, h, tol, partition, correction, options, report)
         return _corrected(comm, V, F, k, h, tol, partition, correction, options, report)
+    whole = None
     if options:
         raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
     tol = check_tol(DEFAULT_TOL if tol is None else tol)
@@ -537,6 +539,7 @@ def laplacian(
         from ..geometry.mass import _face_areas, _mean_edge_length, _vertex_mass
 
         faces = check_faces(F, len(V))
+        whole = (V, faces.triangles())
         if mass is None:
             mass = _vertex_mass(V, faces, _face_areas(V, faces))
         if h is None:
@@ -562,8 +565,10 @@ def laplacian(
         uid = np.arange(a, b, dtype=np.int64)
         part = None if partition is None else np.asarray(partition)[a:b]
         V, mass = V[a:b], mass[a:b]
-    return DistributedLaplacian(comm, np.ascontiguousarray(V), mass, uid, h, tol, matrix_free, part,
-                                report=report)
+    op = DistributedLaplacian(comm, np.ascontiguousarray(V), mass, uid, h, tol, matrix_free, part,
+                              report=report)
+    op.mesh = whole
+    return op
 
 
 def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partition: Any, correction: Any,
@@ -582,9 +587,12 @@ def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partitio
     n = geo.n_points
     a, b = n * rank // size, n * (rank + 1) // size
     part = None if partition is None else np.asarray(partition)[a:b]
-    return DistributedLaplacian(comm, np.ascontiguousarray(P[a:b]), geo.mass[a:b],
-                                np.arange(a, b, dtype=np.int64), widths.h, opts.tol, False, part,
-                                attrs=attrs, table=attrs.table[a:b], report=report)
+    op = DistributedLaplacian(comm, np.ascontiguousarray(P[a:b]), geo.mass[a:b],
+                              np.arange(a, b, dtype=np.int64), widths.h, opts.tol, False, part,
+                              attrs=attrs, table=attrs.table[a:b], report=report)
+    if geo.faces is not None and P.shape[1] == 3:  # LOBPCG's cotangent preconditioner and start
+        op.mesh = (P, geo.faces.triangles())
+    return op
 
 
 def _scattered_corrected(comm, V: Any, F: Any, h: Any, tol: float, partition: Any, correction: Any,

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _eigcheck
 from ..errors import MeshError
 from ..geometry.validation import check_k
 from .comm import _has_mumps, _mpi, _slepc
@@ -172,12 +173,14 @@ class _ImplicitContext:
 def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh: Any = None,
          tol: float | None = None, sigma: float | None = None, maxiter: int | None = None,
          solver: str = "auto", blr: float | None = None, preconditioner: str | None = None,
-         progress: Any = None) -> tuple[np.ndarray, np.ndarray]:
+         progress: Any = None, count: bool | None = None, info: dict | None = None
+         ) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` (collective).
 
     ``method="lobpcg"`` (default): :func:`meshlap.distributed.lobpcg.eigs`, a distributed LOBPCG
-    that never factors the operator (``mesh``, ``tol``, ``maxiter``, ``preconditioner`` and
-    ``progress`` go to it; its defaults 1e-8 on the eigenvalues, 300 and ``"global"``).
+    that never factors the operator (``mesh``, ``tol``, ``maxiter``, ``preconditioner``,
+    ``progress``, ``count`` and ``info`` go to it; its defaults 1e-8 on the eigenvalues, 300
+    and ``"global"``), whose pairs are verified (or :class:`meshlap.EigenError` raised).
     ``method="shift-invert"``: the rest of this docstring (no progress reports: SLEPc runs the
     whole solve).
 
@@ -237,11 +240,12 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh:
             raise MeshError("sigma, solver and blr set up shift-and-invert: pass method='shift-invert'")
 
         given = (("tol", tol), ("maxiter", maxiter), ("preconditioner", preconditioner))
-        return lobpcg(op, k, mesh=mesh, progress=progress, **{key: v for key, v in given if v is not None})
+        return lobpcg(op, k, mesh=mesh, progress=progress, count=count, info=info,
+                      **{key: v for key, v in given if v is not None})
     if method != "shift-invert":
         raise MeshError(f"method must be 'lobpcg' or 'shift-invert'; got {method!r}")
-    if preconditioner is not None:
-        raise MeshError("preconditioner is LOBPCG's: shift-and-invert factors -S - σM itself")
+    if preconditioner is not None or count is not None:
+        raise MeshError("preconditioner and count are LOBPCG's: pass method='lobpcg'")
     MPI, PETSc = _mpi()
     SLEPc = _slepc()
     tol = 1e-12 if tol is None else tol
@@ -305,8 +309,20 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh:
     for i in range(nconv):
         lam[i] = eps.getEigenpair(i, xr).real
         vecs[:, i] = xr.getArray()
-    order = np.argsort(lam)[:k]
+    order = np.argsort(lam)  # all converged pairs: those past k give the check the gap above λ_k
     lam, vecs = lam[order], vecs[:, order]
-    from .lobpcg import finish
+    from .lobpcg import _allsum, _product, finish
+
+    mp = m[P]
+
+    def apply_A(X: np.ndarray) -> np.ndarray:  # -S on the points with mass
+        full = np.zeros((op.n_local, X.shape[1]))
+        full[P] = X
+        return -mp[:, None] * _product(op, full)[P]
+
+    # SLEPc's tol is on the residuals: the eigenvalues are checked to eigs' default 1e-8 at least
+    lam, vecs = _eigcheck.first_verified([_eigcheck.Attempt("shift-invert", lambda want: (lam, vecs, 0))], k,
+                                         apply_A, mp, max(tol, 1e-8), 0.04 * math.pi / area,
+                                         allsum=_allsum(comm), info=info)
 
     return finish(op, P, lam, vecs)

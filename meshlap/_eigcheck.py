@@ -1,0 +1,247 @@
+"""Checks on computed eigenpairs of the pencil ``-S φ = λ M φ`` (M = diag(m) > 0), made after
+every solve of :func:`meshlap.spectral.eigs` and :func:`meshlap.distributed.lobpcg.eigs`.
+
+**The pairs.** For returned ``(λ_i, φ_i)`` the check recomputes, with fresh products (not the
+solver's own updated blocks), the mass Gram matrix ``ΦᵀMΦ`` and the residuals
+``r_i = -S φ_i - λ_i M φ_i``, measured in the M⁻¹ norm (the norm in which the pencil is a
+symmetric matrix). Every column must be M-orthonormal to ``_ORTHO``: a block whose columns
+collapsed onto one vector (ten copies of the constant function have ten Rayleigh quotients
+of zero) fails here, where a residual alone would pass it. Each eigenvalue then has an error
+bound: ``‖r_i‖`` (Bauer–Fike, rigorous for M-orthonormal φ), or, for a cluster of returned
+values with a gap δ to the nearest value outside it, ``‖R_c‖₂² / δ`` (Kato–Temple for the
+cluster, as LOBPCG's own stopping test, :func:`meshlap._lobpcg.eig_error`). The gap of the
+k-th eigenvalue's cluster is to the next value above: the solver's next Ritz value (an
+estimate), or, after a count, the counted shift (a proven lower bound on λ_{k+1}). A pair
+passes when the bound is at most ``tol · max(|λ_i|, λ_k / 100, floor)``: the meaning of ``tol``
+in :func:`meshlap.spectral.eigs`, with ``floor`` (1% of 4π/area) so that a spectrum whose first
+k eigenvalues are all zero (k connected parts) has a scale at all.
+
+**Nothing skipped.** Sylvester's law of inertia: the number of eigenvalues of the pencil below
+σ equals the number of negative pivots of an LDLᵀ factorization of ``-S - σM``
+(:func:`count_below`). With σ between the returned k-th value's cluster and the next computed
+value, a count equal to the number of returned values below σ proves (with the bounds above,
+which place those values at distinct eigenvalues) that none is missing below σ. The sparse LU
+runs in SuperLU's symmetric mode without pivoting (``diag_pivot_thresh=0``): the rows are then
+permuted as the columns (``perm_r == perm_c``) and ``U = D Lᵀ``, so U's diagonal holds D.
+Where SuperLU did pivot (a zero on the diagonal), the count falls back to dense eigenvalues
+for small n or is not given.
+The factorization costs about what a shift-invert solve's does: affordable for sparse pencils
+(cotangent, linear FEM), not for the heat-kernel operator's hundreds of entries per row.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from . import _lobpcg
+
+__all__ = ["Attempt", "Verdict", "count_below", "count_shift", "first_verified", "verify"]
+
+# the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
+_ORTHO = 1e-7
+# pencils up to this many rows are counted densely where the sparse LU pivoted
+_DENSE_COUNT = 3000
+# relative distance within which a computed value is a tie of λ_k (the count's shift goes above)
+_TIE = 1e-3
+
+
+class Verdict(NamedTuple):
+    """What :func:`verify` found: the residual norms ‖r_i‖_{M⁻¹}, each eigenvalue's error bound
+    over ``tol`` times its scale (a pair passes where ≤ 1), and the largest |ΦᵀMΦ - I| entry."""
+
+    residuals: np.ndarray
+    bounds: np.ndarray
+    orthogonality: float
+
+    @property
+    def passed(self) -> np.ndarray:
+        """The pairs that passed (all fail where the block is not M-orthonormal)."""
+        ok = np.isfinite(self.bounds) & (self.bounds <= 1.0)
+        return ok & (self.orthogonality <= _ORTHO)
+
+
+def scales(lam: np.ndarray, floor: float) -> np.ndarray:
+    """``max(|λ_i|, |λ_k| / 100, floor)``: each eigenvalue's yardstick for ``tol``.
+
+    Examples
+    --------
+    >>> scales(np.array([0.0, 2.0, 6.0]), 0.01).tolist()
+    [0.06, 2.0, 6.0]
+    """
+    top = abs(float(lam[-1])) if len(lam) else 0.0
+    return np.maximum(np.abs(lam), max(0.01 * top, floor, 1e-300))
+
+
+def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.ndarray, X: np.ndarray,
+           tol: float, floor: float, upper: float | None = None, allsum=_lobpcg._local) -> Verdict:
+    """Check the pairs ``(lam[i], X[:, i])`` of ``A x = λ M x``, ``A = -S`` (module notes).
+
+    ``apply_A`` multiplies a block; ``upper`` is the next eigenvalue above ``lam[-1]`` as far as
+    known (None: Bauer–Fike alone for the last cluster). The rows may be an MPI rank's share:
+    ``allsum`` then adds the small Gram matrices over the ranks.
+
+    Examples
+    --------
+    >>> m = np.ones(4)
+    >>> A = np.diag([0.0, 1.0, 2.0, 3.0])
+    >>> v = verify(lambda Y: A @ Y, m, np.array([0.0, 1.0]), np.eye(4)[:, :2], 1e-8, 0.01, 2.0)
+    >>> v.passed.tolist(), float(v.orthogonality)
+    ([True, True], 0.0)
+    >>> twice = np.ones((4, 2)) / 2                   # a collapsed block: one vector twice
+    >>> verify(lambda Y: A @ Y, m, np.array([1.5, 1.5]), twice, 1e-8, 0.01).passed.tolist()
+    [False, False]
+    """
+    k = len(lam)
+    mc = m[:, None]
+    MX = mc * X
+    G = allsum(_lobpcg.inner(X, MX))
+    ortho = float(np.abs(G - np.eye(k)).max()) if k else 0.0
+    R = apply_A(X) - MX * lam
+    gram = allsum(_lobpcg.inner(R, R / mc))
+    res = np.sqrt(np.maximum(np.diag(gram), 0.0))
+    if upper is None:  # nothing known above: the last cluster keeps Bauer–Fike's bound
+        err = _lobpcg.eig_error(lam, res, gram)
+        last = np.abs(lam - lam[-1]) <= _lobpcg._WINDOW * max(abs(float(lam[-1])), 1e-300)
+        err[last] = res[last]
+    else:  # the value above joins as a Ritz value of zero residual: the last cluster's gap
+        theta = np.append(lam, float(upper))
+        big = np.zeros((k + 1, k + 1))
+        big[:k, :k] = gram
+        err = _lobpcg.eig_error(theta, np.append(res, 0.0), big)[:k]
+    return Verdict(res, err / (tol * scales(lam, floor)), ortho)
+
+
+def count_shift(lam: np.ndarray, k: int, floor: float) -> tuple[float, int]:
+    """The shift σ for the count and how many of the computed values ``lam`` (ascending, at
+    least k) lie below it: halfway from λ_k to the first computed value that is not its tie
+    (within ``_TIE`` of λ_k's scale), or that far above λ_k where every computed value ties.
+
+    Examples
+    --------
+    >>> count_shift(np.array([0.0, 2.0, 2.0, 2.0, 6.0]), 2, 0.01)   # λ_2's ties join the count
+    (4.0, 4)
+    """
+    top = float(lam[k - 1])
+    tie = _TIE * max(abs(top), floor)
+    above = np.flatnonzero(lam[k:] > top + tie)
+    if len(above):
+        j = k + int(above[0])
+        return 0.5 * (top + float(lam[j])), j
+    return top + tie, len(lam)
+
+
+def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float) -> int | None:
+    """Eigenvalues of ``A x = λ diag(m) x`` below ``sigma`` (A symmetric, m > 0), from the signs
+    of the pivots of a symmetric sparse factorization of ``A - σM`` (module notes); densely up to
+    3,000 rows where SuperLU pivoted; None beyond, or where a pivot is exactly zero.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(100, 100))
+    >>> exact = 2 - 2 * np.cos(np.pi * np.arange(1, 101) / 101)
+    >>> count_below(A, np.ones(100), 0.5), int((exact < 0.5).sum())
+    (23, 23)
+    """
+    B = sp.csc_matrix(A - sp.diags(sigma * np.asarray(m, dtype=np.float64)))
+    try:
+        lu = sp.linalg.splu(B, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                            options={"SymmetricMode": True})
+    except RuntimeError:  # exactly singular: σ is an eigenvalue
+        return None
+    d = lu.U.diagonal()
+    if np.array_equal(lu.perm_r, lu.perm_c) and np.isfinite(d).all() and d.all():
+        return int((d < 0).sum())
+    if B.shape[0] <= _DENSE_COUNT:
+        w = sla.eigh(sp.csr_matrix(A).toarray(), np.diag(m), eigvals_only=True)
+        return int((w < sigma).sum())
+    return None
+
+
+class Attempt(NamedTuple):
+    """One solver of the ladder: ``run(want)`` returns at least ``want`` eigenvalues (ascending,
+    more where it computed them: guards, the next pair), their M-orthonormal vectors and its
+    iterations; ``exact``: the lowest ones by construction (a dense solve), no count needed."""
+
+    name: str
+    run: Callable[[int], tuple[np.ndarray, np.ndarray, int]]
+    exact: bool = False
+
+
+def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarray], np.ndarray],
+                   m: np.ndarray, tol: float, floor: float,
+                   counter: Callable[[float], int | None] | None = None, must_count: bool = False,
+                   allsum=_lobpcg._local, info: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The k lowest pairs from the first attempt whose pairs all pass :func:`verify` (and, with
+    ``counter(σ)`` — the eigenvalues below σ — whose count shows that none is missing).
+
+    An attempt whose count exceeds its computed values below σ (it skipped some, or λ_k's
+    cluster goes on past them) runs again, asked for that many. ``must_count``: an attempt that
+    cannot be counted fails. Raises :class:`meshlap.EigenError` with the best attempt's pairs
+    when none passes. ``info`` is filled with ``method``, ``tried``, ``iterations``, ``residuals``,
+    ``bounds``, ``orthogonality``, ``count``, ``shift``, ``complete`` (a count, or the method,
+    showed that the k values are the lowest) and ``check_seconds`` (the time of the checks).
+
+    Examples
+    --------
+    >>> A = np.diag(np.arange(6.0))
+    >>> bad = Attempt("bad", lambda w: (np.zeros(2), np.ones((6, 2)) / 6 ** 0.5, 9))
+    >>> good = Attempt("good", lambda w: (np.arange(3.0), np.eye(6)[:, :3], 1))
+    >>> info = {}
+    >>> lam, _ = first_verified([bad, good], 2, lambda Y: A @ Y, np.ones(6), 1e-8, 0.01,
+    ...                         lambda s: int((np.arange(6.0) < s).sum()), info=info)
+    >>> lam.tolist(), info["tried"], info["count"], info["complete"]
+    ([0.0, 1.0], ['bad', 'good'], 2, True)
+    """
+    from .errors import EigenError
+
+    want, tried, best, spent = k, [], None, 0.0
+    queue = list(attempts)
+    while queue:
+        attempt = queue.pop(0)
+        tried.append(attempt.name)
+        lam, X, iterations = attempt.run(want)
+        count = shift = None
+        upper = float(lam[k]) if len(lam) > k else None
+        j = k
+        began = time.perf_counter()
+        if counter is not None and not attempt.exact:
+            shift, j = count_shift(lam, k, floor)
+            count = counter(shift)
+            if count is not None and count > j and count + 1 > want:
+                # more eigenvalues below σ than computed (skipped, or ties of λ_k past the
+                # block): the same solver again, asked for all of them
+                want = count + 1
+                queue.insert(0, attempt)
+            if count == j:
+                upper = shift  # proven: λ_{j+1} ≥ σ
+        verdict = verify(apply_A, m, lam[:j], X[:, :j], tol, floor, upper, allsum)
+        spent += time.perf_counter() - began
+        complete = attempt.exact or (count is not None and count == j)
+        ok = bool(verdict.passed.all()) and (complete or not (must_count or count is not None))
+        record = dict(method=attempt.name, tried=list(tried), iterations=iterations,
+                      residuals=verdict.residuals[:k], bounds=verdict.bounds[:k],
+                      orthogonality=verdict.orthogonality, count=count, shift=shift, complete=complete,
+                      check_seconds=spent)
+        if best is None or verdict.passed[:k].sum() > best[2].passed[:k].sum():
+            best = (lam[:k], X[:, :k], verdict, record)
+        if ok:
+            if info is not None:
+                info.update(record)
+            return lam[:k], X[:, :k]
+    lam, X, verdict, record = best
+    if info is not None:
+        info.update(record, tried=list(tried))
+    failed = int((~verdict.passed[:k]).sum())
+    raise EigenError(
+        f"eigs: no solver verified the {k} lowest eigenpairs (tried {', '.join(tried)}); the best "
+        f"({record['method']}) has {failed} pair(s) failing, error bound up to "
+        f"{float(np.max(verdict.bounds[:k])):.2g} × tol, |ΦᵀMΦ - I| = {verdict.orthogonality:.1g}, "
+        f"count {record['count']} below σ = {record['shift']}",
+        eigenvalues=lam, vectors=X, residuals=verdict.residuals[:k], bounds=verdict.bounds[:k],
+        count=record["count"], shift=record["shift"], tried=tuple(tried))

@@ -1,0 +1,176 @@
+"""Verified eigenpairs (issue 38): the check on every returned pair, the inertia count that shows
+nothing was skipped, the fallbacks, and meshlap.EigenError when none of them converges."""
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+import meshlap
+from meshlap import _eigcheck, shapes, spectral
+from meshlap.baselines import cotangent
+
+
+def parts(count, n=600, gap=3.0):
+    """``count`` unit spheres whose centres are ``gap`` apart: a mesh of ``count`` parts."""
+    Vs, Fs, off = [], [], 0
+    for i in range(count):
+        V, F = shapes.sphere(n, seed=i)
+        Vs.append(V + [gap * i, 0.0, 0.0])
+        Fs.append(F + off)
+        off += len(V)
+    return np.vstack(Vs), np.vstack(Fs)
+
+
+def dense_spectrum(op):
+    return sla.eigh(-op.S.toarray(), np.diag(op.mass), eigvals_only=True)
+
+
+@pytest.mark.parametrize("which", ["cotangent", "heat kernel"])
+def test_inertia_count_equals_the_dense_count(monkeypatch, which):
+    """The sparse symmetric LU runs without pivoting (perm_r == perm_c; else count_below would
+    answer densely, turned off here) and its negative pivots count the eigenvalues below σ."""
+    monkeypatch.setattr(_eigcheck, "_DENSE_COUNT", 0)
+    V, F = shapes.sphere(1500, kind="random", seed=1)
+    op = cotangent(V, F) if which == "cotangent" else meshlap.laplacian(V, F, h=0.01, correction="none")
+    w = dense_spectrum(op)
+    for sigma in (0.5, 3.0, 13.0, 50.0, 0.5 * (w[100] + w[101]), 0.5 * (w[-2] + w[-1])):
+        got = _eigcheck.count_below(-op.S, op.mass, sigma)
+        assert got == int((w < sigma).sum())
+    B = sp.csc_matrix(-op.S - 3.0 * op.M)
+    lu = sp.linalg.splu(B, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    assert np.array_equal(lu.perm_r, lu.perm_c)
+
+
+def test_k_parts_and_k_zero_eigenvalues_converge_at_once():
+    """Four parts, k ≤ 4: every wanted eigenvalue is 0. LOBPCG's relative test had no scale then
+    (tol · λ_k/100 ≈ 1e-22) and ran its 200 iterations to a warning; with the floor of 1% of
+    4π/area it stops at the cotangent start, and the check passes the pairs."""
+    V, F = parts(4)
+    op = meshlap.laplacian(V, F, h=0.01, correction="none")
+    for k in (3, 4):
+        info = {}
+        lam, phi = spectral.eigs(op, k, method="lobpcg", info=info)
+        assert np.abs(lam).max() < 1e-10
+        assert info["method"] == "lobpcg" and info["iterations"] <= 3 and (info["bounds"] <= 1).all()
+        assert np.abs(phi.T @ op.M @ phi - np.eye(k)).max() < 1e-9
+    # one zero per part, then the parts' shared l = 1 values
+    lam, _ = spectral.eigs(op, 8, method="lobpcg")
+    assert np.abs(lam[:4]).max() < 1e-10 and np.ptp(lam[4:]) < 1e-6 and abs(lam[4] - 2) < 0.05
+
+
+def test_sparse_pencil_is_counted_and_ties_past_k_are_computed():
+    """The cotangent pencil of four parts, k = 8: four zeros and 4 of the 12 values ≈ 2. The
+    count at σ above λ_8 finds 16: the solver runs again for all of them, and the result is
+    shown to be complete."""
+    V, F = parts(4)
+    cot = cotangent(V, F)
+    info = {}
+    lam, phi = spectral.eigs(cot, 8, info=info)
+    w = dense_spectrum(cot)
+    assert np.abs(lam - w[:8]).max() < 1e-8
+    assert info["tried"] == ["shift-invert", "shift-invert"] and info["count"] == 16 and info["complete"]
+    assert 2.0 < info["shift"] < w[16] and int((w < info["shift"]).sum()) == 16
+
+
+def test_a_stalled_lobpcg_is_recomputed_or_raises(monkeypatch):
+    """Two iterations of LOBPCG with the diagonal preconditioner alone (no mesh: a plain
+    SparseLaplacian of the heat-kernel matrix) leave the pairs far from converged: eigs does not
+    return them but the next solver's; without a next solver, EigenError with the partial result."""
+    V, F = shapes.sphere(1500, kind="random", seed=2)
+    heat = meshlap.laplacian(V, F, h=0.01, correction="none")
+    op = meshlap.lumped.SparseLaplacian(heat.L_sym, heat.mass)  # no mesh: no cotangent preconditioner
+    ref = dense_spectrum(heat)[:12]
+    info = {}
+    lam, phi = spectral.eigs(op, 12, method="lobpcg", maxiter=1, info=info)
+    assert info["tried"][0] == "lobpcg" and info["method"] != "lobpcg"
+    assert (np.abs(lam[1:] - ref[1:]) / ref[1:]).max() < 1e-8 and abs(lam[0]) < 1e-8 * ref[-1]
+    assert (info["bounds"] <= 1).all()
+    # the first try's pairs, as they were, fail the check
+    monkeypatch.setattr(spectral, "_DENSE_FALLBACK", 0)
+    monkeypatch.setattr(spectral, "_FALLBACK_NNZ", 0)
+    with pytest.raises(meshlap.EigenError, match="no solver verified") as err:
+        spectral.eigs(op, 12, method="lobpcg", maxiter=1)
+    e = err.value
+    assert e.tried == ("lobpcg", "lobpcg (wider)")
+    assert e.eigenvalues.shape == (12,) and e.vectors.shape == (1500, 12) and (e.bounds > 1).any()
+    assert (e.eigenvalues[1:] >= ref[1:] * (1 - 1e-12)).all()  # Ritz values: above the exact ones
+
+
+def test_a_skipped_eigenvalue_is_found_by_the_count():
+    """A solver that returns exact pairs but skips one: every residual passes, the count does
+    not, the solver runs again (asked for more) and then the next one."""
+    d = np.arange(8.0)
+    A = np.diag(d)
+    keep = np.array([0, 2, 3, 4, 5, 6, 7])  # λ = 1 is skipped
+
+    def skipping(want):
+        idx = keep[:want + 1]
+        return d[idx], np.eye(8)[:, idx], 1
+
+    def dense(want):
+        return d[:want + 1], np.eye(8)[:, :want + 1], 0
+
+    attempts = [_eigcheck.Attempt("skip", skipping), _eigcheck.Attempt("dense", dense, exact=True)]
+    info = {}
+    lam, _ = _eigcheck.first_verified(attempts, 3, lambda Y: A @ Y, np.ones(8), 1e-8, 0.01,
+                                      lambda s: int((d < s).sum()), info=info)
+    assert lam.tolist() == [0.0, 1.0, 2.0]
+    assert info["tried"] == ["skip", "skip", "dense"] and info["complete"]
+    # without the count the skipping solver's pairs would have passed
+    v = _eigcheck.verify(lambda Y: A @ Y, np.ones(8), d[keep[:3]], np.eye(8)[:, keep[:3]], 1e-8, 0.01)
+    assert v.passed.all()
+
+
+def test_returned_pairs_are_within_tol_on_the_test_meshes():
+    """The bounds eigs reports hold: each eigenvalue within tol · max(λ, λ_k/100) of dense eigh."""
+    for V, F, kw in ((*shapes.sphere(1500, kind="random", seed=7), {}),
+                     (*shapes.sphere(1500, seed=3), {"h": 0.01, "correction": "none"})):
+        op = meshlap.laplacian(V, F, **kw)
+        ref = dense_spectrum(op)[:16]
+        for tol in (1e-8, 1e-5):
+            info = {}
+            lam, _ = spectral.eigs(op, 16, method="lobpcg", tol=tol, info=info)
+            assert info["method"] == "lobpcg" and (info["bounds"] <= 1).all()
+            scale = np.maximum(np.abs(ref), ref[-1] / 100)
+            assert (np.abs(lam - ref) <= tol * scale).all()
+
+
+def dumbbell(nz=120, nt=48, neck=0.06):
+    """Two unit lobes joined by a neck of radius 0.06 (a surface of revolution, closed at the
+    poles): a nearly cut-off part, λ₁ ≈ 0.08 against λ₂ ≈ 2."""
+    z = np.linspace(-2.2, 2.2, nz)[1:-1]
+    r = np.maximum(np.sqrt(np.clip(1 - (np.abs(z) - 1.2) ** 2, 0, None)), neck)
+    t = np.linspace(0, 2 * np.pi, nt, endpoint=False)
+    ring = np.stack([np.outer(r, np.cos(t)).ravel(), np.outer(r, np.sin(t)).ravel(), np.repeat(z, nt)], 1)
+    V = np.concatenate([ring, [[0, 0, -2.2], [0, 0, 2.2]]])
+    i, j = np.meshgrid(np.arange(len(z) - 1), np.arange(nt), indexing="ij")
+    a, b = i * nt + j, i * nt + (j + 1) % nt
+    c, d = a + nt, b + nt
+    F = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+    s, n, last = len(V) - 2, len(V) - 1, (len(z) - 1) * nt
+    jj = np.arange(nt)
+    caps = [np.stack([np.full(nt, s), (jj + 1) % nt, jj], 1),
+            np.stack([np.full(nt, n), last + jj, last + (jj + 1) % nt], 1)]
+    return V, np.concatenate([F, *caps])
+
+
+def test_lobpcg_block_stays_orthonormal_with_a_poor_preconditioner():
+    """The cotangent pencil of a dumbbell, 14 eigenpairs, the diagonal preconditioner alone: 200
+    iterations drifted the block off M-orthonormality until it collapsed onto the constant
+    (|XᵀMX - I| = 1.0, fourteen Ritz values of 0, the issue's "ten zeros"); the audit every 10
+    iterations restarts it from its own span. Unconverged still, and the check says so."""
+    from meshlap import _lobpcg
+
+    V, F = dumbbell()
+    cot = cotangent(V, F)
+    m = cot.mass
+    A = sp.csr_matrix(-cot.S)
+    d = 0.5 / A.diagonal()
+    X0 = np.random.default_rng(0).standard_normal((len(m), 18))
+    out = _lobpcg.lobpcg(lambda Y: A @ Y, m, lambda R: d[:, None] * R, X0, 14, 1e-8, 200)
+    assert np.abs(out.X.T @ (m[:, None] * out.X) - np.eye(18)).max() < 1e-8
+    ref = dense_spectrum(cot)[:14]
+    assert (out.lam[:14] >= ref - 1e-9).all() and out.lam[1] > 0.05  # Ritz values: upper bounds
+    v = _eigcheck.verify(lambda Y: A @ Y, m, out.lam[:14], out.X[:, :14], 1e-8, 0.01, float(out.lam[14]))
+    assert not v.passed.all()
