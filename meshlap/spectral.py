@@ -219,10 +219,8 @@ def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
             raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
         return V, check_faces(F, len(V), "mesh[1]").triangles()
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
-        T = op.faces.triangles()
-        rep = op.geometry._cache.get("weld") if hasattr(op, "geometry") else None
-        # copies of a vertex that the pencil welds: their faces' cotangents join the representative
-        return op.V, (T if rep is None else rep[T])
+        rep = op.geometry._cache.get("weld") if hasattr(op, "geometry") else None  # copies the pencil welds
+        return op.V, op.faces.triangles() if rep is None else rep[op.faces.triangles()]
     # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud) serve as well
     cells = getattr(getattr(op, "geometry", None), "cells", None)
     if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:
@@ -281,8 +279,7 @@ def eigs(
         mesh (``op.V``, ``op.faces``) or ``mesh`` is given, otherwise the diagonal alone.
         ``"shift-invert"``: :func:`scipy.sparse.linalg.eigsh` with a sparse LU of ``-S + σM``
         (slow where it fills in: the heat kernel). ``"dense"``: :func:`scipy.linalg.eigh`.
-        ``"auto"``: dense up to 1,200 vertices with mass, shift-invert for operators with at
-        most 40 entries per row, LOBPCG otherwise.
+        ``"auto"``: dense up to 1,200 vertices, shift-invert up to 40 entries per row, else LOBPCG.
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
         ``√tol``. Passed to eigsh for shift-invert.
@@ -426,8 +423,7 @@ def eigs(
     return lam, _normalize_signs(_extend(op, P, X))
 
 
-def _scale_shift(m: np.ndarray) -> float:
-    # 4π/area: 1 on the unit sphere, where the first nonzero eigenvalue is 2
+def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ₁ = 2)
     return 4.0 * math.pi / float(m.sum())
 
 
@@ -444,8 +440,7 @@ def _shift_invert(S: sp.csr_matrix, m: np.ndarray, k: int, tol: float):
 
 
 def _start_width(k: int, least: int, n: int) -> int:
-    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends
-    (none added for k < 4, e.g. the semidefiniteness check's two vectors)."""
+    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends."""
     return max(least, min(n // 3, least + k // 4))
 
 
