@@ -366,7 +366,7 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, seed=0))
     >>> S, m = fem_pencil(g)
     >>> lam = np.sort(sla.eigsh(-S, 4, sp.diags(m), sigma=-1e-6, return_eigenvectors=False))
-    >>> np.round(lam, 2).tolist()     # 0, then l(l + 1) = 2 three times
+    >>> (np.round(lam, 2) + 0.0).tolist()     # 0, then l(l + 1) = 2 three times
     [0.0, 2.0, 2.0, 2.0]
     """
     if mass not in FEM_MASSES:

@@ -95,8 +95,9 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     # parallel=True made it 34-37 s. The rows' neighbours' grid search (corrections._neighbours)
     # added 1.5 s at a load of 11 (21.5 s in all at 9-10). The cloud reuses the mesh's kernels
     # and compiles its masses (3.6 s quiet, 4-7 s loaded)
-    # the cloud now compiles the kernel's rows too (the mesh's FEM pencil has none): 15 s at a load of 8-10
-    assert mesh < 23.0 and cloud < 20.0
+    # the mesh also compiles the FEM pencil's flips (23.5 s at a load of 8-10), the cloud the
+    # kernel's rows, which the mesh's FEM pencil has none of (15 s at a load of 8-10)
+    assert mesh < 30.0 and cloud < 20.0
     out, err = first_calls(tmp_path)
     print(f"warm cache, CPU time: mesh {out['cpu'][1]:.2f} s, cloud {out['cpu'][2]:.2f} s")
     assert "compiling" not in err and not out["mesh"] and not out["cloud"]
