@@ -63,10 +63,8 @@ __all__ = ["DistributedLaplacian", "laplacian"]
 class DistributedLaplacian:
     r"""The Belkin–Sun–Wang Laplacian as a PETSc operator over the ranks of a communicator.
 
-    Built by :func:`laplacian`. Each rank owns ``n_local`` rows, a contiguous block of
-    PETSc's numbering (the partitioned order); ``ids`` maps them to the caller's vertex
-    numbering. Local arrays (functions on the own rows) are in that order: use
-    :meth:`local` to take a rank's part of a full array and :meth:`gather` to collect one.
+    Built by :func:`laplacian`. Each rank owns ``n_local`` rows, a block of PETSc's numbering;
+    ``ids`` maps them to the caller's; :meth:`local` and :meth:`gather` convert arrays.
 
     Attributes
     ----------
@@ -78,15 +76,12 @@ class DistributedLaplacian:
         paper's operator.
     correction, moment_scale, fallback_reason : str, float, str or None
         As for :class:`meshlap.MeshLaplacian`.
-    mass : (n_local,) ndarray
-        Masses of the own rows.
-    ids : (n_local,) ndarray
-        Caller's indices of the own rows.
+    mass, ids : (n_local,) ndarray
+        Masses and the caller's indices of the own rows.
     n_vertices, n_local, n_halo : int
         Global rows, own rows, and halo points (with mass) this rank reads from others.
     rebalanced : bool
-        The first (point-balanced) split left a rank with over 10% more entries than the
-        mean, and the points were split again by their counted entries.
+        Whether the points were split again by their entries (a rank had 10% over the mean).
     h, tol, radius : float
         Kernel width, tolerance and cut-off radius.
     """
@@ -459,9 +454,8 @@ def laplacian(
 ) -> DistributedLaplacian:
     r"""Build the Belkin–Sun–Wang Laplacian over the ranks of an MPI communicator (collective).
 
-    This is the paper's operator (eq. 1) at one h: the same matrix as the single-machine
-    ``meshlap.laplacian(V, F, h=h, correction="none")``. The single-machine default's bias
-    correction, adaptive width and boundary rows are not distributed (yet).
+    The heat kernel (``operator="kernel"`` of :func:`meshlap.laplacian`; the single-machine
+    default's FEM pencil is not distributed).
 
     Parameters
     ----------
@@ -480,9 +474,9 @@ def laplacian(
         Kernel tolerance, halo r = sqrt(4h ln(1/tol)); default 1e-6 corrected, 1e-8 paper's/curves.
     comm : mpi4py communicator, default MPI.COMM_WORLD
     scattered : bool, default False
-        Each rank passes its own chunk; the global numbering is the chunks in rank order.
+        Each rank passes its own chunk, numbered in rank order.
     matrix_free : bool, default False
-        A PETSc shell that recomputes rows in each product instead of an MPIAIJ matrix.
+        A PETSc shell that recomputes rows in each product (no MPIAIJ matrix).
     partition : (n,) array_like of int, optional
         Owner rank of each passed point, instead of the k-d split.
     progress : bool or callable, optional
@@ -494,10 +488,8 @@ def laplacian(
 
     Notes
     -----
-    Each stored entry equals the single-machine :func:`meshlap.laplacian`'s bit for bit,
-    on any number of ranks and any partition: the off-diagonals are computed by the same
-    compiled code from the same coordinates, and each diagonal is summed over the same
-    values in the same order (the single-machine grid's, whatever the rank's own grid).
+    Each stored entry equals the single-machine kernel's bit for bit, on any number of ranks
+    and any partition: the same compiled code, each diagonal summed in the same order.
 
     Examples
     --------
