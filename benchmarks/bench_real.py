@@ -5,7 +5,7 @@
     python benchmarks/bench_real.py --max-n 3000 --corpus /path/to/corpus
 
 The corpus (benchmarks/corpus.toml; files written by build_corpus.py, outside the repository)
-is read from ``--corpus``, else $MESHLAP_CORPUS, else ../shared/corpus, else /work/corpus;
+is read from ``--corpus``, else $MESHLAP_CORPUS, else benchmarks/corpus (which git ignores);
 a missing file or one whose sha256 differs from the manifest is skipped with a line saying so.
 
 Per mesh, error = the largest relative error of eigenvalues 1-9 after the zero ones (one per
@@ -354,7 +354,7 @@ def meshlap_commit() -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default=None, help="corpus folder (default: $MESHLAP_CORPUS, "
-                    "../shared/corpus, /work/corpus)")
+                    "benchmarks/corpus)")
     ap.add_argument("--only", default="", help="comma-separated mesh names")
     ap.add_argument("--max-n", type=int, default=0, help="skip meshes with more vertices")
     ap.add_argument("--no-write", action="store_true", help="print the table; leave RESULTS.md and the CSV")

@@ -1,13 +1,13 @@
 """Write bench_real.py's corpus of real meshes, and its manifest corpus.toml.
 
-    python benchmarks/build_corpus.py --mirrors /work/.mirror --out /work/corpus
+    python benchmarks/build_corpus.py --mirrors DIR --out benchmarks/corpus
 
 Each mesh is taken, as published, from a clone of its public repository at the commit named
 below (``--mirrors`` holds them as ``owner+name/repo``, bare or with a ``.git``), from
-pyvista's bundled examples, or from ``../shared/meshes``; the few larger than about 12,000
-vertices are decimated with VTK's quadric decimation (``pyvista.PolyData.decimate``) and
-written as OBJ. The files go to ``--out`` (never into this repository: they belong to their
-authors); corpus.toml records where each came from, its licence or attribution, what it
+pyvista's bundled examples, or from ``tests/data`` (attributed in its README); the few larger
+than about 12,000 vertices are decimated with VTK's quadric decimation (``pyvista.PolyData.decimate``) and
+written as OBJ. The files go to ``--out`` (default benchmarks/corpus, which git ignores: they
+belong to their authors); corpus.toml records where each came from, its licence or attribution, what it
 exercises, its size and its sha256, which bench_real.py checks.
 """
 
@@ -35,14 +35,14 @@ REPOS = {
     "alecjacobson/common-3d-test-models": ("8a4f8642acaf43f9cd7b67858a1502e1055ef202",
                                            "common-3d-test-models; original source per its README"),
     "pyvista": ("0.49.2", "pyvista's bundled example data (MIT licence)"),
-    "shared": ("8a4f8642acaf43f9cd7b67858a1502e1055ef202",
-               "../shared/meshes (from common-3d-test-models, see its README)"),
+    "tests/data": ("8a4f8642acaf43f9cd7b67858a1502e1055ef202",
+                   "this repository's tests/data (from common-3d-test-models, see its README)"),
 }
 PYVISTA = Path(sys.prefix) / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" / \
     "site-packages" / "pyvista" / "examples"
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
+TESTDATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 T, G, LP = "mikedh/trimesh", "sgsellan/gpytoolbox", "Deep-MI/LaPy"
-IG, C3, PV, SH = "libigl/libigl-tutorial-data", "alecjacobson/common-3d-test-models", "pyvista", "shared"
+IG, C3, PV, SH = "libigl/libigl-tutorial-data", "alecjacobson/common-3d-test-models", "pyvista", "tests/data"
 #: name, repository, path, kinds, attribution of the model, target vertices after decimation (0: as is)
 SOURCES: list[tuple[str, str, str, str, str, int]] = [
     ("stanford-bunny", SH, "stanford-bunny.obj", "scan open decimated", "Stanford 3D Scanning Repo.", 9000),
@@ -111,7 +111,7 @@ def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> None:
     if repo == PV:
         shutil.copyfile(PYVISTA / path, out)
     elif repo == SH:
-        shutil.copyfile(SHARED / path, out)
+        shutil.copyfile(TESTDATA / path, out)
     else:
         blob = subprocess.run(["git", "--git-dir", str(_git_dir(mirrors, repo)), "show",
                                f"{REPOS[repo][0]}:{path}"], check=True, capture_output=True).stdout
@@ -134,7 +134,7 @@ def _decimate(src: Path, out: Path, target: int) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--mirrors", default="/work/.mirror")
+    ap.add_argument("--mirrors", required=True, help="folder of the repositories' clones (owner+name)")
     ap.add_argument("--out", default=None, help="corpus folder (default as bench_real.py)")
     args = ap.parse_args()
     out = rc.corpus_dir(args.out)

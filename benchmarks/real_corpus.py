@@ -50,13 +50,12 @@ class Mesh:
 
 
 def corpus_dir(arg: str | None = None) -> Path:
-    """The corpus folder: ``arg``, else $MESHLAP_CORPUS, else ../shared/corpus, else /work/corpus."""
+    """The corpus folder: ``arg``, else $MESHLAP_CORPUS, else benchmarks/corpus (git ignores it)."""
     if arg:
         return Path(arg)
     if os.environ.get("MESHLAP_CORPUS"):
         return Path(os.environ["MESHLAP_CORPUS"])
-    shared = Path(__file__).resolve().parents[1].parent / "shared" / "corpus"
-    return shared if shared.is_dir() else Path("/work/corpus")
+    return Path(__file__).resolve().parent / "corpus"
 
 
 def manifest() -> list[dict]:
