@@ -109,7 +109,8 @@ def laplacian(
     if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
         V, F, k = _held_input(V, k)
     geo = as_geometry(V, F, k)
-    chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None})
+    chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None,
+                                       "denoise": denoise or None})
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
