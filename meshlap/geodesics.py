@@ -129,11 +129,8 @@ class HeatDistance:
     Examples
     --------
     >>> import meshlap, numpy as np
-    >>> from meshlap.baselines import cotangent
     >>> V, F = meshlap.shapes.sphere(3000, seed=0)
-    >>> op = cotangent(V, F)
-    >>> op.geometry = meshlap.geometry.surface(V, F)      # a baseline needs its geometry
-    >>> d = HeatDistance(op).compute(0)
+    >>> d = HeatDistance(meshlap.laplacian(V, F)).compute(0)
     >>> exact = np.arccos(np.clip(V @ V[0], -1, 1))      # great-circle distance
     >>> bool(np.abs(d - exact).mean() < 0.02)
     True

@@ -169,9 +169,8 @@ class PoissonSolver:
     Examples
     --------
     >>> import meshlap, numpy as np
-    >>> from meshlap.baselines import cotangent
     >>> V, F = meshlap.shapes.sphere(800, seed=0)
-    >>> op = cotangent(V, F)
+    >>> op = meshlap.laplacian(V, F)                   # the FEM pencil: a sparse LU
     >>> solver = PoissonSolver(op)
     >>> phi = solver.solve(-op.S @ V[:, 2])            # recovers z up to its mean (0)
     >>> bool(np.allclose(phi, V[:, 2] - V[:, 2] @ op.mass / op.mass.sum(), atol=1e-8))
