@@ -141,20 +141,19 @@ class MeshLaplacian(LumpedLaplacian):
         construction where a sample of rows leaves no doubt, else when the pencil is built.
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)``.
-    quadrature : {"vertex", "galerkin"}, optional
+    quadrature : {"vertex", "galerkin"}, default "vertex"
         How the symmetric pencil (``L_sym``, ``S``: spectra, heat flow, smoothing) integrates
         the kernel. "vertex": one point per vertex, the lumped masses. "galerkin": over the
         triangles (segments, tetrahedra) with the hat functions, 3 points per triangle, at
         h = 0.5·ē² unless ``h`` is given (:mod:`meshlap.corrections.galerkin`); ``op.L``
-        keeps the vertex rows. Default: "galerkin" with the correction and automatic h on a
-        clean triangle mesh of at most 10,000 vertices without creases (where it measures
-        ahead, docs/spectral.md), else "vertex". ``op.quadrature`` says which is in effect.
+        keeps the vertex rows. ``op.quadrature`` says which is in effect (the vertex pencil
+        where the Galerkin one's -S is not semidefinite, with a :class:`MeshWarning`).
     feature_width : bool, optional
-        The Galerkin pencil's width follows feature size: narrower (to h/2, its triangles cut
-        in 4) within 2 kernel widths of a groove (a concave crease) and on parts thinner than
-        3 widths (:mod:`meshlap.corrections.features`; fandisk 0.142% → 0.087%, spot 1.32% →
-        0.96%). Default: where h is automatic and the normals are not noise; False: one
-        width; True: also at an explicit h.
+        With ``quadrature="galerkin"``: its width follows feature size: narrower (to h/2, its
+        triangles cut in 4) within 2 kernel widths of a groove (a concave crease) and on parts
+        thinner than 3 widths (:mod:`meshlap.corrections.features`; fandisk 0.142% → 0.087%,
+        spot 1.32% → 0.96%). Default: where h is automatic and the normals are not noise;
+        False: one width; True: also at an explicit h.
     denoise, mass
         Options of the FEM pencil (``quadrature="fem"``): :func:`meshlap.laplacian`.
     k : {1, 2, 3}, optional

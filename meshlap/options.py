@@ -68,7 +68,7 @@ class Options:
     dtype: np.dtype
     max_memory: int
     pointwise_degree: int | None = None
-    quadrature: str | None = None
+    quadrature: str = "vertex"
     #: the Galerkin pencil's tolerance: ``tol`` when given, else 1e-8 (at 1e-6 its short-cut
     #: test moves spot's eigenvalue 5 by 8% of its error, issue 19)
     pencil_tol: float = DEFAULT_TOL
@@ -141,7 +141,8 @@ class Options:
         if correction == "none" and np.ndim(h) == 1:
             raise MeshError("a per-point h needs the corrected kernel; correction='none' is the paper's "
                             "operator at one h")
-        if quadrature is not None and quadrature not in QUADRATURES:
+        quadrature = "vertex" if quadrature is None else quadrature
+        if quadrature not in QUADRATURES:
             raise MeshError(f"quadrature must be one of {', '.join(QUADRATURES)} or None; got {quadrature!r}")
         if quadrature == "fem":
             if geo.faces is None and geo.cells is None:
@@ -164,9 +165,9 @@ class Options:
         if feature_width is not None and not isinstance(feature_width, bool):
             raise MeshError(f"feature_width must be True, False or None; "
                             f"got {feature_width!r}")
-        if feature_width and quadrature == "vertex":
-            raise MeshError("feature_width narrows the Galerkin pencil's kernel: "
-                            "not with quadrature='vertex'")
+        if feature_width and quadrature != "galerkin":
+            raise MeshError("feature_width narrows the Galerkin pencil's kernel: only with "
+                            "quadrature='galerkin' (operator='galerkin')")
         from .assembly import available_memory
 
         return cls(correction, arc_distance, pointwise, neumann, bool(adaptive), float(curvature_limit),

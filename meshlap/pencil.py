@@ -67,7 +67,6 @@ class Pencil:
     matrix_free: assembly.MatrixFree | None = None
     quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
     quadrature_h: float | None = None  # the Galerkin pencil's width
-    galerkin_regime: bool = False  # the Galerkin pencil is in effect, where galerkin.wins measured it
     shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
     thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
@@ -177,13 +176,10 @@ def _stencil_rows(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray | None, opt
 
 def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
               report: Callable[[float, str], None] | None) -> None:
-    # the symmetric pencil from the kernel integrated over the cells, where asked for or where
-    # the automatic choice measures it ahead; op.L keeps the vertex rows
+    # the symmetric pencil from the kernel integrated over the cells, where asked for
+    # (quadrature="galerkin"); op.L keeps the vertex rows
     gal = corrections.galerkin
-    if opts.quadrature == "vertex" or (opts.quadrature is None and not widths.h_auto):
-        return
-    regime = gal.wins(geo)  # where it was measured ahead; the resolution report reads it too
-    if opts.quadrature is None and not regime:
+    if opts.quadrature != "galerkin":
         return
     if report is not None:
         report(0.95, "Galerkin pencil")
@@ -200,7 +196,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
     # the feature width where the width is automatic (an explicit h, as the smoothing flow's, is
     # kept), never on noise: its fake creases and opposite sides would narrow it
     if surface and opts.feature_width is not False and (widths.h_auto or opts.feature_width) \
-            and gal.shape_measures(geo.points, tri)[1] <= gal.AUTO_MAX_ROUGHNESS:
+            and gal.shape_measures(geo.points, tri)[1] <= corrections.features.NOISE_ROUGHNESS:
         grooves = gal.creases(geo.points, tri, concave=True)
         hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
     info: dict = {}
@@ -211,13 +207,12 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
     if dog and opts.check_psd:
         margin, reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo), "Galerkin pencil")
         if reason is not None:
-            if opts.quadrature == "galerkin":  # asked for: say why it is not in effect
-                warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
-                              f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning,
-                              stacklevel=user_stacklevel())
+            warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
+                          f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning,
+                          stacklevel=user_stacklevel())
             return  # the vertex pencil stays
         out.psd_margin = margin
-    out.L_sym, out.quadrature, out.quadrature_h, out.galerkin_regime = L, "galerkin", float(h), regime
+    out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
     out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
     out.shortcuts = info.get("shortcuts", 0.0)
     if surface:
@@ -270,7 +265,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     >>> opts = pipeline.Options.resolve(g, None)
     >>> p = assemble(g, widths.choose(g, None, plain=False, curvature_limit=opts.curvature_limit), opts)
     >>> p.correction, p.quadrature, p.L is None  # the fitted rows are not the pencil's
-    ('richardson', 'galerkin', True)
+    ('richardson', 'vertex', True)
     """
     if opts.quadrature == "fem":
         return _fem(geo, opts, report)
@@ -379,8 +374,8 @@ def review(geo: Geometry, widths: Widths, opts: Options, p: Pencil) -> Pencil:
     fell_back = p.quadrature != "galerkin" and p.correction != opts.correction
     # the report made before the rows, where the build took the kernel it assumed
     kept = p.resolution is not None and p.resolution.fallback == fell_back and p.quadrature != "galerkin"
-    p.report = p.resolution if kept else resolution.assess(geo, widths, opts.correction, p.galerkin_regime,
-                                                           p.shortcuts, p.thin, fell_back)
+    p.report = p.resolution if kept else resolution.assess(
+        geo, widths, opts.correction, p.quadrature == "galerkin", p.shortcuts, p.thin, fell_back)
     if p.report is not None and p.report.too_coarse:
         warnings.warn(p.report.message(), resolution.ResolutionWarning, stacklevel=level)
     return p

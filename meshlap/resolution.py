@@ -436,8 +436,7 @@ def assess(geo: Geometry, widths: Any, correction: str, galerkin_regime: bool = 
     """The resolution report of an operator built on ``geo`` with ``widths``.
 
     None for the paper's operator (``correction="none"``), which the model does not cover.
-    ``galerkin_regime``: the Galerkin pencil is in effect on an input inside the regime where it
-    was measured (:func:`meshlap.corrections.galerkin.wins`); the prediction is then
+    ``galerkin_regime``: the Galerkin pencil is in effect; the prediction is then
     :data:`GALERKIN_FEM_RATIO` times linear FEM's, plus the terms of ``shortcuts`` and ``thin``
     (its area next to a short cut, and on thin parts), else the vertex pencil's model.
     ``fallback``: the corrected kernel's semidefiniteness check failed and the build took the

@@ -281,9 +281,8 @@ class Checks:
         import meshlap
 
         V, F = meshlap.shapes.plane(900, seed=2)  # boundary: mirror images and one-sided rows
-        # the ranks build the vertex pencil; the single machine's default would integrate over
-        # the triangles on a mesh this small (meshlap.corrections.galerkin)
-        self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F, quadrature="vertex"))
+        # the ranks build the vertex pencil, the kernel builder's on a single machine
+        self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F, operator="kernel"))
 
     def corrected_narrow(self):
         """An explicit width too narrow for the Richardson kernel: the ranks take the plain kernel

@@ -234,9 +234,9 @@ def test_width_narrows_only_where_the_surface_bends():
     V, F = shapes.sphere(3000, seed=0)
     assert meshlap.laplacian(V, F).h_vertex is None  # the unit sphere bends slowly: one h
     V, F = real_mesh("spot")
-    # the vertex pencil's widths (the default's Galerkin pencil on spot has its own h)
-    op = meshlap.laplacian(V, F, quadrature="vertex")
-    wide = meshlap.laplacian(V, F, curvature_limit=0, quadrature="vertex")
+    # the vertex pencil's widths (the Galerkin pencil has its own h)
+    op = meshlap.laplacian(V, F, operator="kernel")
+    wide = meshlap.laplacian(V, F, curvature_limit=0, operator="kernel")
     assert op.h == wide.h and op.h_vertex.max() <= op.h and op.h_vertex.min() < 0.1 * op.h
     assert op.correction == "richardson" and abs(op.S - op.S.T).max() <= 1e-12 * abs(op.S).max()
     ref, _ = spectral.eigs(baselines.cotangent(V, F), 12)

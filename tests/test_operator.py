@@ -250,10 +250,10 @@ def test_progress_callback():
     seen.clear()
     meshlap.laplacian(V, F, progress=lambda frac, stage: seen.append((frac, stage))).assemble()
     assert [s for _, s in seen] == ["done", "FEM pencil", "done"]  # the default: no kernel
-    # the kernel reports each stage of the pipeline by name, in order (a stratified plane takes
-    # the Galerkin pencil; a random one, whose longest edges are 30 mean edges, would not)
+    # the kernel reports each stage of the pipeline by name, in order (the Galerkin pencil's
+    # after the vertex pencil's)
     seen.clear()
-    op = meshlap.laplacian(V, F, operator="kernel", progress=lambda frac, stage: seen.append((frac, stage)))
+    op = meshlap.laplacian(V, F, operator="galerkin", progress=lambda frac, stage: seen.append((frac, stage)))
     assert seen == [(1.0, "done")]
     seen.clear()
     op.assemble()  # the pencil: on first use

@@ -44,9 +44,8 @@ from ..widths import Widths
 from .images import neumann_images
 from .shortcuts import drop_shortcuts
 
-__all__ = ["AUTO_MAX_CURVE_POINTS", "AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "AUTO_MAX_ROUGHNESS",
-           "CREASE_ANGLE", "EDGE_QUANTILE", "H_SCALE", "RULES", "SEGMENT_STEP", "SPLIT_BELOW", "creases",
-           "galerkin_pencil", "quadrature_points", "shape_measures", "simplices", "split_points", "wins"]
+__all__ = ["CREASE_ANGLE", "H_SCALE", "RULES", "SEGMENT_STEP", "SPLIT_BELOW", "creases", "galerkin_pencil",
+           "quadrature_points", "shape_measures", "simplices", "split_points"]
 
 #: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
 #: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
@@ -54,23 +53,6 @@ __all__ = ["AUTO_MAX_CURVE_POINTS", "AUTO_MAX_EDGE_RATIO", "AUTO_MAX_POINTS", "A
 H_SCALE = 0.5
 #: Pairs of cells whose normals differ by more than this (degrees) are across a crease.
 CREASE_ANGLE = 60.0
-#: The automatic choice takes the Galerkin pencil up to this many vertices (its build costs
-#: about 4× the vertex pencil's kernel entries; above it the vertex pencil is within 1.5× of
-#: linear FEM on the clean inputs measured).
-AUTO_MAX_POINTS = 10_000
-#: ... whose edges are at most this many mean edges long: three points on a triangle much
-#: larger than the rest do not resolve the kernel there (a random 6,000-vertex plane, longest
-#: edge 63 mean edges: 22% against the vertex pencil's 1.5%)
-AUTO_MAX_EDGE_RATIO = 2.5
-#: ... read at this quantile of the edge lengths, so that a few long edges do not decide it
-#: (fandisk: 2 of 38,838 edges above 2.5 mean edges, its 99.9th percentile 2.02; the random
-#: plane's 99.9th percentile is 19.8)
-EDGE_QUANTILE = 0.999
-#: Polylines take it up to this many vertices (about 6 quadrature points per vertex).
-AUTO_MAX_CURVE_POINTS = 100_000
-#: ... whose face normals are not noise (:func:`shape_measures`): there the narrow kernel
-#: follows the noise, the wide vertex kernel averages it out.
-AUTO_MAX_ROUGHNESS = 3.0
 
 #: A curve's segments are cut into pieces of at most this times √h, two Gauss points on each
 #: (the circle of 2,000 random angles: 0.00289% at 0.5·√h, 0.00289% at 0.25·√h).
@@ -542,33 +524,3 @@ def shape_measures(P: np.ndarray, tri: np.ndarray) -> tuple[float, float]:
         return angle, 0.0 if raw <= 1e-24 else math.inf
     return angle, raw / smooth
 
-
-def wins(geo: Any) -> bool:
-    """Whether the automatic choice is the Galerkin pencil: a triangle mesh of at most
-    :data:`AUTO_MAX_POINTS` vertices, edges at most :data:`AUTO_MAX_EDGE_RATIO` mean edges long
-    (at the quantile :data:`EDGE_QUANTILE`),
-    whose normals are not noise (roughness below
-    :data:`AUTO_MAX_ROUGHNESS`), or a polyline of at most :data:`AUTO_MAX_CURVE_POINTS`
-    vertices, where benchmarks/RESULTS.md measures it ahead of the vertex pencil and of linear
-    FEM.
-
-    Examples
-    --------
-    >>> import meshlap
-    >>> V, E, _ = meshlap.samples.circle(200, kind="random")
-    >>> wins(meshlap.geometry.polyline(V, E))
-    True
-    """
-    if getattr(geo, "source", None) == "polyline":
-        # any sampling: the segments are cut to the width, and on noisy circles it stays at or
-        # below the vertex pencil's error (0.5 mean edges of radial noise: 8.7% against 25%)
-        return simplices(geo) is not None and geo.n_points <= AUTO_MAX_CURVE_POINTS
-    tri = simplices(geo)
-    if tri is None or getattr(geo, "faces", None) is None or geo.dim != 2 or geo.n_points > AUTO_MAX_POINTS:
-        return False
-    P = geo.points if geo.points.shape[1] == 3 else np.pad(geo.points, ((0, 0), (0, 3 - geo.points.shape[1])))
-    E = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    length = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1)
-    if np.quantile(length, EDGE_QUANTILE) > AUTO_MAX_EDGE_RATIO * length.mean():
-        return False
-    return shape_measures(P, tri)[1] <= AUTO_MAX_ROUGHNESS
