@@ -5,10 +5,9 @@ cube) and 20,000-vertex random, uniform and nonuniform spheres, at h = f · ē²
 the largest relative error of eigenvalues 1-9 of the Richardson operator (``check_psd=False``),
 of the plain kernel with the default's arc distances and mirror images (its fallback), of the
 same with chords, and of the paper's operator (``correction="none"``: chords, no images); the
-semidefiniteness check's verdict; the resolution model's predictions of the two kernels
-(:func:`meshlap.resolution.default_terms`, fallback off and on); and what the default builds
-now. References: the exact eigenvalues (sphere, square, cube), else the cotangent Laplacian of
-the mesh refined twice.
+semidefiniteness check's verdict; and what the kernel builder makes now (the Richardson
+operator, the plain kernel where the check fails). References: the exact eigenvalues (sphere,
+square, cube), else the cotangent Laplacian of the mesh refined twice.
 
     python benchmarks/bench_fallback.py          # the table (about 7 minutes on 2 cores)
 """
@@ -17,7 +16,6 @@ from __future__ import annotations
 
 import sys
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +25,7 @@ import bench_psd  # noqa: E402
 import bench_spectra as B  # noqa: E402
 
 import meshlap  # noqa: E402
-from meshlap import resolution, shapes, spectral  # noqa: E402
+from meshlap import shapes, spectral  # noqa: E402
 from meshlap.corrections import psd  # noqa: E402
 
 FRACTIONS = (0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0)
@@ -52,8 +50,8 @@ def _error(op, ref):
 def main() -> None:
     warnings.simplefilter("ignore")
     print("| input | h / ē² | check | Richardson | plain, arc distance and images | plain, chords and images "
-          "| paper's | predicted Richardson / plain | default now (kernel) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| paper's | kernel builder now |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, (V, F), k, ref, fractions in inputs():
         kw = {"k": 3} if k == 3 else {}
         geo = meshlap.geometry.from_mesh(V, F, **kw)
@@ -63,9 +61,6 @@ def main() -> None:
             L = rich.L_sym / rich._built.moment_scale
             lam, scale = psd.smallest_eigenvalue(L, rich.mass, rich.geometry.points, rich.geometry.faces)
             passes = lam >= -psd.PSD_RTOL * scale
-            fig = resolution.assess(geo, meshlap.widths.choose(geo, h, plain=False), "richardson")
-            pr = sum(resolution.default_terms(fig).values())
-            pp = sum(resolution.default_terms(replace(fig, fallback=True)).values())
             # the plain kernel as the build makes it: the corrected default's tolerance and images
             arc, chord = (meshlap.laplacian(V, F, h=h, correction="none", arc_distance=a,
                                             neumann=rich.neumann, tol=meshlap.CORRECTED_TOL, **kw)
@@ -74,7 +69,7 @@ def main() -> None:
             now = meshlap.laplacian(V, F, h=h, pointwise=False, **kw)
             errs = [_error(op, ref) for op in (rich, arc, chord, paper, now)]
             print(f"| {name} | {f:g} | {'passes' if passes else 'fails'} | {errs[0]:.2%} | {errs[1]:.2%} | "
-                  f"{errs[2]:.2%} | {errs[3]:.2%} | {pr:.1%} / {pp:.1%} | {errs[4]:.2%} ({now.correction}) |",
+                  f"{errs[2]:.2%} | {errs[3]:.2%} | {errs[4]:.2%} ({now.correction}) |",
                   flush=True)
 
 

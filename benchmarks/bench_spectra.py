@@ -10,9 +10,8 @@ cotangent Laplacian) on a mesh refined 16× (coarse torus, cube surface, fandisk
 default, the paper's operator (``correction="none"``), libigl COT (on curves: linear FEM on
 the segments, ``meshlap.baselines.cotangent(V, E)``), LaPy (linear FEM, ``lapy``) and
 robust-laplacian, as far as each applies. A missing peer is skipped with its name. Each
-row also says whether the default's build raised the ResolutionWarning, with the figure
-``op.resolution`` names as the reason and its predicted error, and whether the row meets
-issue 18's rule: the default within 1.5× of the best peer, or warned.
+row also says whether it meets issue 35's bar: the default within 1.5× of the best peer, with
+no warning needed to get there.
 """
 
 from __future__ import annotations
@@ -36,7 +35,6 @@ from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
 from meshlap import samples, shapes, spectral  # noqa: E402
-from meshlap.resolution import ResolutionWarning  # noqa: E402
 
 K = 10  # eigenvalues 0..9
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
@@ -88,12 +86,10 @@ def robust_cloud(P):
 
 
 def ours(build, **kw):
-    with warnings.catch_warnings(record=True) as seen:
-        warnings.simplefilter("always")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
         op = build(**kw)
-    lam = spectral.eigs(op, K, tol=1e-6)[0]
-    warned = any(issubclass(w.category, ResolutionWarning) for w in seen)
-    return lam, op, warned
+    return spectral.eigs(op, K, tol=1e-6)[0], op
 
 
 def _refined(V, F, times=2):
@@ -258,23 +254,22 @@ def row(name, kind, data, ref):
         def build(**o):
             return meshlap.point_cloud_laplacian(data, **raw, **o)
     t0 = time.perf_counter()
-    lam, op, warned = ours(build)
-    res["default"] = (err(lam), time.perf_counter() - t0, warned, op.correction, op.quadrature)
-    res["resolution"] = op.resolution
+    lam, op = ours(build)
+    res["default"] = (err(lam), time.perf_counter() - t0, op.correction, op.quadrature)
     if kind == "tets" and op.n_vertices > 20000:
         # the paper's width (2ē)² holds 22× the default's neighbours in 3-D: gigabytes here
-        res["paper"] = (math.nan, None, False, "skipped: memory")
+        res["paper"] = (math.nan, None, "skipped: memory")
     else:
-        lam, _, _ = ours(build, correction="none")
-        res["paper"] = (err(lam), None, False, "none")
+        lam, _ = ours(build, correction="none")
+        res["paper"] = (err(lam), None, "none")
     peers = {"mesh": (("COT", cot), ("LaPy", lapy_tria), ("robust", robust_mesh)),
              "tets": (("LaPy", lapy_tet),), "cloud": (("robust", robust_cloud),),
              "cloud-raw": (("robust", robust_cloud),), "curve": (("COT", cot_curve),)}[kind]
     for pname, fn in peers:
         try:
-            res[pname] = (err(fn(*data) if isinstance(data, tuple) else fn(data)), None, False, "")
+            res[pname] = (err(fn(*data) if isinstance(data, tuple) else fn(data)), None, "")
         except ImportError as exc:
-            res[pname] = (math.nan, None, False, f"missing: {exc.name}")
+            res[pname] = (math.nan, None, f"missing: {exc.name}")
     return res
 
 
@@ -289,36 +284,32 @@ def main(argv=None) -> int:
     ap.add_argument("--rows", help="only the inputs whose name contains this (printed, not written)")
     args = ap.parse_args(argv)
     head = ("| input | default | paper's | COT | LaPy | robust-laplacian | best peer | default / best "
-            "| warned: predicted error, reason | ≤ 1.5× best or warned |\n"
-            "|---|---|---|---|---|---|---|---|---|---|")
+            "| ≤ 1.5× best |\n"
+            "|---|---|---|---|---|---|---|---|---|")
     lines = [head]
     print(head, flush=True)
     for name, kind, data, ref in inputs(args.quick):
         if args.rows and args.rows not in name:
             continue
         r = row(name, kind, data, ref)
-        peers = {k: v[0] for k, v in r.items() if k not in ("default", "paper", "resolution")
-                 and np.isfinite(v[0])}
+        peers = {k: v[0] for k, v in r.items() if k not in ("default", "paper") and np.isfinite(v[0])}
         best = min(peers.values()) if peers else math.nan
         d = r["default"]
         # the vertex pencil's fallback, where that pencil is the one in effect
-        gal = d[4] == "galerkin"
-        flag = ("" if d[3] == "richardson" or gal else f" ({d[3]})") + (" G" if gal else "")
-        rep = r["resolution"]
-        said = f"⚠ {rep.predicted_error:.2%}, {rep.reason}" if d[2] else "–"
-        ok = "yes" if (d[2] or not peers or d[0] <= 1.5 * best) else "**no**"
+        gal = d[3] == "galerkin"
+        flag = ("" if d[2] in ("richardson", "fem") or gal else f" ({d[2]})") + (" G" if gal else "")
+        ok = "yes" if (not peers or d[0] <= 1.5 * best) else "**no**"
 
         cells = [_pct(r[key][0]) if key in r and np.isfinite(r[key][0]) else "–"
                  for key in ("paper", "COT", "LaPy", "robust")]
         tail = f"{_pct(best)} | {d[0] / best:.2f}" if peers else "– | –"
         line = (f"| {name} | {_pct(d[0])}{flag} ({d[1]:.1f} s) | {' | '.join(cells)} | {tail} "
-                f"| {said} | {ok} |")
+                f"| {ok} |")
         lines.append(line)
         print(line, flush=True)
     cmd = "python benchmarks/bench_spectra.py" + (" --quick" if args.quick else "")
-    body = [f"Command: `{cmd}` (2 cores, shared). Largest relative error of eigenvalues 1-9; ⚠: the "
-            "build raised the ResolutionWarning (the predicted error and the figure behind most of it, from "
-            "`op.resolution`); a correction in parentheses: the default fell back to it; COT on curves: "
+    body = [f"Command: `{cmd}` (2 cores, shared). Largest relative error of eigenvalues 1-9; "
+            "a correction in parentheses: the default fell back to it; COT on curves: "
             "linear FEM on the segments (`meshlap.baselines.cotangent(V, E)`); G: the default's "
             "pencil is the Galerkin one (`op.quadrature`); the time is the default's build and eigs "
             "(wall clock).", ""] + lines

@@ -78,7 +78,7 @@ def warm_up() -> None:
     import meshlap
 
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the coarse volume's resolution warning: only compiling
+        warnings.simplefilter("ignore")  # only compiling
         # fit_rows: the default's point-wise rows, which a build fits on first use
         V, F = meshlap.shapes.sphere(500, seed=0)
         meshlap.laplacian(V, F).fit_rows()

@@ -117,10 +117,7 @@ class MeshLaplacian(LumpedLaplacian):
         (:data:`meshlap.widths.CLOUD_CAP_FLOOR`).
     check_psd : bool, default True
         Check that −S is positive semidefinite (Richardson only), else fall back to the plain
-        kernel. With an explicit ``h`` on a surface mesh the build first compares the
-        resolution model's predictions of the two kernels at that h and takes the plain one
-        before any row is made where it is predicted more accurate (``fallback_reason`` says
-        so; :func:`meshlap.pipeline.plain_predicted`). False builds the Richardson operator as is.
+        kernel (``fallback_reason`` says why). False builds the Richardson operator as is.
     tol : float, optional
         Default 1e-6 for the corrected operators, 1e-8 for the paper's (``correction="none"``)
         and for the Galerkin pencil (of meshes and curves), where 1e-6 costs measurable accuracy.
@@ -170,7 +167,7 @@ class MeshLaplacian(LumpedLaplacian):
         The symmetric pencil's L, S = M L_sym: the Richardson kernel with mirror images at the
         boundary (Neumann); ``L`` itself without point-wise rows. Spectra, heat flow and
         smoothing use it (through ``S`` and ``M``). Built on first use (:meth:`assemble`), with
-        the facts below that describe it (correction, fallback, margin, scale, resolution).
+        the facts below that describe it (correction, fallback, margin, scale).
     M : scipy.sparse.csr_matrix
         Diagonal lumped mass matrix.
     S : scipy.sparse.csr_matrix
@@ -192,11 +189,6 @@ class MeshLaplacian(LumpedLaplacian):
     psd_margin, moment_scale : float or None, float
         Smallest eigenvalue of (−S, M) over the largest diagonal entry of −L (the check),
         and the global second-moment factor (docs/accuracy.md).
-    resolution : meshlap.resolution.Resolution or None
-        Whether the kernel resolves the input: the figures, the predicted eigenvalue error
-        against linear FEM's, the verdict (a :class:`~meshlap.resolution.ResolutionWarning`
-        when too coarse, issued when the pencil is built) and the alternative; None for
-        ``correction="none"``.
 
     Examples
     --------
@@ -271,9 +263,8 @@ class MeshLaplacian(LumpedLaplacian):
     matrix_free = property(lambda self: self.options.matrix_free)
     max_memory = property(lambda self: self.options.max_memory)
     neumann = property(lambda self: self.options.neumann)
+    arc_distance = property(lambda self: self.options.arc_distance, doc="Whether the kernel measures arcs.")
     # the symmetric pencil's facts (built on first read: assemble)
-    arc_distance = property(lambda self: self.options.arc_distance and not self._built.assemble().chords,
-                            doc="Whether the kernel measures arcs (not the chords of pencil.plain_arcs).")
     correction = property(lambda self: self._built.assemble().correction, doc="The correction in effect.")
     fallback_reason = property(lambda self: self._built.assemble().fallback_reason)
     psd_margin = property(lambda self: self._built.assemble().psd_margin)
@@ -283,9 +274,6 @@ class MeshLaplacian(LumpedLaplacian):
                           doc="The symmetric pencil's quadrature in effect: 'vertex' or 'galerkin'.")
     quadrature_h = property(lambda self: self._built.assemble().quadrature_h,
                             doc="The Galerkin pencil's h, else None.")
-    resolution = property(lambda self: self._built.assemble().report, doc=(
-        "Whether the kernel resolves the input, and the predicted eigenvalue error (None for the paper's "
-        "operator): :class:`meshlap.resolution.Resolution`, made with the symmetric pencil."))
     # the rows op @ f applies (made on first read: fit_rows)
     pointwise_unchanged = property(lambda self: self._built.fit_rows().unchanged)
     pointwise_choice = property(lambda self: self._built.fit_rows().choice,
@@ -321,13 +309,13 @@ class MeshLaplacian(LumpedLaplacian):
         """Build the symmetric pencil now; returns the operator.
 
         The pencil (``L_sym``, ``S``: what spectra, heat flow and smoothing read; with it the
-        kernel choice at an explicit h, the semidefiniteness check and its fallback, the moment
-        scale, the Galerkin pencil, :attr:`resolution`) is built on first use: the first
+        semidefiniteness check and its fallback, the moment scale, the Galerkin pencil) is
+        built on first use: the first
         ``op.L_sym``, ``op.S``, :func:`~meshlap.spectral.eigs`, heat flow, smoothing, a fact of
         the pencil (``op.correction``, ``op.fallback_reason``, ``op.psd_margin``,
         ``op.quadrature``, ...) or saving builds it, once (under a lock, whichever thread comes
-        first), with the same bits as a build at construction; its warnings (the fallback, a
-        :class:`~meshlap.resolution.ResolutionWarning`) come then. ``op @ f`` of the default
+        first), with the same bits as a build at construction; its warning (the fallback) comes
+        then. ``op @ f`` of the default
         (the fitted rows, :meth:`fit_rows`) never builds it. Call this to pay for it at a time of
         your choosing (e.g. before timing eigs, or to see the warnings at construction); it does
         nothing when it is held. The memory guard still refuses at construction a pencil over

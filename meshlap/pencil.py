@@ -1,14 +1,14 @@
 """The symmetric pencil: what spectra, heat flow and smoothing read (``S = M L_sym``).
 
-    kernel choice ─▶ Kernel ─▶ assembly.assemble ─▶ semidefinite check ─▶ moment scale ─▶ Galerkin
+    Kernel ─▶ assembly.assemble ─▶ semidefinite check ─▶ moment scale ─▶ Galerkin
 
 :func:`assemble` runs these stages for one geometry, its widths and options, and returns
 :class:`Pencil`; :func:`meshlap.pipeline.build` calls it on the pencil's first use, not at
 construction, so an operator that only applies ``op @ f`` (the fitted rows, which read the
 points alone) never pays for it. Rows built on the kernel's own stencil (``pointwise=True``,
 ``pointwise_degree``), the paper's operator (whose ``L`` is ``L_sym``) and a matrix-free
-operator come with the pencil. :func:`review` adds the operator's resolution report and its
-warnings, which come when the pencil is built.
+operator come with the pencil. :func:`review` gives the warning of a fallback to the plain
+kernel, which comes when the pencil is built.
 """
 
 from __future__ import annotations
@@ -21,32 +21,14 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from . import assembly, corrections, denoise, fem, resolution
+from . import assembly, corrections, denoise, fem
 from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshWarning, user_stacklevel
 from .geometry import Geometry
 from .options import Options
 from .widths import Widths
 
-__all__ = ["PLAIN_MARGIN", "PREDICT_MAX_IRREGULARITY", "THIN_SAMPLE", "Pencil", "assemble", "guard_for",
-           "plain_arcs", "plain_predicted", "review"]
-
-#: Up to this irregularity (spread of the edge lengths) of a surface mesh the build compares the
-#: resolution model's predictions of the two kernels at an explicit width before it builds either:
-#: both were fitted on 0.12-0.50 (uniform to random spheres) and checked on a nonuniform sphere
-#: (0.77: the plain kernel more accurate at every width from 0.3 to 4 ē², taken up to 2 ē²); past
-#: that they extrapolate (a random plane, 1.41: 58% predicted at 2ē², 2.9% measured;
-#: benchmarks/RESULTS.md, i19c and i20r).
-PREDICT_MAX_IRREGULARITY = 0.8
-#: The plain kernel is built where the Richardson kernel's predicted error is more than this times
-#: its own: each prediction is off by up to 2-4×, and of the 99 rows of
-#: ``calibrate_resolution.py --kernels`` those the Richardson kernel wins reach 1.45 (a 20,000-vertex
-#: torus at ē², 0.55% against 0.69%), those the plain kernel wins by more than 10% start at 1.85.
-PLAIN_MARGIN = 1.6
-#: The plain kernel that :func:`plain_predicted` takes measures chords, as the paper's does, where
-#: no vertex of at most this many (a sample of a larger mesh) has the surface's other side within
-#: its reach (:func:`plain_arcs`); the thickness of all 400,000 would cost 3 s of CPU at h = ē².
-THIN_SAMPLE = 20000
+__all__ = ["Pencil", "assemble", "guard_for", "review"]
 
 
 @dataclass
@@ -70,70 +52,8 @@ class Pencil:
     shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
     thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
-    chords: bool = False  # the plain kernel taken before the rows measures chords (plain_arcs)
     #: the masses the pencil goes with, where they are not the geometry's (the FEM pencil's)
     mass: np.ndarray | None = field(default=None, repr=False)
-    #: the resolution report of the kernel in effect, from the figures measured before the rows
-    #: (:func:`plain_predicted`; None where none were)
-    resolution: Any = field(default=None, repr=False)
-    #: the operator's report (:func:`review`): ``resolution`` where it holds, else assessed anew
-    report: Any = field(default=None, repr=False)
-
-
-def plain_predicted(geo: Geometry, widths: Widths) -> tuple[Any, str | None]:
-    """``(report, reason)``: the resolution report of the Richardson kernel at an explicit width on
-    a surface mesh (None elsewhere), and why the plain kernel is built instead (None to build
-    the Richardson one): where the model (:func:`meshlap.resolution.default_terms`) predicts the
-    plain kernel at this width more accurate by :data:`PLAIN_MARGIN`. Decided before any row: a
-    narrow width costs neither the Richardson rows nor the semidefiniteness check (400,000 random vertices at
-    h = ē²: the check passes after 29 s of CPU, and the operator is 5% off where the plain
-    kernel is 0.9%; benchmarks/RESULTS.md, i19c). Part of the pencil: ``op @ f`` of the default
-    (the fitted rows) does not pay for it.
-
-    Examples
-    --------
-    >>> import meshlap
-    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, kind="random", seed=0))
-    >>> report, reason = plain_predicted(g, meshlap.widths.choose(g, 0.5 * g.spacing**2, plain=False))
-    >>> "predicted less accurate" in reason
-    True
-    >>> plain_predicted(g, meshlap.widths.choose(g, 2 * g.spacing**2, plain=False))[1] is None
-    True
-    """
-    if widths.h_auto or geo.faces is None or geo.dim != 2:
-        return None, None
-    report = resolution.assess(geo, widths, "richardson")
-    if report.irregularity > PREDICT_MAX_IRREGULARITY:
-        return report, None
-    rich = sum(resolution.default_terms(report).values())
-    plain = sum(resolution.default_terms(replace(report, fallback=True)).values())
-    if rich <= PLAIN_MARGIN * plain:
-        return report, None
-    return report, (f"at h = {report.width:.2f}² mean edges the Richardson operator is predicted less "
-                    f"accurate than the plain kernel ({rich:.1%} against {plain:.1%} for eigenvalues 1-9): h "
-                    f"is too small for the mesh to resolve the narrow kernel h/2; using the plain kernel "
-                    f"(O(h) bias)")
-
-
-def plain_arcs(geo: Geometry, widths: Widths) -> bool:
-    """Whether the plain kernel that :func:`plain_predicted` takes keeps the default's arc
-    distances: where part of the surface is thinner than
-    :data:`~meshlap.corrections.shortcuts.THIN_WIDTHS` of its widths √(2h), whose chords would
-    cross to the other side (spot at h = ē²/2: 4.4% of its area, 12.8% off with chords against
-    2.0% with arcs); elsewhere chords (spheres 1.0-1.3×, tori 1.1-2.2× more accurate than arcs
-    where the plain kernel is taken; benchmarks/RESULTS.md, i20r).
-
-    Examples
-    --------
-    >>> import meshlap
-    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, kind="random", seed=0))
-    >>> plain_arcs(g, meshlap.widths.choose(g, g.spacing**2, plain=False))
-    False
-    """
-    n = geo.n_points
-    rows = None if n <= THIN_SAMPLE else np.arange(0, n, -(-n // THIN_SAMPLE))
-    width = float(np.sqrt(2 * widths.largest))
-    return corrections.shortcuts.thin_fraction(geo.points, geo.normals(), geo.mass, width, rows=rows) > 0
 
 
 def guard_for(geo: Geometry, opts: Options, h: float, images: bool) -> MemoryGuard:
@@ -254,7 +174,7 @@ def _apart(geo: Geometry, out: Pencil) -> None:
 
 def assemble(geo: Geometry, widths: Widths, opts: Options,
              report: Callable[[float, str], None] | None = None) -> Pencil:
-    """The symmetric pencil of one geometry at its widths: kernel choice, kernel rows, the
+    """The symmetric pencil of one geometry at its widths: kernel rows, the
     semidefinite check, the moment scale, the Galerkin pencil (and the rows that come with it).
 
     Examples
@@ -270,14 +190,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     if opts.quadrature == "fem":
         return _fem(geo, opts, report)
     radius = cutoff_radius(widths.largest, opts.tol)
-    checked = not opts.plain and opts.check_psd and not opts.matrix_free
-    if checked and report is not None and not widths.h_auto:
-        report(0.0, "kernel choice")  # the resolution report's figures: 1.6-2 s at 400,000 vertices
-    figures, reason = plain_predicted(geo, widths) if checked else (None, None)
-    dog = not opts.plain and reason is None
-    chords = reason is not None and opts.arc_distance and not plain_arcs(geo, widths)
-    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance and not chords else None,
-                  tol=opts.tol)
+    dog = not opts.plain
+    kern = Kernel(geo.dim, dog=dog, normals=geo.normals() if opts.arc_distance else None, tol=opts.tol)
     frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
     band = None if frames is None else frames[0]
     if opts.matrix_free:
@@ -318,10 +232,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         return free, L
 
     free, L = stage(kern, "kernel rows")
-    out = Pencil(L, None if opts.pointwise == "fit" else L, "none" if reason else opts.correction,
-                 fallback_reason=reason, chords=chords,
-                 boundary_rows=0 if frames is None or not opts.neumann else len(band),
-                 resolution=resolution.as_fallback(figures, geo) if reason else figures)
+    out = Pencil(L, None if opts.pointwise == "fit" else L, opts.correction,
+                 boundary_rows=0 if frames is None or not opts.neumann else len(band))
     if dog and opts.check_psd:
         if report is not None:
             report(0.7, "semidefinite check")
@@ -334,7 +246,6 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
                                                                     what, known)
         if out.fallback_reason is not None:
             out.correction = "none"
-            out.resolution = None if out.resolution is None else resolution.as_fallback(out.resolution, geo)
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
             out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
@@ -357,25 +268,13 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     return out
 
 
-def review(geo: Geometry, widths: Widths, opts: Options, p: Pencil) -> Pencil:
-    """The operator's resolution report of pencil ``p`` (``p.report``) and its warnings: the
-    fallback to the plain kernel where that pencil is used, and the resolution's "too coarse";
+def review(opts: Options, p: Pencil) -> Pencil:
+    """The warning of pencil ``p``'s fallback to the plain kernel where that pencil is used,
     pointed at the user's line that asked for the pencil. Returns ``p``."""
-    if p.quadrature == "fem":  # nothing to report: no kernel, no fallback
-        return p
-    level = user_stacklevel()
     # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
-    # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own)
+    # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own);
+    # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to
     if p.fallback_reason is not None and (p.quadrature != "galerkin" or opts.pointwise is True):
         warnings.warn(p.fallback_reason + "; pass a larger h to keep the correction", MeshWarning,
-                      stacklevel=level)
-    # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to;
-    # a vertex pencil that fell back to the plain kernel is reported as such (FEM wins there)
-    fell_back = p.quadrature != "galerkin" and p.correction != opts.correction
-    # the report made before the rows, where the build took the kernel it assumed
-    kept = p.resolution is not None and p.resolution.fallback == fell_back and p.quadrature != "galerkin"
-    p.report = p.resolution if kept else resolution.assess(
-        geo, widths, opts.correction, p.quadrature == "galerkin", p.shortcuts, p.thin, fell_back)
-    if p.report is not None and p.report.too_coarse:
-        warnings.warn(p.report.message(), resolution.ResolutionWarning, stacklevel=level)
+                      stacklevel=user_stacklevel())
     return p

@@ -27,12 +27,11 @@ from . import assembly, corrections, pencil
 from .assembly import Kernel
 from .geometry import Geometry
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
-from .pencil import PLAIN_MARGIN, PREDICT_MAX_IRREGULARITY, THIN_SAMPLE, Pencil, plain_arcs, plain_predicted
+from .pencil import Pencil
 from .widths import Widths
 
-__all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "PLAIN_MARGIN", "POINTWISE",
-           "PREDICT_MAX_IRREGULARITY", "QUADRATURES", "THIN_SAMPLE", "Built", "Once", "Options", "Rows",
-           "build", "default_tol", "fitted_rows", "plain_arcs", "plain_predicted"]
+__all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "POINTWISE", "QUADRATURES", "Built", "Once",
+           "Options", "Rows", "build", "default_tol", "fitted_rows"]
 
 
 class Once:
@@ -196,7 +195,7 @@ def build(geo: Geometry, widths: Widths, opts: Options,
 
     def make_pencil() -> Pencil:
         p = pencil.assemble(geo, widths, opts, report)
-        return pencil.review(geo, widths, opts, p) if review else p
+        return pencil.review(opts, p) if review else p
 
     # the fitted rows read the points alone (0.5 s of CPU at 16k vertices), the pencil the
     # kernel (0.4 s): spectra, heat flow and smoothing never fit the rows, op @ f never

@@ -15,7 +15,6 @@ the normals, with a time step from the noise the fits measure (:data:`DENOISE_DT
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -25,7 +24,6 @@ from .errors import MeshError
 from .geometry.frames import vertex_normals
 from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
-from .resolution import ResolutionWarning
 
 __all__ = ["DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "smooth_function", "mean_curvature_flow",
            "enclosed_volume"]
@@ -251,9 +249,7 @@ def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool
     quadrature = "galerkin" if (faces.sizes == 3).all() else "vertex"
 
     def build(P: np.ndarray, Q: Any) -> Any:
-        with warnings.catch_warnings():  # its verdict is on eigenvalues at this width, not on smoothing
-            warnings.simplefilter("ignore", ResolutionWarning)
-            return bsw(P, Q, h=h, quadrature=quadrature)
+        return bsw(P, Q, h=h, quadrature=quadrature)
 
     return build, h
 

@@ -11,8 +11,8 @@ those of the saved one. What is stored:
   matrix;
 * ``S`` itself for operators whose S is not ``M @ L`` to the bit (the cotangent Laplacian);
 * the masses, the kernel parameters (h, tol, radius, correction, the moment factor,
-  per-vertex widths), the resolution report (as JSON) and the geometry (points, faces or
-  cells, boundary, intrinsic dimension), unless ``mesh=False``;
+  per-vertex widths) and the geometry (points, faces or cells, boundary, intrinsic
+  dimension), unless ``mesh=False``;
 * ``meshlap_format``, the layout's version: files of another version are refused with
   :class:`OperatorFormatError`.
 
@@ -37,7 +37,6 @@ from .geometry import Geometry, Polygons
 from .geometry.validation import check_faces, check_function, existing_file
 from .lumped import LumpedLaplacian
 from .operator import MeshLaplacian
-from .resolution import Resolution
 from .spectral import symmetric_L
 
 __all__ = ["FORMAT_VERSION", "OperatorFormatError", "SavedLaplacian", "load_operator", "save_operator"]
@@ -61,9 +60,9 @@ class SavedLaplacian(LumpedLaplacian):
     """An operator read back by :func:`load_operator`.
 
     Behaves like the operator it was saved from: ``op @ f``, ``L``, ``L_sym``, ``M``, ``S``,
-    ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction``,
-    ``resolution`` (None for operators without them, such as the cotangent Laplacian), and when the
-    geometry was saved ``V``, ``faces``, ``geometry`` and ``dim``.
+    ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction`` (None
+    for operators without them, such as the cotangent Laplacian), and when the geometry was
+    saved ``V``, ``faces``, ``geometry`` and ``dim``.
 
     Examples
     --------
@@ -89,7 +88,6 @@ class SavedLaplacian(LumpedLaplacian):
         self.correction = params.get("correction")
         self.pointwise = applied is not symmetric
         self.h_vertex = params.get("h_vertex")
-        self.resolution = params.get("resolution")  # as the build reported it
         self.exact = self.tol == 0.0
         self.dtype = applied.dtype
         if geometry is not None:  # only then: code that looks for op.V falls back without it
@@ -266,8 +264,6 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
             arrays["correction"] = np.array(op.correction)
         if getattr(op, "h_vertex", None) is not None:
             arrays["h_vertex"] = op.h_vertex
-        if getattr(op, "resolution", None) is not None:
-            arrays["resolution"] = np.array(op.resolution.to_json())
         if mesh:
             arrays.update(_geometry_arrays(op))
     if "data" in arrays:
@@ -361,8 +357,7 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
                   if k in data}
         if "h_vertex" in data:
             params["h_vertex"] = data["h_vertex"]
-        if "resolution" in data:
-            params["resolution"] = Resolution.from_json(str(data["resolution"]))
+        # a "resolution" entry (the removed resolution report, as JSON) of older files is not read
         geo = _geometry(data, mass, path.name)
         if "matrix_free" in data:
             return _rebuild_matrix_free(geo, params, path.name)

@@ -284,33 +284,6 @@ class Checks:
         # the ranks build the vertex pencil, the kernel builder's on a single machine
         self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F, operator="kernel"))
 
-    def corrected_narrow(self):
-        """An explicit width too narrow for the Richardson kernel: the ranks take the plain kernel
-        before any row, with chords (no part of the sphere is thin), as the single machine does
-        (pipeline.plain_predicted, pipeline.plain_arcs)."""
-        import warnings
-
-        import meshlap
-        from meshlap import distributed
-
-        V, F = meshlap.shapes.sphere(2000, kind="random", seed=0)
-        h = 0.5 * meshlap.geometry.from_mesh(V, F).spacing ** 2
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", meshlap.MeshWarning)
-            op = distributed.laplacian(V, F, h=h, comm=self.comm)
-            A, B = op.to_scipy(), op.to_scipy(symmetric=True)
-            if self.rank == 0:
-                serial = meshlap.laplacian(V, F, h=h, quadrature="vertex")
-        if self.rank == 0:
-            assert op.correction == serial.correction == "none", (op.correction, serial.correction)
-            assert not serial.arc_distance
-            assert op.fallback_reason == serial.fallback_reason, (op.fallback_reason, serial.fallback_reason)
-            assert op.psd_margin is None  # no check ran
-            e_L = abs(A - serial.L).max() / abs(serial.L).max()
-            e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
-            assert A.nnz == serial.L.nnz and max(e_L, e_S) <= 1e-12, (A.nnz, serial.L.nnz, e_L, e_S)
-            self.report("corrected_narrow", f"plain kernel on every rank: L {e_L:.1e}, L_sym {e_S:.1e}")
-
     def corrected_scattered(self):
         """Scattered input (each rank a chunk of the points and a share of the faces, no rank the
         whole mesh): the same default from global reductions."""

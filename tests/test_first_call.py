@@ -81,10 +81,9 @@ def test_first_build_on_a_fresh_cache(tmp_path):
     assert not [k for k, parallel in kernels if parallel], kernels
     assert len({k for k, _ in kernels}) == len(kernels), kernels
     # the mesh: kernel rows, fitted rows, their copy, their compiled neighbour medians (np.nanmedian
-    # was 5x slower), their neighbours' grid search, the resolution report's ring heights and the
-    # Galerkin pencil's short cuts, and the geometry's one-pass sums (edge lengths, normals, the
-    # curvature cap's sums: a few tenths of a second together); the time bound below is what
-    # matters
+    # was 5x slower), their neighbours' grid search, the Galerkin pencil's short cuts, and the
+    # geometry's one-pass sums (edge lengths, normals, the curvature cap's sums: a few tenths of a
+    # second together); the time bound below is what matters
     # the cloud then compiles the kernel's rows, which the mesh's default FEM pencil does not use
     assert 1 <= len(out["mesh"]) <= 8 and len(out["cloud"]) <= 6, kernels
     # the frames' eigenvectors and the metric's inverse are hand-written (meshlap._dense):

@@ -15,9 +15,6 @@ def kernel_laplacian(*args, **kwargs):
     # the heat-kernel operator these tests are about (the default of meshes is the FEM pencil)
     return meshlap.laplacian(*args, **{"operator": "kernel", **kwargs})
 
-pytestmark = pytest.mark.filterwarnings("ignore::meshlap.resolution.ResolutionWarning")
-
-
 @pytest.fixture
 def counted(monkeypatch):
     # every fit of the rows, counted (and slowed, so that threads asking at once overlap)

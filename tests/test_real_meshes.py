@@ -14,7 +14,6 @@ import pytest
 import meshlap
 from meshlap import topology
 from meshlap.geometry.validation import MeshWarning
-from meshlap.resolution import ResolutionWarning
 
 DATA = Path(__file__).parent / "data"
 BUNNY = DATA / "stanford-bunny.obj"  # checked by test_bunny
@@ -27,12 +26,11 @@ def read(path):
 
 
 def build(V, F, **kw):
-    # the MeshWarnings about the mesh itself; whether the kernel resolves it is op.resolution's
+    # the MeshWarnings about the mesh itself
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         op = meshlap.laplacian(V, F, **kw)
-    return op, [w for w in seen if issubclass(w.category, MeshWarning)
-                and not issubclass(w.category, ResolutionWarning)]
+    return op, [w for w in seen if issubclass(w.category, MeshWarning)]
 
 
 def check_sound(op, V):

@@ -98,3 +98,17 @@ def test_wrong_arguments_and_versions(tmp_path):
         np.savez(tmp_path / "tampered.npz", **arrays)
         with pytest.raises(io.OperatorFormatError, match=word):
             io.load_operator(tmp_path / "tampered.npz")
+
+
+def test_a_file_with_the_former_resolution_report_loads(tmp_path):
+    # files saved while the kernel carried a resolution report (JSON under "resolution") are of
+    # the same layout: they load, bit for bit, and the report is not read
+    op = meshlap.laplacian(V, F, operator="kernel")
+    with np.load(io.save_operator(tmp_path / "op", op)) as data:
+        arrays = dict(data)
+    assert "resolution" not in arrays
+    arrays["resolution"] = np.array('{"spacing": 0.1, "verdict": "resolved"}')
+    np.savez(tmp_path / "old.npz", **arrays)
+    back = io.load_operator(tmp_path / "old.npz")
+    assert np.array_equal(back @ V, op @ V) and same_csr(back.S, op.S)
+    assert not hasattr(back, "resolution")

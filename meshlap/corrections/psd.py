@@ -66,8 +66,8 @@ scale) after 10 iterations and 38 s of CPU, 5.7× the paper's whole build: of it
 orthogonalization) 7%; 100,000 vertices: 8 iterations, 3.9 s. A pass is the costly verdict, not
 a failure: a failure ends at the first negative Ritz value or diagonal entry (100,000 vertices
 at 0.5 ē²: 11 iterations, 3.3 s). There the operator it certifies is 5.3% off where the plain
-kernel is 0.9%: an explicit width that narrow on a surface mesh is now decided before the rows
-by the resolution model (:func:`meshlap.pipeline.plain_predicted`), and the check is not run.
+kernel is 0.9%: an explicit width that narrow is the caller's choice (``correction="none"``
+builds the plain kernel).
 """
 
 from __future__ import annotations

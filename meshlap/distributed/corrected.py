@@ -28,7 +28,6 @@ import scipy.sparse as sp
 from .. import assembly, corrections
 from ..geometry import Geometry
 from ..options import Options
-from ..pencil import plain_arcs, plain_predicted
 from ..widths import Widths
 
 __all__ = ["PointAttributes", "attributes", "local_rows"]
@@ -51,9 +50,6 @@ class PointAttributes:
 
     raw: bool = False  # d more columns: a denoised cloud's input points, where f was sampled
     degree: int | None = None  # pointwise_degree: fitted rows of that degree on the kernel's stencil
-    #: why the plain kernel is built where the Richardson one was asked for, decided before the
-    #: rows from the whole geometry (:func:`meshlap.pipeline.plain_predicted`), as the single machine
-    predicted: str | None = None
 
     @property
     def d(self) -> int:
@@ -86,19 +82,14 @@ def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
         T[band, 1] = 1.0
         T[band, 2 + d:2 + d + d0] = b
         T[band, 2 + 2 * d:2 + 2 * d + d0] = nu
-    # at a narrow explicit width the plain kernel, where the resolution model predicts it more
-    # accurate, with chords where no part is thinner than its reach: the single machine's choice,
-    # made before any row
-    reason = plain_predicted(geo, widths)[1] if not opts.plain and opts.check_psd else None
-    arc = opts.arc_distance and (reason is None or plain_arcs(geo, widths))
-    if arc:
+    if opts.arc_distance:
         T[:, 2:2 + d0] = geo.normals()
     raw = geo._cache.get("input_points") if opts.pointwise == "fit" else None
     if raw is not None:
         T = np.column_stack([T, assembly.pad3(raw)])
-    return PointAttributes(T, geo.dim, not opts.plain and reason is None, arc, opts.neumann,
+    return PointAttributes(T, geo.dim, not opts.plain, opts.arc_distance, opts.neumann,
                            opts.pointwise, opts.check_psd, opts.tol, d0, raw is not None,
-                           opts.pointwise_degree, reason)
+                           opts.pointwise_degree)
 
 
 def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) -> sp.csr_matrix:
@@ -139,7 +130,7 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
     hv, band, normals, b, nu = attrs.columns(table)
     frames = (np.flatnonzero(band), b[band], nu[band]) if band.any() else None
     info: dict = {"correction": "richardson" if attrs.dog else "none", "moment_scale": 1.0,
-                  "psd_margin": None, "fallback_reason": attrs.predicted, "pointwise_choice": None}
+                  "psd_margin": None, "fallback_reason": None, "pointwise_choice": None}
 
     def stage(dog: bool) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         free = _rows_csr(P, mass, g, rows, hv, attrs, normals, dog)

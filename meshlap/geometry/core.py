@@ -484,8 +484,7 @@ def spatial_order(points: np.ndarray) -> np.ndarray:
     In that order the rows of a kernel operator that are close in memory hold nearly the
     same columns, so a block product reads the block from cache: on a random 16,000-vertex
     sphere, whose vertex numbers are random in space, the 36-column product takes half the time
-    (:mod:`meshlap.spectral`); a pass over each vertex's rings likewise
-    (:mod:`meshlap.resolution`).
+    (:mod:`meshlap.spectral`).
 
     Examples
     --------
