@@ -1,4 +1,4 @@
-"""How far the curvature cap may narrow a cloud's kernel: the floor of meshlap.widths.CLOUD_CAP_FLOOR.
+"""How far the curvature cap may narrow a cloud's kernel: the floor of meshlap.tuned.CLOUD_CAP_FLOOR.
 
     python benchmarks/bench_cloud_cap.py          # printed, a markdown table
 
@@ -45,7 +45,7 @@ def main() -> int:
             geo = meshlap.geometry.point_cloud_geometry(P)
             h0 = widths.h_scale(geo) * geo.spacing**2
             floor, widths.CLOUD_CAP_FLOOR = widths.CLOUD_CAP_FLOOR, 0.0  # the cap alone
-            capped = widths.choose(geo, None, plain=False, curvature_limit=widths.CURVATURE_LIMIT)
+            capped = widths.choose(geo, None, plain=False, curvature_limit=meshlap.tuned.CURVATURE_LIMIT)
             capped = capped.per_point(len(P))
             widths.CLOUD_CAP_FLOOR = floor
             errors = []

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg as sla
 
 import meshlap
-from meshlap import _lobpcg, shapes
+from meshlap import _lobpcg, shapes, tuned
 from meshlap.corrections import psd
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
@@ -50,7 +50,7 @@ def main() -> None:
     iterations = []
     real = _lobpcg.lobpcg
     _lobpcg.lobpcg = lambda *a, **kw: _record(real, iterations, *a, **kw)
-    wrong = dict.fromkeys((1e-3, psd._TOL, args.tol), 0)
+    wrong = dict.fromkeys((1e-3, tuned.PSD_STOP_TOL, args.tol), 0)
     print("| input | h / ē² | LAPACK λ_min / scale | " + " | ".join(f"tol {t:g}" for t in wrong) + " |")
     print("|---|---|---|" + "---|" * len(wrong))
     for name, (V, F), k in inputs():

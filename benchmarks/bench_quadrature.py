@@ -25,7 +25,7 @@ import bench_spectra as bs  # noqa: E402
 from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
-from meshlap import assembly, shapes, spectral  # noqa: E402
+from meshlap import assembly, shapes, spectral, tuned  # noqa: E402
 from meshlap.corrections import galerkin, neumann_images  # noqa: E402
 from meshlap.geometry import frames  # noqa: E402
 from meshlap.widths import Widths  # noqa: E402
@@ -69,7 +69,7 @@ def main() -> int:
             return f"{float(np.abs(lam[1:bs.K] / ref[1:bs.K] - 1).max()):.2%}"
 
         g = meshlap.geometry.from_mesh(V, F)
-        h = galerkin.H_SCALE * g.spacing**2
+        h = tuned.GALERKIN_H_SCALE * g.spacing**2
         bnd = g.boundary_samples(assembly.cutoff_radius(4.0 * g.spacing**2, 1e-8))  # as the default samples
         folds = galerkin.creases(V, F)
         row = [err(spectral.eigs(meshlap.laplacian(V, F, quadrature="vertex"), bs.K)[0])]
@@ -77,7 +77,7 @@ def main() -> int:
         row.append(err(_eig(S, C)))
         S, C = _raw(V, F, h, True, bnd)
         row += [err(_eig(S, g.mass)), err(_eig(S, C))]
-        for c in (galerkin.H_SCALE, 0.25, 1.0):
+        for c in (tuned.GALERKIN_H_SCALE, 0.25, 1.0):
             S, m = galerkin.galerkin_pencil(V, F, c * g.spacing**2, 2, crease_edges=folds, boundary=bnd)
             row.append(err(_eig(S, m)))
         if bnd is not None or len(folds):

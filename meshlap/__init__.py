@@ -34,6 +34,7 @@ from . import (
     smoothing,
     solve,
     spectral,
+    tuned,
     widths,
 )
 from .builders import (
@@ -95,6 +96,7 @@ __all__ = [
     "spectral",
     "topology",
     "truncation_bound",
+    "tuned",
     "validation",
     "vertex_mass",
     "widths",

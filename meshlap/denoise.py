@@ -21,19 +21,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 from pykdtree.kdtree import KDTree
 
-__all__ = ["NEIGHBOURS", "QUANTILE", "SAMPLE", "STEP", "denoised", "normal_noise", "smoothed_points"]
+from .tuned import NOISE_QUANTILE, NOISE_STEP
 
-#: c of the step's time τ = (c σ̂)²: measured on spot and fandisk with 0, 0.1 and 0.3 mean edges of
-#: normal noise (eigenvalues 1-9 against the clean mesh's refined FEM): c = 1 took 0.3 ē of noise
-#: from 16% to 8%, c = 2 to 5%, at no cost on the clean meshes (σ̂ ≈ 0 there).
-STEP = 2.0
+__all__ = ["NEIGHBOURS", "SAMPLE", "denoised", "normal_noise", "smoothed_points"]
+
 #: Neighbours of each cubic height fit: 10 coefficients, 14 degrees of freedom left.
 NEIGHBOURS = 24
-#: The quantile of the vertices' estimates that is read: noise reaches every vertex alike, a
-#: shape the cubic misses (creases, corners, a coarse curved region) only some; on spot and
-#: fandisk with 0, 0.1 and 0.3 mean edges of normal noise the lower quartile read 0.014 and 0
-#: (clean), 0.098 and 0.100, 0.273 and 0.292 mean edges, the median 0.035 and 0.041 clean.
-QUANTILE = 0.25
 #: At most this many vertices are fitted (evenly spaced in the input order): the median of
 #: their variances is read, and it is stable well before this count.
 SAMPLE = 20000
@@ -45,8 +38,8 @@ def normal_noise(P: np.ndarray, normals: np.ndarray | None = None) -> float:
     Each fitted vertex takes its :data:`NEIGHBOURS` nearest vertices, their principal frame
     (the smallest principal direction the normal), and fits the heights by a cubic in the
     two tangent coordinates; the residual's variance over its degrees of freedom estimates
-    σ² there, and the :data:`QUANTILE` over the vertices passes over creases and corners,
-    which a cubic does not fit.
+    σ² there, and the :data:`~meshlap.tuned.NOISE_QUANTILE` over the vertices passes over
+    creases and corners, which a cubic does not fit.
 
     Parameters
     ----------
@@ -89,7 +82,7 @@ def normal_noise(P: np.ndarray, normals: np.ndarray | None = None) -> float:
     coef = np.linalg.solve(G, np.swapaxes(A, 1, 2) @ z[..., None])
     resid = z - (A @ coef)[..., 0]
     var = (resid**2).sum(axis=1) / (NEIGHBOURS - A.shape[2])
-    return float(np.sqrt(np.quantile(var, QUANTILE)))
+    return float(np.sqrt(np.quantile(var, NOISE_QUANTILE)))
 
 
 def smoothed_points(P: np.ndarray, S: sp.spmatrix, m: np.ndarray, tau: float) -> np.ndarray:
@@ -108,5 +101,5 @@ def smoothed_points(P: np.ndarray, S: sp.spmatrix, m: np.ndarray, tau: float) ->
 
 
 def denoised(P: np.ndarray, S: sp.spmatrix, m: np.ndarray, sigma: float) -> np.ndarray | Any:
-    """The positions after the heat step of time (STEP·σ)² (module docstring); ``P`` for σ = 0."""
-    return P if sigma <= 0 else smoothed_points(P, S, m, (STEP * sigma) ** 2)
+    """The positions after the heat step of time (NOISE_STEP·σ)² (module docstring); ``P`` for σ = 0."""
+    return P if sigma <= 0 else smoothed_points(P, S, m, (NOISE_STEP * sigma) ** 2)

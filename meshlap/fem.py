@@ -34,6 +34,7 @@ import scipy.sparse as sp
 
 from ._jit import jit
 from .errors import MeshError
+from .tuned import FEM_TIE as TIE
 
 __all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
            "simplicial_cells", "surface_noise", "welded"]
@@ -42,11 +43,6 @@ __all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "p
 #: (the default), the lumped diagonal (the cotangent Laplacian's pencil), or the consistent mass
 #: moved onto it by the same congruence.
 FEM_MASSES = ("blend", "lumped", "consistent")
-#: Copies of one vertex (an unwelded seam) are tied by a stiffness this many times their
-#: representative's diagonal entry: the pencil splits into the welded mesh's (exact) and the
-#: copies' differences, whose eigenvalues (about 4× the vertex's own frequency) lie above the
-#: smooth modes while the pencil stays as well conditioned as the mesh's.
-TIE = 1.0
 
 
 def _halfedge_twins(F: np.ndarray) -> np.ndarray:

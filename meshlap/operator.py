@@ -31,7 +31,8 @@ from .geometry.validation import check_function
 from .lumped import LumpedLaplacian
 from .pipeline import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL
 from .progress import ProgressLike, make_progress
-from .widths import CURVATURE_LIMIT, DEFAULT_H_SCALE, default_h
+from .tuned import CURVATURE_LIMIT
+from .widths import DEFAULT_H_SCALE, default_h
 
 __all__ = [
     "CORRECTED_TOL",
@@ -114,7 +115,7 @@ class MeshLaplacian(LumpedLaplacian):
     curvature_limit : float, optional
         β of h_w = min(h, β/κ_w²); default 0.05 with the correction, automatic h and
         normals, else 0. On a surface's point cloud h_w stays at least half of h
-        (:data:`meshlap.widths.CLOUD_CAP_FLOOR`).
+        (:data:`meshlap.tuned.CLOUD_CAP_FLOOR`).
     check_psd : bool, default True
         Check that −S is positive semidefinite (Richardson only), else fall back to the plain
         kernel (``fallback_reason`` says why). False builds the Richardson operator as is.

@@ -16,7 +16,7 @@ from . import corrections
 from .errors import MeshError
 from .geometry import Geometry
 from .geometry.validation import check_positive, check_tol
-from .widths import CURVATURE_LIMIT
+from .tuned import CORRECTED_TOL, CURVATURE_LIMIT
 
 __all__ = ["CORRECTED_TOL", "CORRECTIONS", "DEFAULT_TOL", "POINTWISE", "QUADRATURES", "Options",
            "default_tol"]
@@ -33,12 +33,6 @@ POINTWISE = (True, False, "fit")
 QUADRATURES = ("vertex", "galerkin", "fem")
 #: Kernel tolerance of the paper's operator: Gaussian weights below 1e-8 of the peak are dropped.
 DEFAULT_TOL = 1e-8
-#: Kernel tolerance of the corrected operators when none is given. Against 1e-8 on a 16k-vertex
-#: sphere: 24.5% fewer entries, eigenvalues moved by at most 1.9e-6 relative, against the
-#: operator's own 1.8e-3 error; ``op @ f`` (the fitted rows) does not use the kernel. The
-#: Galerkin pencil keeps 1e-8 (``Options.pencil_tol``): there 1e-6 grew a circle's eigenvalue
-#: error (3e-5) by 15% and moved spot's by 8% (issue 19, benchmarks/RESULTS.md).
-CORRECTED_TOL = 1e-6
 
 
 def default_tol(tol: Any, correction: str | None) -> Any:

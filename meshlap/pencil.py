@@ -26,6 +26,7 @@ from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshWarning, user_stacklevel
 from .geometry import Geometry
 from .options import Options
+from .tuned import GALERKIN_H_SCALE, NOISE_ROUGHNESS
 from .widths import Widths
 
 __all__ = ["Pencil", "assemble", "guard_for", "review"]
@@ -104,7 +105,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
     if report is not None:
         report(0.95, "Galerkin pencil")
     tri = gal.simplices(geo)
-    h = gal.H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
+    h = GALERKIN_H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
     dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
     # the vertex pencil's boundary samples (one sampling per build), reflected across for the
     # quadrature points within the Galerkin kernel's cut-off
@@ -116,7 +117,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
     # the feature width where the width is automatic (an explicit h, as the smoothing flow's, is
     # kept), never on noise: its fake creases and opposite sides would narrow it
     if surface and opts.feature_width is not False and (widths.h_auto or opts.feature_width) \
-            and gal.shape_measures(geo.points, tri)[1] <= corrections.features.NOISE_ROUGHNESS:
+            and gal.shape_measures(geo.points, tri)[1] <= NOISE_ROUGHNESS:
         grooves = gal.creases(geo.points, tri, concave=True)
         hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
     info: dict = {}

@@ -10,7 +10,7 @@ at every step or held fixed at the initial one.
 Called without a time step, :func:`mean_curvature_flow` denoises: the flow is taken relative
 to the fitted surface (the vertices move by their mean curvature in excess of the one the
 point-wise fitted rows give, so noise is removed and the shape's own curvature is not), along
-the normals, with a time step from the noise the fits measure (:data:`DENOISE_DT`).
+the normals, with a time step from the noise the fits measure (:data:`~meshlap.tuned.DENOISE_DT`).
 """
 
 from __future__ import annotations
@@ -24,21 +24,9 @@ from .errors import MeshError
 from .geometry.frames import vertex_normals
 from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
+from .tuned import DENOISE_DT, DENOISE_H, DENOISE_STEPS
 
-__all__ = ["DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "smooth_function", "mean_curvature_flow",
-           "enclosed_volume"]
-
-#: Denoising time step per step in units of σ̂², σ̂ the normal noise the fitted rows measure
-#: (the median of ``op.pointwise_choice.noise``): two steps of 4σ̂² diffuse over √(2·8σ̂²) = 4σ̂.
-#: Chosen on fandisk and spot at noise of 0.15, 0.3 and 0.5 mean edges ē: the RMS error is within
-#: 1% of the flow's at its best dt but on spot at 0.15ē (7%; benchmarks/bench_smoothing.py).
-DENOISE_DT = 4.0
-#: Steps of the denoising flow.
-DENOISE_STEPS = 2
-#: Width of the denoising pencil in units of ē² (the Galerkin pencil on triangle meshes):
-#: narrower than the spectra's ē²/2, since a kernel's symbol saturates near 1/h and a wide one
-#: leaves the noise of the highest frequencies in place.
-DENOISE_H = 0.25
+__all__ = ["smooth_function", "mean_curvature_flow", "enclosed_volume"]
 
 
 def smooth_function(op: Any, f: Any, t: float, steps: int = 1, **kwargs: Any) -> np.ndarray:
@@ -120,11 +108,11 @@ def mean_curvature_flow(
     removed and the shape is not shrunk (a clean sphere stays put; the plain flow shrinks it
     as R² − 4t, which on a real mesh is most of its error). The denoising defaults:
 
-    * **time step** ``dt = 4σ̂²`` (:data:`DENOISE_DT`), σ̂ the normal noise the fitted rows
+    * **time step** ``dt = 4σ̂²`` (:data:`~meshlap.tuned.DENOISE_DT`), σ̂ the normal noise the fitted rows
       measure on the input (``info["noise"]``, the median of ``op.pointwise_choice.noise``);
-      :data:`DENOISE_STEPS` = 2 steps, so the flow diffuses over √(2·8σ̂²) = 4σ̂. A clean mesh
+      :data:`~meshlap.tuned.DENOISE_STEPS` = 2 steps, so the flow diffuses over √(2·8σ̂²) = 4σ̂. A clean mesh
       (σ̂ = 0) does not move.
-    * the Galerkin pencil at h = ē²/4 (:data:`DENOISE_H`) on triangle meshes, the vertex pencil
+    * the Galerkin pencil at h = ē²/4 (:data:`~meshlap.tuned.DENOISE_H`) on triangle meshes, the vertex pencil
       at that width on other faces; the operator built once (``rebuild=False``);
     * ``normal=True``.
 

@@ -23,24 +23,12 @@ from ._jit import jit
 from .errors import MeshError
 from .geometry import Geometry, from_mesh
 from .geometry.validation import check_h, check_positive
+from .tuned import CLOUD_CAP_FLOOR, H_SCALE
 
-__all__ = ["CLOUD_CAP_FLOOR", "CURVATURE_LIMIT", "DEFAULT_H_SCALE", "H_SCALE", "Widths", "choose",
-           "curvature_h", "default_h", "h_scale", "local_h"]
+__all__ = ["DEFAULT_H_SCALE", "Widths", "choose", "curvature_h", "default_h", "h_scale", "local_h"]
 
-#: With the correction, h = c · ē² (ē the spacing: the mean length of the cells' edges, or
-#: a cloud's lattice distance), or per point h_w = c · ℓ_w² with ``adaptive=True``; c by
-#: intrinsic dimension k, and for tetrahedra, whose edges include the face diagonals (a long
-#: spacing for their density), its own. docs/accuracy.md has the measurements.
-H_SCALE = {1: 8.0, 2: 4.0, 3: 4.0, "tetrahedra": 0.5}
-#: c on surfaces.
+#: c of h = c·ē² on surfaces (:data:`meshlap.tuned.H_SCALE` of k = 2).
 DEFAULT_H_SCALE = H_SCALE[2]
-#: β of the curvature cap h_w = min(h, β/κ_w²).
-CURVATURE_LIMIT = 0.05
-#: On a surface's point cloud the cap stops at this fraction of the default width (2a²): the
-#: point masses are a one-point quadrature, and below about 2a² its error on a random sampling
-#: outgrows the bias the cap removes (1,000 random points of a torus of radii 1 and 0.4, capped
-#: to 0.13-0.2 of 4a²: eigenvalues 1-9 33% off; with this floor 5.0%, robust-laplacian 6.7%).
-CLOUD_CAP_FLOOR = 0.5
 
 
 @dataclass(frozen=True)
@@ -83,7 +71,7 @@ def default_h(V: Any, F: Any, k: int | None = None) -> float:
 
 
 def h_scale(geo: Geometry) -> float:
-    """c of the corrected default width h = c · spacing² for this geometry (:data:`H_SCALE`).
+    """c of the corrected default width h = c · spacing² for this geometry (:data:`~meshlap.tuned.H_SCALE`).
 
     Examples
     --------
@@ -205,7 +193,7 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     """The widths of a build: an explicit ``h`` (a number or one per point) always wins;
     otherwise the paper's (2ē)² when ``plain``, else 4ē² (or ``adaptive`` local widths),
     capped by the curvature (``curvature_limit`` β > 0, where normals exist; on a surface's
-    point cloud not below :data:`CLOUD_CAP_FLOOR` of the uncapped width).
+    point cloud not below :data:`~meshlap.tuned.CLOUD_CAP_FLOOR` of the uncapped width).
 
     Examples
     --------

@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
 import meshlap
-from meshlap import MeshError, shapes, spectral
+from meshlap import MeshError, shapes, spectral, tuned
 from meshlap.corrections import features, galerkin
 
 
@@ -117,7 +117,7 @@ def test_the_kernel_builder_keeps_the_vertex_pencil_unless_asked():
     noisy = V * (1 + 0.005 * np.random.default_rng(1).standard_normal((len(V), 1)))
     assert galerkin.shape_measures(V, F)[1] < 2
     angle, rough = galerkin.shape_measures(noisy, F)
-    assert rough > features.NOISE_ROUGHNESS  # measured 3.65 (smooth: about 1)
+    assert rough > tuned.NOISE_ROUGHNESS  # measured 3.65 (smooth: about 1)
     # the 12 edges of a box are creases (90° between faces), its face diagonals are not
     Vb = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
     Fb = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
@@ -290,11 +290,11 @@ def test_feature_width_pencil_symmetric_rows_sum_to_zero_semidefinite():
     # triangles there are cut in 4; S symmetric with zero row sums, -S semidefinite
     V, F = _cube_surface(6)
     g = meshlap.geometry.from_mesh(V, F)
-    h = galerkin.H_SCALE * g.spacing**2
+    h = tuned.GALERKIN_H_SCALE * g.spacing**2
     folds = galerkin.creases(V, F)
     hv = features.feature_widths(V, g.normals(), folds, h, crease=1.0)
     d = features.crease_distance(V, folds, np.inf)
-    assert np.allclose(hv[d < 1e-9], features.FEATURE_FLOOR * h)
+    assert np.allclose(hv[d < 1e-9], tuned.FEATURE_FLOOR * h)
     far = d > math.sqrt(2 * h)
     assert far.sum() > 20 and (hv[far] == h).all()
     order = np.argsort(d, kind="stable")
@@ -316,7 +316,7 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
     # fandisk: its 115 concave creases (of 700) narrow the width on 12% of its area
     Vf, Ff = igl.read_triangle_mesh("tests/data/fandisk.obj")
     g = meshlap.geometry.from_mesh(Vf, Ff)
-    h = galerkin.H_SCALE * g.spacing**2
+    h = tuned.GALERKIN_H_SCALE * g.spacing**2
     grooves = galerkin.creases(Vf, Ff, concave=True)
     assert 50 < len(grooves) < 200 and len(galerkin.creases(Vf, Ff)) > 500
     hv = features.feature_widths(Vf, g.normals(), grooves, h)
@@ -328,7 +328,7 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
     V, F = shapes.sphere(2000, kind="random", seed=0)
     noisy = V * (1 + 0.005 * np.random.default_rng(1).standard_normal((len(V), 1)))
     gn = meshlap.geometry.from_mesh(noisy, F)
-    hn = galerkin.H_SCALE * gn.spacing**2
+    hn = tuned.GALERKIN_H_SCALE * gn.spacing**2
     fake = features.feature_widths(noisy, gn.normals(), galerkin.creases(noisy, F, concave=True), hn)
     assert (fake < hn).mean() > 0.2
     op = kernel_laplacian(noisy, F, quadrature="galerkin")
@@ -337,7 +337,7 @@ def test_feature_width_narrows_next_to_grooves_not_on_noise():
     assert (op.L_sym != off.L_sym).nnz == 0
     # an explicit h (the smoothing flow's) keeps one width unless asked
     Vt, Ft = shapes.torus(300, seed=0)  # its tube is 2.5 kernel widths across at h = 0.5 ē²
-    ht = galerkin.H_SCALE * meshlap.geometry.from_mesh(Vt, Ft).spacing**2
+    ht = tuned.GALERKIN_H_SCALE * meshlap.geometry.from_mesh(Vt, Ft).spacing**2
     assert kernel_laplacian(Vt, Ft, h=ht, quadrature="galerkin")._built.assemble().narrowed == 0
     narrowed = kernel_laplacian(Vt, Ft, h=ht, quadrature="galerkin", feature_width=True)
     assert narrowed._built.assemble().narrowed > 0.5

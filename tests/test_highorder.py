@@ -10,7 +10,7 @@ import pytest
 import sympy
 
 import meshlap
-from meshlap import shapes
+from meshlap import shapes, tuned
 from meshlap.corrections import _gather, highorder, rowchoice
 from meshlap.errors import MeshError, MeshWarning
 
@@ -178,7 +178,7 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
     built = []
 
     def spy(P, near, K, rows, degree, c, *args, **kw):
-        if c == rowchoice._C_COMPACT and degree in (4, 6):
+        if c == tuned.ROW_C_COMPACT and degree in (4, 6):
             skip = kw.get("skip")
             fitted = (len(near[0]) if rows is None else len(rows)) - (0 if skip is None else int(skip.sum()))
             built.append((degree, fitted))
@@ -196,8 +196,8 @@ def test_compact_high_degree_rows_only_where_they_can_win(monkeypatch):
     assert max(counts[1]) <= 90  # measured 76, 76 (the sample of 75 and one point)
     P, _ = shapes.sphere(8000, kind="random", seed=0)
     rows = []
-    for floors in (rowchoice._FLOORS, (rowchoice._FLOORS[0], 0.0, 0.0)):  # with and without the bias bound
-        monkeypatch.setattr(rowchoice, "_FLOORS", floors)
+    for floors in (tuned.ROW_FLOORS, (tuned.ROW_FLOORS[0], 0.0, 0.0)):  # with and without the bias bound
+        monkeypatch.setattr(rowchoice, "ROW_FLOORS", floors)
         built.clear()
         rows.append(rowchoice.choose_rows(P)[0])
         counts.append([sum(r for q, r in built if q == degree) for degree in (4, 6)])
@@ -258,15 +258,15 @@ def test_candidates_measured_only_are_fitted_again_where_chosen(monkeypatch):
     L_kept, choice_kept = rowchoice.choose_rows(V)
     assert kept_all.count(False) == 4 and (L != L_kept).nnz == 0  # (the sample's and the rest's)
     assert np.array_equal(choice.neighbors, choice_kept.neighbors)
-    K2 = int(round(rowchoice._K_PER_MONOMIAL * 6 + 4))
-    assert ((choice.neighbors == rowchoice._K_NOISE) & (choice.degree == 2)).any()
+    K2 = int(round(tuned.ROW_K_PER_MONOMIAL * 6 + 4))
+    assert ((choice.neighbors == tuned.ROW_K_NOISE) & (choice.degree == 2)).any()
     assert ((choice.neighbors == K2) & (choice.degree == 2)).any()
 
 
 def test_clean_points_fit_the_top_degree_alone(monkeypatch):
     # where the sample points near a point predict degree 6 far ahead of the degree-2 rows, the
     # point's degree-2 candidates are not fitted; the rows chosen are those of the full path
-    # (_MARGIN infinite: every candidate fitted wherever it can win). A sphere noisy on one side
+    # (ROW_MARGIN infinite: every candidate fitted wherever it can win). A sphere noisy on one side
     fitted = []
 
     def spy(P, near, K, rows, degree, c, *args, **kw):
@@ -277,7 +277,7 @@ def test_clean_points_fit_the_top_degree_alone(monkeypatch):
     real = rowchoice._candidate
     monkeypatch.setattr(rowchoice, "_candidate", spy)
     V, _ = shapes.sphere(6000, kind="random", seed=3)
-    sample = int((rowchoice._Spread(V, rowchoice.cKDTree(V), rowchoice.SAMPLE).rank < 6000 // 16).sum())
+    sample = int((rowchoice._Spread(V, rowchoice.cKDTree(V), tuned.ROW_SAMPLE).rank < 6000 // 16).sum())
     L, choice = rowchoice.choose_rows(V)
     # the sample's degree-2 fits, and those of the few points whose degree-6 residual is more than
     # twice their neighbours' median (measured 27)
@@ -287,7 +287,7 @@ def test_clean_points_fit_the_top_degree_alone(monkeypatch):
     L, choice = rowchoice.choose_rows(noisy)
     # the points not clean, each fitted once by both degree-2 candidates: the noisy half and a margin
     assert fitted[2] == fitted[3] and 3000 < fitted[2] < 4500  # measured 3,752
-    monkeypatch.setattr(rowchoice, "_MARGIN", np.inf)
+    monkeypatch.setattr(rowchoice, "ROW_MARGIN", np.inf)
     L_all, choice_all = rowchoice.choose_rows(noisy)
     assert np.array_equal(choice.degree, choice_all.degree) and (L != L_all).nnz == 0
 
@@ -298,14 +298,14 @@ def test_noise_between_the_sample_points_is_caught(monkeypatch):
     # all (the ladder then widens them): the rows the full path chooses
     V, _ = shapes.sphere(6000, kind="random", seed=4)
     tree = rowchoice.cKDTree(V)
-    sample = rowchoice._Spread(V, tree, rowchoice.SAMPLE).rank < 6000 // 16
+    sample = rowchoice._Spread(V, tree, tuned.ROW_SAMPLE).rank < 6000 // 16
     patch = next(p for p in tree.query(V, 40)[1] if not sample[p].any())
     noisy = V.copy()
     noisy[patch] *= 1 + 0.01 * np.random.default_rng(1).standard_normal((40, 1))
     stages = []
     L, choice = rowchoice.choose_rows(noisy, progress=stages.append)
     assert stages.count("noise fit") == 2 and (choice.degree[patch] < 6).all()  # (4 and 2)
-    monkeypatch.setattr(rowchoice, "_MARGIN", np.inf)
+    monkeypatch.setattr(rowchoice, "ROW_MARGIN", np.inf)
     L_all, choice_all = rowchoice.choose_rows(noisy)
     assert np.array_equal(choice.degree, choice_all.degree) and (L != L_all).nnz == 0
 
@@ -325,7 +325,7 @@ def test_noise_at_the_coordinates_rounding_widens_no_row(monkeypatch):
     x = P[:, 0]
     err = np.abs(L @ x**2 - (2 - 6 * x**2))
     assert err[np.abs(xy).max(axis=1) < 0.8e-3].max() < 1e-10 and err.max() < 1e-6
-    monkeypatch.setattr(rowchoice, "_ROUNDING", 0.0)
+    monkeypatch.setattr(rowchoice, "ROW_ROUNDING", 0.0)
     stages.clear()
     L0, choice0 = rowchoice.choose_rows(P, progress=stages.append)
     assert any(s.startswith("rung") for s in stages) and (L0 != L).nnz == 0

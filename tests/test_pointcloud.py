@@ -283,7 +283,7 @@ def test_coarse_torus_cloud_keeps_its_width_and_its_accuracy():
     op = meshlap.point_cloud_laplacian(P)
     assert op.geometry.notes == ""
     hv = op.widths.per_point(len(P))
-    assert hv.min() >= meshlap.widths.CLOUD_CAP_FLOOR * op.h * (1 - 1e-12) and hv.max() < op.h
+    assert hv.min() >= meshlap.tuned.CLOUD_CAP_FLOOR * op.h * (1 - 1e-12) and hv.max() < op.h
     lam = spectral.eigs(op, 10, tol=1e-6)[0]
     assert np.abs(lam[1:] / samples.torus_eigenvalues(10)[1:] - 1).max() < 0.055  # measured 5.01%
 

@@ -94,6 +94,30 @@ def test_stages_live_in_their_modules():
         assert (PACKAGE / name).exists() or (PACKAGE / f"{name}.py").exists()
 
 
+def test_tuned_constants_are_in_one_place_each_documented_and_used():
+    # meshlap.tuned holds the builders' tuned constants: each with its line of provenance (a "#:"
+    # comment right above it), each in __all__, and each imported by a module of meshlap (ruff's
+    # unused-import check then sees that the module uses it)
+    path = PACKAGE / "tuned.py"
+    lines = path.read_text().splitlines()
+    names = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Assign) and node.targets[0].id != "__all__":
+            name = node.targets[0].id
+            names.add(name)
+            doc = lines[node.lineno - 2]
+            assert doc.startswith("#: ") and len(doc) > 40, f"{name}: no line of provenance above it"
+    assert names == set(meshlap.tuned.__all__) and len(names) > 30
+    imported = set()
+    for p in PACKAGE.rglob("*.py"):
+        if p == path:
+            continue
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module == "tuned" and node.level:
+                imported |= {a.name for a in node.names}
+    assert names - imported == set(), f"tuned constants no module uses: {sorted(names - imported)}"
+
+
 def _counting(monkeypatch, module, name, calls):
     original = getattr(module, name)
 

@@ -5,9 +5,10 @@ follow: a concave crease (a groove, :func:`~meshlap.corrections.galerkin.creases
 ``concave=True``), whose two sides face each other across the air, and a part thinner than a
 few kernel widths √(2h) (spot's teats), on which the kernel's disc does not fit. A feature
 size per vertex, the smaller of its distance to the nearest concave crease edge over
-:data:`CREASE_WIDTHS` widths and half its distance to the surface's other side (a vertex of
-opposite normal along both normals, the test of
-:func:`~meshlap.corrections.shortcuts.thin_fraction`) over :data:`THIN_WIDTHS` widths, sets
+:data:`~meshlap.tuned.CREASE_WIDTHS` widths and half its distance to the surface's other side
+(a vertex of opposite normal along both normals, the test of
+:func:`~meshlap.corrections.shortcuts.thin_fraction`) over
+:data:`~meshlap.tuned.FEATURE_THIN_WIDTHS` widths, sets
 
     h_v = h · clip(size_v², FEATURE_FLOOR, 1),
 
@@ -22,7 +23,7 @@ version's 0.28% to 0.49%.
 Noise makes fake creases and fake opposite sides (on a sphere of 16,000 random vertices with
 0.5% radial noise 89% of the vertices would narrow): the build narrows nothing on a mesh whose
 normals are noise (roughness, :func:`~meshlap.corrections.galerkin.shape_measures`, above
-:data:`NOISE_ROUGHNESS`), nor at an explicit h.
+:data:`~meshlap.tuned.NOISE_ROUGHNESS`), nor at an explicit h.
 """
 
 from __future__ import annotations
@@ -32,22 +33,9 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["CREASE_WIDTHS", "FEATURE_FLOOR", "NOISE_ROUGHNESS", "THIN_WIDTHS", "crease_distance",
-           "feature_widths", "thickness"]
+from ..tuned import CREASE_WIDTHS, FEATURE_FLOOR, FEATURE_THIN_WIDTHS
 
-#: A vertex narrows where its distance to a concave crease is under this many kernel widths
-#: √(2h) (fandisk 0.087% at 2; all creases, convex too: 0.057-0.066% at 2-3 widths, 0.26% at
-#: 1-1.5, with the floor 0.25) ...
-CREASE_WIDTHS = 2.0
-#: ... or half its thickness under this many (spot 0.91-0.94% at 1.5, 0.94% at 2; at 2 the
-#: coarse torus's tube, 3.5 widths across, narrows and goes from 0.95% to 1.49%) ...
-THIN_WIDTHS = 1.5
-#: ... to no less than this fraction of h; the triangles there are cut into ⌈√(1/FLOOR)⌉² = 4.
-FEATURE_FLOOR = 0.5
-#: Face normals rougher than this are noise, and nothing narrows: the median squared
-#: difference of adjacent face normals over that of their twice-averaged ones is about 1 on
-#: smooth meshes, 3.65 on a 2,000-vertex unit sphere with radial noise of 0.5% (0.06 mean edges).
-NOISE_ROUGHNESS = 3.0
+__all__ = ["crease_distance", "feature_widths", "thickness"]
 
 
 def crease_distance(P: np.ndarray, crease_edges: np.ndarray, limit: float) -> np.ndarray:
@@ -119,7 +107,7 @@ def _across(P: np.ndarray, normals: np.ndarray, i: np.ndarray, j: np.ndarray) ->
 
 
 def feature_widths(P: np.ndarray, normals: np.ndarray, crease_edges: np.ndarray, h: float,
-                   crease: float = CREASE_WIDTHS, thin: float = THIN_WIDTHS,
+                   crease: float = CREASE_WIDTHS, thin: float = FEATURE_THIN_WIDTHS,
                    floor: float = FEATURE_FLOOR) -> np.ndarray:
     """Per-vertex widths ``h_v`` at most ``h``: ``h·clip(s², floor, 1)``, s the smaller of the
     distance to the ``crease_edges`` (the concave creases) over ``crease`` kernel widths √(2h)

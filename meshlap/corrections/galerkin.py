@@ -40,28 +40,14 @@ from ..assembly.variable import dog_factor
 from ..errors import MeshError
 from ..geometry import frames as frames_mod
 from ..geometry import simplex_volumes
+from ..tuned import CREASE_ANGLE, SEGMENT_STEP, SPLIT_BELOW
 from ..widths import Widths
 from .images import neumann_images
 from .shortcuts import drop_shortcuts
 
-__all__ = ["CREASE_ANGLE", "H_SCALE", "RULES", "SEGMENT_STEP", "SPLIT_BELOW", "creases", "galerkin_pencil",
-           "quadrature_points", "shape_measures", "simplices", "split_points"]
+__all__ = ["RULES", "creases", "galerkin_pencil", "quadrature_points", "shape_measures", "simplices",
+           "split_points"]
 
-#: The automatic Galerkin width h = H_SCALE · ē², ē the mean edge length: narrow enough that
-#: the kernel resolves a coarse mesh's shape, wide enough for 3 points per triangle
-#: (0.25 ē² loses 1% to the quadrature on the 4,000-vertex square).
-H_SCALE = 0.5
-#: Pairs of cells whose normals differ by more than this (degrees) are across a crease.
-CREASE_ANGLE = 60.0
-
-#: A curve's segments are cut into pieces of at most this times √h, two Gauss points on each
-#: (the circle of 2,000 random angles: 0.00289% at 0.5·√h, 0.00289% at 0.25·√h).
-SEGMENT_STEP = 0.5
-
-#: A triangle whose narrowest corner's width is h_min is cut into ⌈√(SPLIT_BELOW·h/h_min)⌉²:
-#: at the feature width's floor ½ into 4, not at all from 0.64h up (at 1, every narrowed one:
-#: spot 29,142 → 26,370 points, 0.96% → 0.92%; fandisk 56,910 → 50,646, 0.087% → 0.086%).
-SPLIT_BELOW = 0.64
 
 #: Degree-2 rules on the simplex of k + 1 corners: (a, b) barycentric coordinates, each point
 #: a at one corner and b at the others, one point per corner, equal weights.
@@ -233,7 +219,7 @@ def quadrature_points(P: np.ndarray, cells: np.ndarray, h: float | None = None
     cells : (c, k + 1) int ndarray
         Simplices: segments, triangles or tetrahedra.
     h : float, optional
-        Kernel width. Segments are then cut into pieces of at most :data:`SEGMENT_STEP`·√h
+        Kernel width. Segments are then cut into pieces of at most :data:`~meshlap.tuned.SEGMENT_STEP`·√h
         with two Gauss points on each (degree 3): a curve's points are cheap, and a random
         sampling's long segments would not resolve a narrow kernel with two points.
 
@@ -371,7 +357,7 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
     crease_edges : (e, 2) int ndarray, optional
         Crease edges of a triangle mesh in R³ (:func:`creases`): a pair of quadrature points
         within the cut-off of one, whose faces' normals differ by more than
-        :data:`CREASE_ANGLE`, gets the kernel of its distance along the two face planes
+        :data:`~meshlap.tuned.CREASE_ANGLE`, gets the kernel of its distance along the two face planes
         unfolded about their line of intersection (the geodesic across a straight crease)
         instead of the chord.
     boundary : (samples, ν), optional
@@ -386,7 +372,8 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         each quadrature point takes the hat-function interpolant of them and a pair the mean
         of its two points' widths, normalized per pair as in the assembly (so S stays
         symmetric with rows summing to zero); a triangle whose narrowest corner has width
-        h/r is cut into ⌈√(:data:`SPLIT_BELOW`·r)⌉² triangles of 3 points each (:func:`split_points`).
+        h/r is cut into ⌈√(:data:`~meshlap.tuned.SPLIT_BELOW`·r)⌉² triangles of 3 points each
+        (:func:`split_points`).
     info : dict, optional
         Filled with ``"shortcuts"`` on a triangle mesh: the fraction of the area whose
         quadrature points lost a pair to :func:`~meshlap.corrections.shortcuts.drop_shortcuts`,

@@ -81,20 +81,16 @@ import scipy.sparse as sp
 
 from ..geometry import Polygons
 from ..lumped import SparseLaplacian
+from ..tuned import PSD_RTOL, PSD_STOP_TOL
 
-__all__ = ["PSD_RTOL", "check", "fill_columns", "smallest_eigenvalue", "unit_constant"]
+__all__ = ["check", "fill_columns", "smallest_eigenvalue", "unit_constant"]
 
 # points up to which a failed iterative check is repeated with a dense eigensolver, and up to
 # which the check is dense from the start
 _DENSE_MAX = 4000
 _DENSE_DIRECT = 1200
-#: −S counts as semidefinite when λ_min ≥ −PSD_RTOL · max_w(−L_ww).
-PSD_RTOL = 1e-6
 # columns of the start block: the coordinate functions and random vectors up to this many
 _START = 6
-# LOBPCG stops once the smallest Ritz value's error estimate is this fraction of it (module
-# notes: 3e-2 and 0.1, measured, each miss a failure that 1e-3 finds)
-_TOL = 1e-3
 
 
 def unit_constant(mass: np.ndarray) -> float:
@@ -130,7 +126,7 @@ def _guards(n: int, count: int) -> np.ndarray:
 
 
 def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces: Polygons | None,
-                        tol: float = _TOL, maxiter: int = 40,
+                        tol: float = PSD_STOP_TOL, maxiter: int = 40,
                         known: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[float, float]:
     """The two ends that decide whether −S = −M L is positive semidefinite.
 

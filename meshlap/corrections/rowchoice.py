@@ -40,12 +40,12 @@ before), the clean spot of bench_pointwise, Δf exact: E2 0.080 → 0.035 (cotan
 The noise term assumes f sampled at the noisy points (its noise σ|∇f|). A smooth f on a
 noisy surface (the paper's Table 4: f of the clean sphere at the noisy vertices) has none, and
 there the least-error row, often degree 2 and wide, errs by its bias. So each point takes,
-among the candidates within :data:`ROBUST` (2×) of the least predicted error, the one of least
-bias: on Table 4's 8,000-vertex sphere E2 0.025 → 0.0097 (the paper's operator 0.015), at
-most 2× the predicted error where f is noisy.
+among the candidates within :data:`~meshlap.tuned.ROW_ROBUST` (2×) of the least predicted
+error, the one of least bias: on Table 4's 8,000-vertex sphere E2 0.025 → 0.0097 (the paper's
+operator 0.015), at most 2× the predicted error where f is noisy.
 
-A wide rung holds at most :data:`SAMPLE` points, drawn from a random subset of the cloud
-whose nearest points span the rung's width (:class:`_Spread`): the bias of a row is set by
+A wide rung holds at most :data:`~meshlap.tuned.ROW_SAMPLE` points, drawn from a random subset
+of the cloud whose nearest points span the rung's width (:class:`_Spread`): the bias of a row is set by
 its width, its noise factor falls only as the square root of the points it holds, so on
 16,000 noisy sphere points 96 points spread over the width of 1,000 lose 10-40% of the
 accuracy of all 1,000 at a sixth of the cost (build and ``op @ f``).
@@ -53,16 +53,17 @@ accuracy of all 1,000 at a sixth of the cost (build and ``op @ f``).
 The compact rows of degree 4 and 6 are built only where they can win: a lower bound of their
 predicted error, the noise term γ σ̂ ℓ ‖row‖₂ and the bias β Σ_e probe_e ℓ^{1−q−e}, with ‖row‖₂
 and the probes bounded below by the rows of a sample of the points (:func:`_compact`), must
-come within ROBUST of the least predicted error of the rows built before (degree 6 first, then
+come within ROW_ROBUST of the least predicted error of the rows built before (degree 6 first, then
 4, then the ladder, which only lowers it). On the noisy spheres and tori of bench_pointwise
 they are built almost nowhere; on clean data degree 6 everywhere and degree 4 where degree 6's
 lead is small (16,000 sphere points: 13% of them, the same rows as building it everywhere).
 Clean regions fit one candidate (:func:`_clean`). Every candidate is fitted first at the sample
 (every 16th point); where the sample points among a point's 64 nearest, and among its 16 nearest
-points' 64, all predict the compact rows of degree > 2 :data:`_MARGIN` (10×) more accurate than
-the degree-2 candidates, the point fits the top degree alone (its residual not corrected for the
-degrees of freedom: it measures shape there), and takes its noise level and scale from it (ℓ =
-1.000 on the unit sphere, the wide fit's 0.916); the other points' medians keep their numbers.
+points' 64, all predict the compact rows of degree > 2 :data:`~meshlap.tuned.ROW_MARGIN` (10×)
+more accurate than the degree-2 candidates, the point fits the top degree alone (its residual
+not corrected for the degrees of freedom: it measures shape there), and takes its noise level
+and scale from it (ℓ = 1.000 on the unit sphere, the wide fit's 0.916); the other points'
+medians keep their numbers.
 A clean point whose row turns out noise-dominated, or whose residual exceeds twice its level (a
 crease, a noisy patch between the sample's points), has the degree-2 candidates fitted after all.
 bench_pointwise's 15 inputs: E2 unchanged (L the same in 14); the row choice at 400,000 clean
@@ -88,6 +89,22 @@ from scipy.spatial import cKDTree
 
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
+from ..tuned import (
+    ROW_BETA,
+    ROW_C_COMPACT,
+    ROW_C_WIDE,
+    ROW_EXCESS,
+    ROW_FLOORS,
+    ROW_GAMMA,
+    ROW_K_NOISE,
+    ROW_K_PER_MONOMIAL,
+    ROW_LADDER,
+    ROW_MARGIN,
+    ROW_NOISY,
+    ROW_ROBUST,
+    ROW_ROUNDING,
+    ROW_SAMPLE,
+)
 from ._gather import _assemble, _restrict, _table
 from ._levels import _local_noise, _scale
 from ._neighbours import _nearest, _Spread
@@ -96,44 +113,13 @@ from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows 
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
 
-#: Weight of the probes (bias) and of the noise factor in the predicted error.
-BETA, GAMMA = 0.1, 0.6
-# Gaussian width per candidate: the K-th neighbour gets weight e^{-c}
-_C_COMPACT, _C_WIDE = 12.0, 3.0
-# Neighbours of the compact rows, per monomial count, and of the noise and curvature fits
-_K_PER_MONOMIAL = 1.7
-_K_NOISE = 64
-# noise/spacing above which the scale is taken from the wider curvature fit
-_NOISY = 1e-3
-# The ladder of wide stencils: K grows by this factor up to max_neighbors
-_LADDER = 4.0
-#: Most points a row holds; wider stencils take them from a subset of the points
-SAMPLE = 96
 # The compact rows of every 16th point, and of at least 64, measure how small a row's noise
 # factor can be (_compact)
 _CALIBRATE = (64, 16)
-#: A candidate within this factor of the least predicted error may win by a lower bias
-ROBUST = 2.0
 # From this many points the rows are fitted in the k-d tree's order (their neighbours near in
 # memory; CPU at 16,000 points 3-5% more, where the points fit in the cache and the rows' own
 # arrays are better read in order; 5% less at 40,000, 17% at 100,000)
 _IN_ORDER = 30_000
-# A noise level below this many units of rounding of the largest coordinate is the arithmetic's,
-# not the data's: no reason for a wider row (on a clean 1,000,000-point sphere σ̂ is 6e-17, 0.3
-# of a unit; the ladder's rows, whose bias is 1e-5 where the compact rows err by 1e-11, then cost
-# 25 s of CPU and won nowhere)
-_ROUNDING = 16.0
-# A fit's residual beyond this multiple of the noise level is shape it misses (a noise estimate
-# from a residual fluctuates well within it)
-_EXCESS = 2.0
-# The least noise factor and probes of a sample's compact rows, times these, bound the others'
-# (_compact; the probes' spread is wider: a quarter of the sample's least is below every one of
-# 16,000 sphere points' at degree 4)
-_FLOORS = (0.5, 0.25, 0.25)
-# Where the sample points near a point predict the compact rows of degree > 2 this many times
-# more accurate than the wide and the compact degree-2 rows, the point is clean (_clean): its
-# degree-2 candidates are not fitted, unless its row turns out noise-dominated or rough
-_MARGIN = 10.0
 
 
 @dataclass
@@ -201,7 +187,7 @@ def predicted_error(fit: RowFit, noise: np.ndarray, scale: np.ndarray) -> np.nda
     q = np.maximum(fit.degree, 0).astype(np.float64)
     probes = np.nan_to_num(fit.probes, nan=0.0)
     bias = probes[:, 0] * scale ** (1.0 - q) + probes[:, 1] * scale ** (-q)
-    err = BETA * bias + GAMMA * noise * scale * fit.amplification
+    err = ROW_BETA * bias + ROW_GAMMA * noise * scale * fit.amplification
     err[fit.degree < 2] = np.inf
     return err
 
@@ -230,14 +216,14 @@ def _errors(fit: RowFit, sig: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray
     # the predicted error of each row and its bias part. A fit's residual well beyond the noise
     # level is shape its polynomials miss (a surface rough at the spacing): it reaches Δf as
     # noise of that size would, and is bias
-    excess = np.maximum(np.nan_to_num(fit.residual, posinf=0.0) - _EXCESS * sig, 0.0)
+    excess = np.maximum(np.nan_to_num(fit.residual, posinf=0.0) - ROW_EXCESS * sig, 0.0)
     return predicted_error(fit, sig + excess, scale), predicted_error(fit, excess, scale)
 
 
 def _clean(wide: RowFit, low: RowFit, highs: list, near: np.ndarray, width: int, nb: np.ndarray, k: int,
            d: int, diameter: float, spacing: float) -> np.ndarray:
     # the points whose `width` nearest, and their nb's, hold no sample point (these fits' centres)
-    # but clean ones: where degree > 2 predicts an error _MARGIN times below the degree-2
+    # but clean ones: where degree > 2 predicts an error ROW_MARGIN times below the degree-2
     # candidates', with the sample point's own least residual and wide curvature for σ̂ and ℓ (no
     # medians: a sample point stands for 16 spacings²). The nb condition leaves the other points'
     # noise level and scale, medians over nb, the numbers they had with every fit everywhere
@@ -247,7 +233,7 @@ def _clean(wide: RowFit, low: RowFit, highs: list, near: np.ndarray, width: int,
     lo = np.minimum(*(_errors(f, sig, scale)[0] for f in (wide, low)))
     hi = np.min([_errors(f, sig, scale)[0] for f in highs], axis=0)
     status = np.zeros(len(nb), dtype=np.int8)  # 1: a clean sample point, 2: another sample point
-    status[wide.centers] = np.where(np.isfinite(sig) & (_MARGIN * hi <= lo), 1, 2)
+    status[wide.centers] = np.where(np.isfinite(sig) & (ROW_MARGIN * hi <= lo), 1, 2)
     if not (status == 1).any():
         return np.zeros(len(nb), dtype=bool)
     out = np.ones(len(nb), dtype=bool)
@@ -263,7 +249,7 @@ def _whole(P, near, K, q, k, normals, fit, place, noise_dof=True) -> RowFit:
     # matrix whole
     skip = np.zeros(len(near[0]), dtype=bool)
     skip[fit.centers] = True
-    whole = _candidate(P, near, K, None, q, _C_COMPACT, k, normals, np.arange(len(skip)), noise_dof, place,
+    whole = _candidate(P, near, K, None, q, ROW_C_COMPACT, k, normals, np.arange(len(skip)), noise_dof, place,
                        skip=skip)
     whole.matrix.data.reshape(-1, K)[fit.centers] = fit.matrix.data.reshape(-1, K)
     for name in ("degree", "residual", "amplification", "probes", "curvature"):
@@ -288,21 +274,21 @@ def _compact(P, near, K, q, k, normals, done, level, scale, sampled, todo, own, 
     lows = [sampled.amplification[ok] * rho[first[ok]] ** 2] + [
         np.nan_to_num(sampled.probes[ok, e], nan=np.inf) / rho[first[ok]] ** (q - 1 + e) for e in (0, 1)]
     least = [_min(comm, float(v.min()) if len(v) else math.inf) for v in lows]
-    floor = [f * x if math.isfinite(x) else 0.0 for f, x in zip(_FLOORS, least, strict=True)]
-    bound = GAMMA * level * scale * floor[0] / rho ** 2 + BETA * (
+    floor = [f * x if math.isfinite(x) else 0.0 for f, x in zip(ROW_FLOORS, least, strict=True)]
+    bound = ROW_GAMMA * level * scale * floor[0] / rho ** 2 + ROW_BETA * (
         floor[1] * (rho / scale) ** (q - 1) + floor[2] * (rho / scale) ** q)
-    rest = np.flatnonzero(todo & (bound <= ROBUST * best))
+    rest = np.flatnonzero(todo & (bound <= ROW_ROBUST * best))
     if len(rest) + len(first) == len(best):  # every point (clean data)
         return [(_whole(P, near, K, q, k, normals, sampled, place), K)]
     fits = [(sampled, K)]
     if len(rest):
-        fits.append((_candidate(P, near, K, rest, q, _C_COMPACT, k, normals, rest, place=place), K))
+        fits.append((_candidate(P, near, K, rest, q, ROW_C_COMPACT, k, normals, rest, place=place), K))
     return fits
 
 
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                 max_neighbors: int | None = None, noise: float | None = None,
-                sample: int = SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None,
+                sample: int = ROW_SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None,
                 progress: Callable[[str], None] | None = None) -> tuple[sp.csr_matrix, RowChoice]:
     """Point-wise Laplacian rows whose width and degree follow the data at every point.
 
@@ -381,10 +367,10 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     place = spread.place if n >= _IN_ORDER else None
     everyone = np.arange(n)
     degrees = sorted({max_degree, *range(2, max_degree + 1, 2)}, reverse=True)
-    Ks = [min(n, int(round(_K_PER_MONOMIAL * count[q] + 4))) for q in degrees]
-    Kn = min(n, _K_NOISE)
+    Ks = [min(n, int(round(ROW_K_PER_MONOMIAL * count[q] + 4))) for q in degrees]
+    Kn = min(n, ROW_K_NOISE)
     if comm is not None:  # a rank's share and its halo: as many neighbours as the whole would give
-        Ks, Kn = [min(total, K) for K in Ks], min(total, _K_NOISE)
+        Ks, Kn = [min(total, K) for K in Ks], min(total, ROW_K_NOISE)
     # one query serves every compact candidate, the spacing and the neighbourhood medians:
     # the K nearest are a prefix of the Kq nearest
     # (the distances of the spacing's neighbours and of each width's last one only)
@@ -396,8 +382,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
     diameter = float(np.linalg.norm(hi - lo))
-    # a noise level at the coordinates' own rounding widens no row (_ROUNDING)
-    rounding = _ROUNDING * np.finfo(np.float64).eps * float(np.maximum(np.abs(lo), np.abs(hi)).max())
+    # a noise level at the coordinates' own rounding widens no row (ROW_ROUNDING)
+    rounding = ROW_ROUNDING * np.finfo(np.float64).eps * float(np.maximum(np.abs(lo), np.abs(hi)).max())
     # every candidate at the sample first (it bounds _compact, and _clean reads it); the clean
     # points fit the top degree alone, the others the degree-2 candidates, then the compact rows
     # of higher degree where they can win. (The degree-2 rows measured, not kept: 250 MB at
@@ -414,8 +400,8 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         return fit, K
 
     highs = list(zip(degrees[:-1], Ks[:-1], strict=True))  # (q, K) of degree > 2, the highest first
-    wide, low = [measured(Kn, _C_WIDE, first)], [measured(K2, _C_COMPACT, first)]
-    sampled = {q: _candidate(P, table, K, first, q, _C_COMPACT, k, normals, first, place=place)
+    wide, low = [measured(Kn, ROW_C_WIDE, first)], [measured(K2, ROW_C_COMPACT, first)]
+    sampled = {q: _candidate(P, table, K, first, q, ROW_C_COMPACT, k, normals, first, place=place)
                for q, K in highs}
     fast = _clean(wide[0][0], low[0][0], list(sampled.values()), idx_all, Kn, nb, k, d, diameter, spacing) \
         & ~sample if highs else np.zeros(n, dtype=bool)
@@ -428,12 +414,12 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         rows = np.flatnonzero(fast)
         whole = len(rows) + len(first) == n
         clean = [(_whole(P, table, K, q, k, normals, sampled[q], place, False) if whole else
-                  _candidate(P, table, K, rows, q, _C_COMPACT, k, normals, rows, False, place), K)]
+                  _candidate(P, table, K, rows, q, ROW_C_COMPACT, k, normals, rows, False, place), K)]
     slow = np.flatnonzero(~fast & ~sample)
     if len(slow):
         tick("noise fit")
-        wide.append(measured(Kn, _C_WIDE, slow))
-        low.append(measured(K2, _C_COMPACT, slow))
+        wide.append(measured(Kn, ROW_C_WIDE, slow))
+        low.append(measured(K2, ROW_C_COMPACT, slow))
     # the noise level as the fits everywhere gave it before the compact rows of degree > 2 (the
     # clean points: of their top degree's); the curvature of the wide fit, else of the top degree
     resid = np.full(n, np.inf)
@@ -467,13 +453,13 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     # would inflate the curvature of a small fit, on the ladder's first rung (256), whose
     # degree-2 rows that fit then is
     Kmax = min(total, max_neighbors or min(1000, total // 4))
-    curv_fit, Kc = None, max(Kn, min(Kmax, int(round(Kn * _LADDER))))
-    if typical is not None and typical > _NOISY * spacing:
+    curv_fit, Kc = None, max(Kn, min(Kmax, int(round(Kn * ROW_LADDER))))
+    if typical is not None and typical > ROW_NOISY * spacing:
         tick("curvature fit")
         idx_c, dist_c, _ = spread(Kc, everyone)
-        held = idx_c.shape[1]  # (at most SAMPLE of the Kc nearest)
-        curv_fit = _candidate(P, _table(idx_c, dist_c), held, None, 2, _C_WIDE, k, normals, everyone, False,
-                              place)
+        held = idx_c.shape[1]  # (at most ROW_SAMPLE of the Kc nearest)
+        curv_fit = _candidate(P, _table(idx_c, dist_c), held, None, 2, ROW_C_WIDE, k, normals, everyone,
+                              False, place)
     if typical is None:
         notes.append("no fit left degrees of freedom to estimate the noise: assumed clean")
     scale = first_scale if curv_fit is None else _scale(curv_fit.curvature, nb, k, d, diameter, spacing)
@@ -494,7 +480,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         pick[rows[better]] = len(local)
         widths[rows[better]] = K
         local.append((fit, K))
-        noisy = (GAMMA * sig[rows] * scale[rows] * fit.amplification > 0.5 * err) & (sig[rows] > rounding)
+        noisy = (ROW_GAMMA * sig[rows] * scale[rows] * fit.amplification > 0.5 * err) & (sig[rows] > rounding)
         dominated[rows[better]] = noisy[better]
         return rows[better & noisy]
 
@@ -506,35 +492,35 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     # fitted after all
     rough = np.zeros(n, dtype=bool)
     for fit, _ in clean:
-        rough[fit.centers] = fit.residual > _EXCESS * sig[fit.centers]
+        rough[fit.centers] = fit.residual > ROW_EXCESS * sig[fit.centers]
     suspect = np.flatnonzero(fast & (dominated | rough) & own)
     if len(suspect):
         tick("noise fit")
-        consider(*measured(K2, _C_COMPACT, suspect))
-        consider(*measured(Kn, _C_WIDE, suspect))
+        consider(*measured(K2, ROW_C_COMPACT, suspect))
+        consider(*measured(Kn, ROW_C_WIDE, suspect))
     K = Kn
     pick[~own] = -1  # the halo's rows are not built here
     active = np.flatnonzero(dominated & own)
     while len(active) and K < Kmax:
-        K = min(Kmax, int(round(K * _LADDER)))
+        K = min(Kmax, int(round(K * ROW_LADDER)))
         tick(f"rung {K}")
         grown = []
         # (its degree-2 rows at the curvature fit's width are that fit's)
         reuse = K == Kc and curv_fit is not None
         near, rows = (_table(idx_c, dist_c), active) if reuse else (_table(*spread(K, active)[:2]), None)
         want = tuple(q for q in ((4, 2) if max_degree >= 4 else (2,)) if not (reuse and q == 2))
-        fits = _candidate(P, near, near[0].shape[1], rows, want, _C_WIDE, k, normals, active, False, place) \
-            if want else []
+        fits = _candidate(P, near, near[0].shape[1], rows, want, ROW_C_WIDE, k, normals, active, False,
+                          place) if want else []
         for fit in ([_restrict(curv_fit, active)] if reuse else []) + fits[::-1]:  # degree 2 first
             grown.append(consider(fit, K))
         active = np.unique(np.concatenate(grown))
-    # robust to clean f on a noisy surface: among the candidates within ROBUST of the least
+    # robust to clean f on a noisy surface: among the candidates within ROW_ROBUST of the least
     # predicted error, the one of least bias (the noise term assumes f sampled at the noisy
     # points; a smooth f there is served by the lower bias)
     least_bias = np.full(n, np.inf)
     least = best.copy()
     for i, (rows, err, bias) in enumerate(scores):
-        ok = (err <= ROBUST * least[rows]) & (bias < least_bias[rows]) & (pick[rows] >= 0)
+        ok = (err <= ROW_ROBUST * least[rows]) & (bias < least_bias[rows]) & (pick[rows] >= 0)
         least_bias[rows[ok]] = bias[ok]
         pick[rows[ok]] = i
         widths[rows[ok]] = local[i][1]
@@ -587,7 +573,7 @@ def wider_rows(P: Any, choice: RowChoice, *, k: int = 2, normals: Any = None, fa
     P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     n = len(P)
     tree = cKDTree(P)
-    spread = _Spread(P, tree, SAMPLE)
+    spread = _Spread(P, tree, ROW_SAMPLE)
     out = sp.csr_matrix((n, n))
     ok = choice.degree >= 2
     for q, K in sorted(set(zip(choice.degree[ok].tolist(), choice.neighbors[ok].tolist(), strict=True))):

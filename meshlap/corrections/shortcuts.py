@@ -4,8 +4,8 @@ Across a narrow groove, a thin wall or a concave fold, two points can lie within
 reach while the shortest path between them along the surface is several times longer; the
 heat on the surface does not jump the gap, so such a pair must not interact. Here the path
 along the mesh (the shortest path over its edges, from the corner nearest each point) decides:
-a pair whose path is longer than :data:`SHORTCUT_RATIO` times its chord, plus the two cells'
-longest edges (a point's distance to its corner, and the edge path's own detour), is dropped.
+a pair whose path is longer than :data:`~meshlap.tuned.SHORTCUT_RATIO` times its chord, plus the
+two cells' longest edges (a point's distance to its corner, and the edge path's own detour), is dropped.
 The edge path overestimates the geodesic by about 15% (median on fandisk); the slack keeps
 the pairs of a smooth coarse surface (on the 600-vertex torus 1.6% of the area loses a pair,
 and its error stays 0.95%). Pairs across a 90° crease can reach the ratio (23% of the cube
@@ -27,20 +27,10 @@ import scipy.sparse as sp
 
 from .._jit import in_blocks, jit
 from ..assembly._intrinsics import zero_row_sum
+from ..tuned import SHORTCUT_RATIO, SHORTCUT_THIN_WIDTHS
 from .features import thickness
 
-__all__ = ["SHORTCUT_RATIO", "THIN_WIDTHS", "drop_shortcuts", "thin_fraction"]
-
-#: A pair is dropped where its path along the mesh exceeds this times its chord, plus the slack.
-#: Eigenvalues 1-9 of the Galerkin pencil against COT 16× refined: fandisk 1.33% with every
-#: pair, 0.35% at 3, 0.14% from 2 to 1.2 (COT 0.09%); spot 2.67% at 2, 1.63% at 1.4, 1.42% at
-#: 1.3, 1.32% at 1.25 (eigenvalue 5, on the teats: the pairs across them), 1.25% at 1.2 (COT
-#: 0.41%). Below 1.25 the coarse torus starts to lose pairs (14% of its area at 1.2).
-SHORTCUT_RATIO = 1.25
-#: A point is on a thin part when the surface's other side is within this many kernel widths
-#: √(2h) (spot at h = ē²/2: 2.7% of its area not next to a short cut, its teats 2.4 widths
-#: across at their base; the coarse torus's tube, which the pencil resolves, is 3.5 widths across)
-THIN_WIDTHS = 3.0
+__all__ = ["drop_shortcuts", "thin_fraction"]
 
 
 @jit()
@@ -106,7 +96,8 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
     radius : float
         The kernel's cut-off: no pair is farther apart.
     ratio : float, optional
-        The path over the chord beyond which a pair is dropped; :data:`SHORTCUT_RATIO` by default.
+        The path over the chord beyond which a pair is dropped;
+        :data:`~meshlap.tuned.SHORTCUT_RATIO` by default.
     face, corner : (q,) int ndarray, optional
         Each point's triangle and its vertex of largest weight at the point, for points other than
         three per triangle (:func:`meshlap.corrections.galerkin.split_points`).
@@ -159,7 +150,7 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
 def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: float,
                   separated: np.ndarray | None = None, rows: np.ndarray | None = None) -> float:
     """The mass fraction of a surface's vertices whose other side is within
-    ``THIN_WIDTHS · width``: another vertex whose normal points the opposite way (more than
+    ``SHORTCUT_THIN_WIDTHS · width``: another vertex whose normal points the opposite way (more than
     120° apart) and which lies along both normals (within 45°), as across a thin limb or wall.
     Vertices marked in ``separated`` (those that lost pairs to :func:`drop_shortcuts`, which
     already keeps the two sides apart: fandisk's thin walls, 2.6 of its 3.1% at h = ē²/2) do
@@ -173,7 +164,7 @@ def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: f
     >>> thin_fraction(V, geo.normals(), geo.mass, 0.1), thin_fraction(V, geo.normals(), geo.mass, 1.0)
     (0.0, 1.0)
     """
-    thin = np.isfinite(thickness(P, normals, THIN_WIDTHS * width, rows))
+    thin = np.isfinite(thickness(P, normals, SHORTCUT_THIN_WIDTHS * width, rows))
     if rows is not None:
         mass = mass[rows]
         separated = None if separated is None else separated[rows]

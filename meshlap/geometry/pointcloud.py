@@ -49,14 +49,13 @@ from scipy.sparse.csgraph import connected_components
 
 from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
+from ..tuned import CLOUD_NOISY as NOISY
 from . import frames
 from .core import Geometry, check_points
 from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
 
 __all__ = ["NOISY", "noise_ratio", "point_cloud_geometry", "point_masses", "project_to_tangent"]
 
-#: The noise ratio σ̂²/a² (:func:`noise_ratio`) above which a cloud is denoised by default.
-NOISY = 0.02
 
 # noise_ratio fits every ⌊n / _NOISE_SAMPLE⌋-th point's neighbourhood
 _NOISE_SAMPLE = 32768
