@@ -50,8 +50,6 @@ class Pencil:
     matrix_free: assembly.MatrixFree | None = None
     quadrature: str = "vertex"  # the symmetric pencil's quadrature in effect
     quadrature_h: float | None = None  # the Galerkin pencil's width
-    shortcuts: float = 0.0  # the Galerkin pencil's area that lost pairs to corrections.shortcuts
-    thin: float = 0.0  # the Galerkin pencil's area on parts thinner than its kernel (corrections.shortcuts)
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
     #: the masses the pencil goes with, where they are not the geometry's (the FEM pencil's)
     mass: np.ndarray | None = field(default=None, repr=False)
@@ -120,9 +118,8 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
             and gal.shape_measures(geo.points, tri)[1] <= NOISE_ROUGHNESS:
         grooves = gal.creases(geo.points, tri, concave=True)
         hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
-    info: dict = {}
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
-                               tol=opts.pencil_tol, guard=guard, info=info, h_vertex=hv)
+                               tol=opts.pencil_tol, guard=guard, h_vertex=hv)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if dog and opts.check_psd:
@@ -135,10 +132,6 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
     out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
-    out.shortcuts = info.get("shortcuts", 0.0)
-    if surface:
-        out.thin = corrections.shortcuts.thin_fraction(geo.points, geo.normals(), geo.mass,
-                                                       float(np.sqrt(2 * h)), info.get("shortcut_vertices"))
     if not opts.pointwise:
         out.L = L
 

@@ -16,7 +16,7 @@ __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "C
            "NOISE_ROUGHNESS", "NOISE_STEP", "PSD_RTOL", "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT",
            "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS", "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL",
            "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY", "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE",
-           "SEGMENT_STEP", "SHORTCUT_RATIO", "SHORTCUT_THIN_WIDTHS", "SPLIT_BELOW"]
+           "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
@@ -43,8 +43,6 @@ SEGMENT_STEP = 0.5
 SPLIT_BELOW = 0.64
 #: Pairs whose path exceeds this times their chord are dropped: fandisk 1.33% → 0.14%, spot 1.32% (i19)
 SHORTCUT_RATIO = 1.25
-#: Thin part: the other side within this many widths √(2h); spot's teats 2.4, torus tube 3.5 (i19)
-SHORTCUT_THIN_WIDTHS = 3.0
 #: The width narrows within this many widths √(2h) of a groove: fandisk 0.087% at 2, 0.26% at 1-1.5 (i19)
 CREASE_WIDTHS = 2.0
 #: ... or where half its thickness is under this many: spot 0.91-0.94%; at 2 the torus 0.95% → 1.49% (i19)

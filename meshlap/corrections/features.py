@@ -6,8 +6,7 @@ follow: a concave crease (a groove, :func:`~meshlap.corrections.galerkin.creases
 few kernel widths √(2h) (spot's teats), on which the kernel's disc does not fit. A feature
 size per vertex, the smaller of its distance to the nearest concave crease edge over
 :data:`~meshlap.tuned.CREASE_WIDTHS` widths and half its distance to the surface's other side
-(a vertex of opposite normal along both normals, the test of
-:func:`~meshlap.corrections.shortcuts.thin_fraction`) over
+(a vertex of opposite normal along both normals, :func:`thickness`) over
 :data:`~meshlap.tuned.FEATURE_THIN_WIDTHS` widths, sets
 
     h_v = h · clip(size_v², FEATURE_FLOOR, 1),
@@ -65,27 +64,19 @@ def crease_distance(P: np.ndarray, crease_edges: np.ndarray, limit: float) -> np
     return out
 
 
-def thickness(P: np.ndarray, normals: np.ndarray, limit: float, rows: np.ndarray | None = None) -> np.ndarray:
+def thickness(P: np.ndarray, normals: np.ndarray, limit: float) -> np.ndarray:
     """Each vertex's distance to the surface's other side, ``inf`` beyond ``limit``: the nearest
     vertex whose normal points the opposite way (more than 120° apart) and which lies along
-    both normals (within 45°), as in :func:`~meshlap.corrections.shortcuts.thin_fraction`.
-    ``rows``: only those vertices' (in that order), against all of ``P``.
+    both normals (within 45°), as across a thin limb or wall.
 
     Examples
     --------
     >>> import numpy as np
     >>> P = np.array([[0.0, 0, 0], [0, 0, 0.1], [1, 0, 0]])      # a slab 0.1 thick
     >>> N = np.array([[0.0, 0, -1], [0, 0, 1], [0, 0, -1]])
-    >>> thickness(P, N, 0.5).tolist(), thickness(P, N, 0.5, np.array([2, 1])).tolist()
-    ([0.1, 0.1, inf], [inf, 0.1])
+    >>> thickness(P, N, 0.5).tolist()
+    [0.1, 0.1, inf]
     """
-    if rows is not None:  # the pairs of the rows' vertices only (a sample of a large mesh)
-        found = cKDTree(P[rows]).sparse_distance_matrix(cKDTree(P), limit, output_type="ndarray")
-        i, j = found["i"], found["j"]
-        out = np.full(len(rows), np.inf)
-        across = _across(P, normals, rows[i], j)
-        np.minimum.at(out, i[across], found["v"][across])
-        return out
     out = np.full(len(P), np.inf)
     pairs = cKDTree(P).query_pairs(limit, output_type="ndarray")
     if not len(pairs):

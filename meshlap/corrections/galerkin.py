@@ -375,9 +375,7 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
         h/r is cut into ⌈√(:data:`~meshlap.tuned.SPLIT_BELOW`·r)⌉² triangles of 3 points each
         (:func:`split_points`).
     info : dict, optional
-        Filled with ``"shortcuts"`` on a triangle mesh: the fraction of the area whose
-        quadrature points lost a pair to :func:`~meshlap.corrections.shortcuts.drop_shortcuts`,
-        and ``"shortcut_vertices"``: the vertices one of whose quadrature points did.
+        Filled with ``"points"`` on a triangle mesh: the number of quadrature points.
 
     Returns
     -------
@@ -416,11 +414,8 @@ def galerkin_pencil(P: np.ndarray, cells: np.ndarray, h: float, dim: int, *, dog
     if crease_edges is not None and len(crease_edges):
         Lq = _unfold(Lq, P, cells, X, W, crease_edges, hq, dim, dog, cutoff_radius(h, tol), face)
     if cells.shape[1] == 3:
-        Lq, hit = drop_shortcuts(Lq, P, cells, X, cutoff_radius(h, tol), face=face, corner=corner, copy=False)
+        Lq, _ = drop_shortcuts(Lq, P, cells, X, cutoff_radius(h, tol), face=face, corner=corner, copy=False)
         if info is not None:
-            info["shortcuts"] = float(W[hit].sum() / W.sum())
-            info["shortcut_vertices"] = np.zeros(len(P), dtype=bool)
-            info["shortcut_vertices"][corner[hit]] = True
             info["points"] = len(X)
     if boundary is not None:
         samples, nu = boundary

@@ -10,11 +10,9 @@ The edge path overestimates the geodesic by about 15% (median on fandisk); the s
 the pairs of a smooth coarse surface (on the 600-vertex torus 1.6% of the area loses a pair,
 and its error stays 0.95%). Pairs across a 90° crease can reach the ratio (23% of the cube
 surface's area loses one), where the crease's unfolded distance already gave them little
-weight: its error stays 0.043%.
-
-What dropping cannot mend, :func:`thin_fraction` measures: the area on parts whose two sides
-are within a few kernel widths (spot's teats, ears and horns), where the kernel's disc does
-not fit on the surface.
+weight: its error stays 0.043%. What dropping cannot mend, parts whose two sides are within a
+few kernel widths (spot's teats, ears and horns), the width narrows for
+(:mod:`meshlap.corrections.features`).
 """
 
 from __future__ import annotations
@@ -27,10 +25,9 @@ import scipy.sparse as sp
 
 from .._jit import in_blocks, jit
 from ..assembly._intrinsics import zero_row_sum
-from ..tuned import SHORTCUT_RATIO, SHORTCUT_THIN_WIDTHS
-from .features import thickness
+from ..tuned import SHORTCUT_RATIO
 
-__all__ = ["drop_shortcuts", "thin_fraction"]
+__all__ = ["drop_shortcuts"]
 
 
 @jit()
@@ -146,28 +143,3 @@ def drop_shortcuts(Lq: sp.csr_matrix, P: np.ndarray, tri: np.ndarray, X: np.ndar
               np.ascontiguousarray(X, dtype=np.float64), slack, float(ratio), float(limit), n, hit)
     return out, hit
 
-
-def thin_fraction(P: np.ndarray, normals: np.ndarray, mass: np.ndarray, width: float,
-                  separated: np.ndarray | None = None, rows: np.ndarray | None = None) -> float:
-    """The mass fraction of a surface's vertices whose other side is within
-    ``SHORTCUT_THIN_WIDTHS · width``: another vertex whose normal points the opposite way (more than
-    120° apart) and which lies along both normals (within 45°), as across a thin limb or wall.
-    Vertices marked in ``separated`` (those that lost pairs to :func:`drop_shortcuts`, which
-    already keeps the two sides apart: fandisk's thin walls, 2.6 of its 3.1% at h = ē²/2) do
-    not count. ``rows``: the fraction over those vertices only (a sample of a large mesh).
-
-    Examples
-    --------
-    >>> import meshlap, numpy as np
-    >>> V, F = meshlap.shapes.sphere(500, seed=0)       # radius 1: its sides are 2 apart
-    >>> geo = meshlap.laplacian(V, F).geometry
-    >>> thin_fraction(V, geo.normals(), geo.mass, 0.1), thin_fraction(V, geo.normals(), geo.mass, 1.0)
-    (0.0, 1.0)
-    """
-    thin = np.isfinite(thickness(P, normals, SHORTCUT_THIN_WIDTHS * width, rows))
-    if rows is not None:
-        mass = mass[rows]
-        separated = None if separated is None else separated[rows]
-    if separated is not None:
-        thin &= ~separated
-    return float(mass[thin].sum() / mass.sum())
