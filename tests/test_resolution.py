@@ -190,7 +190,7 @@ def test_cube_of_tetrahedra():
 
 def test_sphere_cloud_16_eigenvalues_within_1_percent():
     P = samples.sphere_points(8000, "random", seed=0)
-    op, warned = build(meshlap.point_cloud_laplacian, P)
+    op, warned = build(meshlap.point_cloud_laplacian, P, operator="kernel")
     assert not warned and op.resolution.fem_error is None  # no mesh, no FEM to name
     assert error(op, SPHERE, 16) < 0.01  # measured 0.50% (robust-laplacian on 16,000 points: 7.8%)
 
@@ -219,7 +219,7 @@ def test_narrow_cloud_warns_and_names_robust_laplacian():
         L, M = robust_laplacian.point_cloud_laplacian(P)
         lam = np.sort(sla.eigsh(L.tocsc(), 10, M.tocsc(), sigma=-1e-8)[0])
         assert 0.5 < r.peer_error / np.abs(lam[1:10] / SPHERE[1:10] - 1).max() < 2
-    op, warned = build(meshlap.point_cloud_laplacian, P)
+    op, warned = build(meshlap.point_cloud_laplacian, P, operator="kernel")
     assert not warned and op.resolution.predicted_error < RATIO_LIMIT * op.resolution.peer_error
     assert error(op, SPHERE) < 0.015
 
