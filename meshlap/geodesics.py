@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.spatial import cKDTree
 
 from .errors import MeshError
 from .gradients import Gradient, gradient_operator
@@ -93,6 +94,34 @@ def _sparse_pencils(op: Any, grad: Gradient) -> tuple[Any, Any]:
     K = grad.stiffness()
     K_heat = K if grad.kind == "simplices" else _graph_stiffness(geo)
     return _wrapped(K_heat, mass), _wrapped(K, mass)
+
+
+def _nearest(tree: cKDTree, Q: np.ndarray, k: int) -> np.ndarray:
+    """Indices ((len(Q), k)) of each query point's k nearest points of the tree."""
+    return np.asarray(tree.query(Q, k=k)[1], dtype=np.int64).reshape(len(Q), k)
+
+
+def _principal(local: np.ndarray, k: int) -> np.ndarray:
+    """The k principal axes ((m, k, d)) of each of m sets of offsets (m, p, d)."""
+    return np.linalg.svd(local - local.mean(axis=1, keepdims=True), full_matrices=False)[2][:, :k]
+
+
+def _tangent_interpolation(P: np.ndarray, covered: np.ndarray, lonely: np.ndarray, k: int) -> sp.csr_matrix:
+    """Weights ((len(lonely), n)) of the value at each lonely point of the least-squares linear
+    fit to its 2(k+1) nearest covered points, in their k-dimensional principal frame: exact for
+    a function linear there (a distance away from its source, to O(h²)), where taking one
+    neighbour's value plus the step to it is an upper bound off by the step's component across
+    the distance's gradient (up to a spacing)."""
+    if not len(lonely):
+        return sp.csr_matrix((0, len(P)))
+    m = min(2 * (k + 1), len(covered))
+    near = covered[_nearest(cKDTree(P[covered]), P[lonely], m)]
+    local = P[near] - P[lonely][:, None, :]  # (L, m, d)
+    A = np.concatenate([np.ones((len(lonely), m, 1)), np.einsum("lmd,lkd->lmk", local, _principal(local, k))],
+                       axis=2)
+    w = np.linalg.pinv(A)[:, 0, :]  # the fit's constant term: its value at the lonely point
+    rows = np.repeat(np.arange(len(lonely)), m)
+    return sp.csr_matrix((w.ravel(), (rows, near.ravel())), shape=(len(lonely), len(P)))
 
 
 class HeatDistance:
@@ -153,19 +182,14 @@ class HeatDistance:
         self._heat = ImplicitHeat(heat_op, self.t, solver=solver)
         self._poisson = PoissonSolver(poisson_op, solver=solver)
         self._points = np.asarray(geo.points, dtype=np.float64)
-        # vertices in no element (a cloud point left out of every local triangle): their distance
-        # is their nearest covered neighbour's plus the step to it
-        # (no gradient reads them: the FEM pencil's own diagonal entry there holds no element)
+        # vertices in no element (a cloud point left out of every local triangle) take the value of
+        # a linear fit to their covered neighbours (no gradient reads them)
         lonely = np.asarray(abs(self.grad.G).sum(axis=0)).ravel() == 0
         if lonely.all():
             raise MeshError("the geometry has no element with a positive measure to carry heat")
         self._lonely = np.flatnonzero(lonely)
-        if len(self._lonely):
-            from pykdtree.kdtree import KDTree
-
-            covered = np.flatnonzero(~lonely)
-            step, near = KDTree(self._points[covered]).query(self._points[self._lonely], k=1)
-            self._fill = (covered[np.asarray(near, dtype=np.int64).ravel()], np.asarray(step).ravel())
+        self._fill = _tangent_interpolation(self._points, np.flatnonzero(~lonely), self._lonely, geo.dim)
+        self._tree = cKDTree(self._points)
 
     def _sources(self, sources: Any) -> np.ndarray:
         idx = _indices(np.atleast_1d(np.asarray(sources)), self.n, "source")
@@ -193,35 +217,32 @@ class HeatDistance:
         if cloud:  # the same direction, from a function that is nearly linear in the distance
             u = np.log(np.maximum(u, np.finfo(float).tiny))
         g = self.grad(u)  # (E, d, s)
-        norm = np.linalg.norm(g, axis=1, keepdims=True)
-        X = -np.divide(g, norm, out=np.zeros_like(g), where=norm > 0)
+        norm = np.sqrt(np.einsum("eds,eds->es", g, g))[:, None, :]
+        X = g * np.divide(-1.0, norm, out=np.zeros_like(norm), where=norm > 0)
         if cloud:  # a point-source's own gradient has no direction
             for j, grp in enumerate(groups):
                 X[grp, :, j] = 0.0
         phi = self._poisson.solve(-self.grad.divergence(X))
-        for j, grp in enumerate(groups):
-            phi[:, j] -= self._offset(phi[:, j], grp)
-            phi[grp, j] = 0.0
         if len(self._lonely):
-            near, step = self._fill
-            phi[self._lonely] = phi[near] + step[:, None]
+            phi[self._lonely] = self._fill @ phi
+        phi -= self._offsets(phi, groups)
+        for j, grp in enumerate(groups):
+            phi[grp, j] = 0.0
         return np.maximum(phi, 0.0)
 
-    def _offset(self, phi: np.ndarray, grp: np.ndarray) -> float:
-        """The constant that makes φ the distance to each source on its nearest points, measured
-        in their own k-dimensional principal plane (geodesic and planar distance agree to O(r³)
-        there, and the plane drops the noise across the surface)."""
+    def _offsets(self, phi: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
+        """The constants that make each column of φ the distance to its sources on their nearest
+        points, measured in those points' own k-dimensional principal plane (geodesic and planar
+        distance agree to O(r³) there, and the plane drops the noise across the surface)."""
+        src = np.concatenate(groups)
+        col = np.repeat(np.arange(len(groups)), [len(g) for g in groups])
         near = min(_SHIFT_POINTS, self.n)
-        k = self.op.geometry.dim
-        shifts = []
-        for s in grp:
-            diff = self._points - self._points[s]
-            dist = np.einsum("nd,nd->n", diff, diff)
-            idx = np.argpartition(dist, near - 1)[:near]
-            local = diff[idx]
-            axes = np.linalg.svd(local - local.mean(axis=0), full_matrices=False)[2][:k]
-            shifts.append(np.mean(phi[idx] - np.linalg.norm(local @ axes.T, axis=1)))
-        return float(np.mean(shifts))
+        idx = _nearest(self._tree, self._points[src], near)
+        local = self._points[idx] - self._points[src][:, None, :]  # (sources, near, d)
+        axes = _principal(local, self.op.geometry.dim)
+        planar = np.linalg.norm(np.einsum("snd,skd->snk", local, axes), axis=2)
+        shift = (phi[idx, col[:, None]] - planar).mean(axis=1)
+        return np.bincount(col, shift, minlength=len(groups)) / np.bincount(col, minlength=len(groups))
 
     def compute(self, sources: Any) -> np.ndarray:
         """Distance to the nearest of ``sources`` (one vertex index or several): (n,).

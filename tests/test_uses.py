@@ -113,12 +113,12 @@ def disc():
     return V, F, edge
 
 
-@pytest.mark.parametrize("kind, tol", [("cot", 5e-4), ("default", 0.03)])
+@pytest.mark.parametrize("kind, tol", [("cot", 5e-4), ("default", 1e-3)])
 def test_harmonic_and_poisson_on_a_disc(disc, kind, tol):
     V, F, edge = disc
     op = cotangent(V, F) if kind == "cot" else meshlap.laplacian(V, F)
     x, y = V[:, 0], V[:, 1]
-    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4, heat kernel 0.014
+    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4; default (FEM) 2e-4, Poisson 4.6e-4
     assert np.abs(u - (x**2 - y**2)).max() < tol
     u = poisson(op, 4.0, dirichlet={int(i): x[i] ** 2 + y[i] ** 2 for i in edge})
     assert np.abs(u - (x**2 + y**2)).max() < tol
@@ -129,7 +129,7 @@ def test_neumann_problem_and_its_compatibility(disc):
     op = meshlap.laplacian(V, F)
     x = V[:, 0]
     u = poisson(op, 0.0, neumann=(edge, x[edge]))  # ∂x/∂n = x on the unit circle; x has mean 0
-    assert np.abs(u - x).max() < 0.03  # measured 0.014
+    assert np.abs(u - x).max() < 1e-3  # measured 2e-4
     with pytest.warns(meshlap.MeshWarning, match="integrate to zero"):
         poisson(op, 1.0)
 
@@ -232,7 +232,7 @@ def test_cli_distance(tmp_path, capsys):
     assert "indices must lie in [0, 799]" in capsys.readouterr().err
 
 
-def test_unreferenced_vertex_gets_its_neighbour_s_distance():
+def test_unreferenced_vertex_gets_its_neighbours_fitted_distance():
     V, F = meshlap.shapes.sphere(800, seed=0)
     V = np.vstack([V, [[0.0, 0.0, 1.01]]])  # in no face
     with warnings.catch_warnings():
@@ -240,6 +240,6 @@ def test_unreferenced_vertex_gets_its_neighbour_s_distance():
         op = meshlap.laplacian(V, F)
     d = geodesic_distance(op, 0)
     exact = _great_circle(V, [0])[0]
-    assert np.isfinite(d).all() and abs(d[-1] - exact[-1]) < 0.1  # measured 0.02 at n = 1500
+    assert np.isfinite(d).all() and abs(d[-1] - exact[-1]) < 0.05  # measured 0.019, the mean error
     with pytest.raises(meshlap.MeshError, match="no element"):
         geodesic_distance(op, 800)
