@@ -248,14 +248,16 @@ class HeatDistance:
         near = min(_SHIFT_POINTS, self.n)
         idx = _nearest(self._tree, self._points[src], near)
         P = self._points
-        axes = _principal(P[idx] - P[src][:, None, :], self.op.geometry.dim)  # (sources, k, d)
-        planar = np.full(idx.shape, np.inf)
-        for j, grp in enumerate(groups):  # to each of the group's sources, in each one's plane
+        local = P[idx] - P[src][:, None, :]  # (sources, near, d)
+        axes = _principal(local, self.op.geometry.dim)  # (sources, k, d)
+        planar = np.linalg.norm(np.einsum("snd,skd->snk", local, axes), axis=2)
+        for j, grp in enumerate(groups):  # several sources: to the nearest, in each one's plane
+            if len(grp) == 1:
+                continue
             mine = np.flatnonzero(col == j)
             for s in grp:
-                local = P[idx[mine]] - P[s]
-                planar[mine] = np.minimum(planar[mine], np.linalg.norm(np.einsum("snd,skd->snk", local,
-                                                                                  axes[mine]), axis=2))
+                other = np.linalg.norm(np.einsum("snd,skd->snk", P[idx[mine]] - P[s], axes[mine]), axis=2)
+                planar[mine] = np.minimum(planar[mine], other)
         shift = (phi[idx, col[:, None]] - planar).mean(axis=1)
         return np.bincount(col, shift, minlength=len(groups)) / np.bincount(col, minlength=len(groups))
 

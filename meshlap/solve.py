@@ -201,7 +201,9 @@ class PoissonSolver:
         anchored = np.zeros(ncomp, dtype=bool)
         anchored[lab[self.fixed][lab[self.fixed] >= 0]] = True
         # each floating part's free vertices, and the vertices without mass, found once for every solve
-        self._parts = [np.flatnonzero(lab[self.free] == c) for c in np.flatnonzero(~anchored)]
+        self._parts: list[Any] = [np.flatnonzero(lab[self.free] == c) for c in np.flatnonzero(~anchored)]
+        if len(self._parts) == 1 and len(self._parts[0]) == len(self.free):
+            self._parts = [slice(None)]  # one part, all free: no copies
         self._missing = np.setdiff1d(np.flatnonzero(mass == 0), self.fixed)
         if solver == "auto":
             solver = "direct" if S.nnz <= _SPARSE_ROW_MAX * n else "cg"
@@ -210,7 +212,7 @@ class PoissonSolver:
         with _one_blas_thread():
             if solver == "direct":
                 # one vertex of each floating part pinned at 0: A restricted to the others is SPD
-                first = np.array([part[0] for part in self._parts], dtype=np.int64)
+                first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
                 self._keep = np.setdiff1d(np.arange(len(self.free)), first)
                 self._lu = _factor(A[self._keep][:, self._keep])
             else:
@@ -279,7 +281,7 @@ class PoissonSolver:
                 warnings.warn("the data of a part without Dirichlet vertices do not integrate to zero "
                               "(∫f ≠ ∮q): solving for their projection", MeshWarning,
                               stacklevel=user_stacklevel())
-            rhs[sel] -= total / sel.sum()
+            rhs[sel] -= total / len(rhs[sel])
 
 
 def poisson(op: Any, f: Any = 0.0, *, dirichlet: Indexed = None, neumann: Indexed = None,
