@@ -12,7 +12,7 @@ Three steps with the operator's symmetric pencil (S ≈ MΔ, negative semidefini
    clouds);
 3. the Poisson problem ``Δφ = div X``: ``(-S) φ = Gᵀ W X`` (the divergence is the gradient's
    adjoint), by :class:`~meshlap.solve.PoissonSolver`, then φ shifted to match the planar
-   distance on each source's 32 nearest points, and 0 at the sources.
+   distance to the nearest source on each source's 32 nearest points, and 0 at the sources.
 
 Where the pencil is sparse, both solves use ``op.S``; where it has the heat-kernel operator's
 dense rows, the geometry's own sparse matrices (:func:`_sparse_pencils`). Both are factorised
@@ -160,7 +160,8 @@ class HeatDistance:
     Notes
     -----
     Memory: the preparation holds the gradient (about (k+1)·d entries per simplex, or
-    (K+1)·d per point of a cloud, K = 16) and the two factorisations or preconditioners.
+    (K+1)·d per point of a cloud, K = 16), the two factorisations or preconditioners and a k-d
+    tree of the points (about (d + 2)·8 bytes per point).
     :meth:`compute_many` works on ``batch`` sources at a time, with about
     ``(4 + 3·E·d / n) · 8 · n · batch`` bytes of temporaries (E elements; about 150 n · batch
     bytes on a triangle mesh in R³), and returns a ``len(sources) × n`` float64 matrix.
