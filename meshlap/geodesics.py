@@ -24,7 +24,7 @@ kernel, u ∝ K_0(r/√t) in the plane, log u = -r/√t - ½ log r + O(1): nearl
 distance r, so the direction of its P1 gradient is off by O(h/r) (the level sets' curvature),
 where that of u itself, which falls by a factor e^(h/√t) across an element, is off by O(h/√t)
 at every distance. Measured on 10,000 vertices: the heat method's mean relative error falls from
-0.95% to 0.22% on a sphere mesh, from 1.3% to 0.47% on a sphere cloud and from 0.69% to 0.35%
+0.95% to 0.22% on a sphere mesh, from 1.3% to 0.44% on a sphere cloud and from 0.69% to 0.35%
 on a flat square (docs/uses.md).
 
 The time step ``t = c ē²``, ē the geometry's mean spacing (``op.geometry.spacing``), c = 1:
