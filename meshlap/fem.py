@@ -38,10 +38,10 @@ from .errors import MeshError
 __all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
            "simplicial_cells", "surface_noise", "welded"]
 
-#: ``mass`` values of :func:`fem_pencil`: ½(consistent + lumped) moved onto the lumped diagonal
-#: (the default), the lumped diagonal (the cotangent Laplacian's pencil), or the consistent mass
-#: moved onto it by the same congruence.
-FEM_MASSES = ("blend", "lumped", "consistent")
+#: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
+#: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
+#: it by the same congruence.
+FEM_MASSES = ("lumped", "blend", "consistent")
 #: Copies of one vertex (an unwelded seam) are tied by a stiffness this many times their
 #: representative's diagonal entry: the pencil splits into the welded mesh's (exact) and the
 #: copies' differences, whose eigenvalues (about 4× the vertex's own frequency) lie above the
