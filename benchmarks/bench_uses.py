@@ -6,10 +6,13 @@
    cloud, clean and with 0.5% radial noise; the exact distance is the great circle between
    the points' projections on the sphere) and the stratified flat square [-1, 1]² (Euclidean).
    Relative error |d - d*| / d* over the vertices with d* ≥ 0.1, mean and max, over three
-   sources; time per source after the set-up (meshlap: ``HeatDistance.compute_many``), and the
-   set-up (meshlap: operator build + ``HeatDistance``). Peers: potpourri3d's
-   ``MeshHeatMethodDistanceSolver`` / ``PointCloudHeatSolver``, LaPy's heat diffusion +
-   ``compute_geodesic_f``, libigl's ``heat_geodesics_precompute/solve`` (all at their default t).
+   sources; time per source after the set-up (meshlap: ``HeatDistance.compute_many``; every
+   method: the fastest of up to three runs), and the set-up (meshlap: operator build +
+   ``HeatDistance``). Peers: potpourri3d's ``MeshHeatMethodDistanceSolver`` /
+   ``PointCloudHeatSolver``, LaPy's heat diffusion + ``compute_geodesic_f``, libigl's
+   ``heat_geodesics_precompute/solve`` (all at their default t). The noisy sphere meshes also
+   against their own exact (polyhedral) geodesic distance, libigl's ``exact_geodesic``: the
+   great circle is not the geodesic of a surface that rough.
 2. Dirichlet problems on the unit disc (``meshlap.shapes.disc``): the harmonic x² - y² from
    its boundary values and Δφ = 4 with φ = x² + y² on the boundary; max error. meshlap with its
    default operator and with the cotangent baseline; LaPy ``Solver.poisson``; libigl ``harmonic``.
@@ -56,6 +59,19 @@ def _timed(fn):
     return out, time.perf_counter() - t0
 
 
+def _best(fn):
+    """fn's output and its fastest of up to three runs (within about a second): one run of a few
+    milliseconds on shared cores measures the neighbours' load as much as the method."""
+    out, best = _timed(fn)
+    spent = best
+    for _ in range(2):
+        if spent > 1.0:
+            break
+        t = _timed(fn)[1]
+        spent, best = spent + t, min(best, t)
+    return out, best
+
+
 def _sphere_exact(P: np.ndarray, src: np.ndarray) -> np.ndarray:
     Q = P / np.linalg.norm(P, axis=1, keepdims=True)
     return np.arccos(np.clip(Q[src] @ Q.T, -1.0, 1.0))
@@ -63,7 +79,7 @@ def _sphere_exact(P: np.ndarray, src: np.ndarray) -> np.ndarray:
 
 def _meshlap(op_fn, src):
     (op, hd), setup = _timed(lambda: (lambda o: (o, HeatDistance(o)))(op_fn()))
-    D, t = _timed(lambda: hd.compute_many(src))
+    D, t = _best(lambda: hd.compute_many(src))
     return D, setup, t / len(src)
 
 
@@ -71,7 +87,7 @@ def _pp3d_mesh(V, F, src):
     import potpourri3d as pp3d
 
     s, setup = _timed(lambda: pp3d.MeshHeatMethodDistanceSolver(V, F))
-    D, t = _timed(lambda: np.array([s.compute_distance(int(i)) for i in src]))
+    D, t = _best(lambda: np.array([s.compute_distance(int(i)) for i in src]))
     return D, setup, t / len(src)
 
 
@@ -79,7 +95,7 @@ def _pp3d_cloud(P, src):
     import potpourri3d as pp3d
 
     s, setup = _timed(lambda: pp3d.PointCloudHeatSolver(P))
-    D, t = _timed(lambda: np.array([s.compute_distance(int(i)) for i in src]))
+    D, t = _best(lambda: np.array([s.compute_distance(int(i)) for i in src]))
     return D, setup, t / len(src)
 
 
@@ -94,7 +110,7 @@ def _lapy(V, F, src):
         u = diffusion(mesh, [[int(i)] for i in src])
         return compute_geodesic_f(mesh, u).T
 
-    D, t = _timed(run)
+    D, t = _best(run)
     return D, setup, t / len(src)
 
 
@@ -107,8 +123,8 @@ def _igl(V, F, src):
         return data
 
     data, setup = _timed(pre)
-    D, t = _timed(lambda: np.array([igl.heat_geodesics_solve(data, np.array([i], dtype=np.int64))
-                                    for i in src]))
+    D, t = _best(lambda: np.array([igl.heat_geodesics_solve(data, np.array([i], dtype=np.int64))
+                                   for i in src]))
     return D, setup, t / len(src)
 
 
@@ -118,9 +134,26 @@ def _row(lines, case, who, D, exact, setup, per):
     print(lines[-1], flush=True)
 
 
-def geodesics(sizes: list[int]) -> list[str]:
+def _mesh_methods(V, F, src):
+    """(who, D, set-up, per source) of meshlap and each peer on one mesh."""
+    out = [("meshlap", *_meshlap(lambda: meshlap.laplacian(V, F), src))]
+    return out + [(who, *fn(V, F, src)) for who, fn in (("potpourri3d", _pp3d_mesh), ("LaPy", _lapy),
+                                                         ("libigl", _igl))]
+
+
+def _polyhedral(V, F, src):
+    """The mesh's own exact geodesic distance from each source (libigl's exact_geodesic, MMP)."""
+    import igl
+
+    none = np.zeros(0, dtype=np.int64)
+    return np.array([igl.exact_geodesic(V, F, np.array([i], dtype=np.int64), none, np.arange(len(V)), none)
+                     for i in src])
+
+
+def geodesics(sizes: list[int]) -> tuple[list[str], list[str]]:
     lines = ["| input | method | mean rel. error | max rel. error | set-up (s) | per source (ms) |",
              "|---|---|---|---|---|---|"]
+    own = ["| input | method | mean rel. error | max rel. error |", "|---|---|---|---|"]
     rng = np.random.default_rng(0)
     for n in sizes:
         for noise in (0.0, 0.005):
@@ -130,11 +163,14 @@ def geodesics(sizes: list[int]) -> list[str]:
             src = np.array([0, n // 3, 2 * n // 3])
             exact = _sphere_exact(V, src)
             case = f"sphere mesh {n:,}" + (" noise 0.5%" if noise else "")
-            _row(lines, case, "meshlap", *(lambda r: (r[0], exact, r[1], r[2]))(
-                _meshlap(lambda V=V, F=F: meshlap.laplacian(V, F), src)))
-            for who, fn in (("potpourri3d", _pp3d_mesh), ("LaPy", _lapy), ("libigl", _igl)):
-                D, setup, per = fn(V, F, src)
+            results = _mesh_methods(V, F, src)
+            for who, D, setup, per in results:
                 _row(lines, case, who, D, exact, setup, per)
+            if noise:  # the great circle is not this rough surface's geodesic: its own exact one
+                poly = _polyhedral(V, F, src)
+                for who, D in [("great circle (the reference above)", exact)] + [r[:2] for r in results]:
+                    own.append("| {} | {} | {:.4f} | {:.3f} |".format(case, who, *_errors(D, poly)))
+                    print(own[-1], flush=True)
             P = meshlap.samples.sphere_points(n, "noisy" if noise else "random", noise=noise)
             exact = _sphere_exact(P, src)
             case = f"sphere cloud {n:,}" + (" noise 0.5%" if noise else "")
@@ -146,17 +182,14 @@ def geodesics(sizes: list[int]) -> list[str]:
     src = np.array([int(np.argmin(np.linalg.norm(V, axis=1))), 0, len(V) // 3])
     exact = np.linalg.norm(V[src][:, None] - V[None], axis=2)
     case = f"flat square mesh {len(V):,}"
-    D, setup, per = _meshlap(lambda: meshlap.laplacian(V, F), src)
-    _row(lines, case, "meshlap", D, exact, setup, per)
-    for who, fn in (("potpourri3d", _pp3d_mesh), ("LaPy", _lapy), ("libigl", _igl)):
-        D, setup, per = fn(V, F, src)
+    for who, D, setup, per in _mesh_methods(V, F, src):
         _row(lines, case, who, D, exact, setup, per)
     case = f"flat square cloud {len(V):,}"
     D, setup, per = _meshlap(lambda: meshlap.point_cloud_laplacian(V), src)
     _row(lines, case, "meshlap", D, exact, setup, per)
     D, setup, per = _pp3d_cloud(V, src)
     _row(lines, case, "potpourri3d", D, exact, setup, per)
-    return lines
+    return lines, own
 
 
 def dirichlet(n: int = 10000) -> list[str]:
@@ -259,13 +292,15 @@ def main() -> None:
     sizes = [int(s) for s in args.sizes.split(",")]
     warnings.simplefilter("ignore", meshlap.MeshWarning)
     t0 = time.perf_counter()
-    geo = geodesics(sizes)
+    geo, own = geodesics(sizes)
     bvp = dirichlet()
     desc = descriptors()
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     lines = [f"`python benchmarks/bench_uses.py --sizes {args.sizes}`, {stamp}, "
              f"{platform.machine()}, 2 shared cores, {time.perf_counter() - t0:.0f} s in all.", "",
              "### Geodesic distance (heat method)", "", *geo, "",
+             "Noisy sphere meshes against their own exact geodesic distance (libigl's exact_geodesic, "
+             "MMP), the same three sources:", "", *own, "",
              "### Dirichlet problems", "", *bvp, "", "### Descriptors", "", *desc]
     if not args.no_write:
         write_section("bench_uses.py", lines)

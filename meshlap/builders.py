@@ -216,7 +216,11 @@ def pointwise_laplacian(V: Any, F: Any = None, h: float | None = None, tol: floa
 def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float | None = None, *,
                           denoise: bool | None = None, neighbors: int | None = None, merge_tol: float = 1e-6,
                           outlier_ratio: float = 10.0, **kwargs: Any) -> MeshLaplacian:
-    """The heat-kernel Laplacian of a point cloud (Belkin, Sun and Wang, SODA 2009).
+    """The Laplacian of a point cloud, chosen as for a mesh by :mod:`meshlap.policy`.
+
+    A surface's cloud gets linear FEM on every point's local Delaunay star (a third each) as its
+    symmetric pencil; a noisy one (or a curve's, a volume's) the heat-kernel Laplacian of
+    Belkin, Sun and Wang (SODA 2009; ``operator="kernel"`` asks for it):
 
     L f(w) = Σ_p m_p exp(-|p-w|²/4h) (f(p) - f(w)) / (h (4πh)^{k/2}), with the masses m_p of
     :func:`~meshlap.geometry.point_masses`, corrected as for a mesh (the Richardson kernel,
@@ -249,8 +253,8 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     neighbors, merge_tol, outlier_ratio
         See :func:`~meshlap.geometry.point_masses`.
     **kwargs
-        ``correction``, ``exact``, ``dtype``, ``matrix_free``, ``max_memory``, ``progress`` and
-        the accuracy options, as for :class:`~meshlap.MeshLaplacian`.
+        ``operator`` and the other options of :func:`laplacian`; ``correction``, ``exact``,
+        ``max_memory`` and the accuracy options of the kernel, as for :class:`~meshlap.MeshLaplacian`.
 
     Examples
     --------
@@ -268,7 +272,7 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
         P = as_geometry_input(P)[0]
     geo = point_cloud_geometry(P, k, denoise=denoise, neighbors=neighbors, merge_tol=merge_tol,
                                outlier_ratio=outlier_ratio)
-    return MeshLaplacian(geo, None, h=h, tol=tol, **kwargs)
+    return laplacian(geo, None, h, tol=tol, **kwargs)
 
 
 def point_cloud_matrices(P: Any, h: float | None = None, k: int = 2, *,

@@ -39,10 +39,10 @@ from .tuned import FEM_TIE as TIE
 __all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
            "simplicial_cells", "surface_noise", "welded"]
 
-#: ``mass`` values of :func:`fem_pencil`: ½(consistent + lumped) moved onto the lumped diagonal
-#: (the default), the lumped diagonal (the cotangent Laplacian's pencil), or the consistent mass
-#: moved onto it by the same congruence.
-FEM_MASSES = ("blend", "lumped", "consistent")
+#: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
+#: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
+#: it by the same congruence.
+FEM_MASSES = ("lumped", "blend", "consistent")
 
 
 def _halfedge_twins(F: np.ndarray) -> np.ndarray:
@@ -219,7 +219,9 @@ def _scatter(cells: np.ndarray, local: np.ndarray, n: int) -> sp.csr_matrix:
 
 def simplicial_cells(geo: Any) -> np.ndarray | None:
     """The geometry's cells as simplices: a surface's faces fan-triangulated, a curve's
-    segments, tetrahedra; None for a point cloud.
+    segments, tetrahedra; a surface cloud's local Delaunay stars (every point's own, so most
+    triangles come three times: :func:`fem_pencil` weights them by a third); None for other
+    point clouds.
 
     Examples
     --------
@@ -229,6 +231,8 @@ def simplicial_cells(geo: Any) -> np.ndarray | None:
     """
     if geo.faces is not None:
         return geo.faces.triangles()
+    if geo.source == "point cloud":
+        return geo._cache.get("stars")
     return geo.cells
 
 
@@ -339,7 +343,8 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     Parameters
     ----------
     geo : Geometry
-        A surface (faces of any size, fan-triangulated), curve or tetrahedral mesh.
+        A surface (faces of any size, fan-triangulated), curve or tetrahedral mesh, or a
+        surface's point cloud (its local Delaunay stars, each weighted by a third).
     mass : {"lumped", "blend", "consistent"}, default "lumped"
         The mass the stiffness pairs with (module docstring): "lumped", the cotangent
         Laplacian's pencil; "blend" and "consistent" are moved onto the lumped diagonal.
@@ -380,8 +385,9 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
         cells, lengths = intrinsic_delaunay(P, cells)
         gram = _gram_from_lengths(lengths)
     K, C, _ = cell_matrices(P, cells, gram)
-    S = -_scatter(cells, K, n)
-    Cm = _scatter(cells, C, n)
+    third = 1 / 3 if geo.source == "point cloud" else 1.0  # each star triangle from each corner
+    S = -_scatter(cells, third * K, n)
+    Cm = _scatter(cells, third * C, n)
     m = np.asarray(Cm.sum(axis=1)).ravel()
     if mass != "lumped":
         inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)

@@ -12,7 +12,12 @@ n vertex values to one vector of R^d per *element*, with the elements' measures 
   triangles) in any dimension;
 * point clouds of intrinsic dimension 2 keep the local Delaunay triangles of their masses
   (:func:`~meshlap.geometry.point_cloud_geometry`): those are the elements by default
-  (``method="auto"``), as for a mesh; a cloud along a curve (k = 1) is joined to each point's
+  (``method="auto"``), as for a mesh, but measured in the mean tangent plane of their corners
+  (the top k eigenvectors of the sum of the corners' projectors onto their principal axes): a
+  cloud samples a surface, and the triangles' tilt by the noise across it would lengthen every
+  path (by 2% on a sphere of 10,000 points with 0.5% radial noise), while the mean plane is the
+  triangle's own to O(h²) on a smooth surface;
+  a cloud along a curve (k = 1) is joined to each point's
   nearest neighbour on either side along its tangent, the neighbours that set its mass;
 * other point clouds (and ``method="least squares"``): the elements are the points, with
   their masses; the gradient at a point is
@@ -27,6 +32,7 @@ weak form of ∫ φ div X = -∫ ∇φ · X (no boundary term: natural boundary 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -109,12 +115,18 @@ def _curve_edges(geo: Geometry) -> np.ndarray:
     return np.unique(e[e[:, 0] != e[:, 1]], axis=0)
 
 
-def _simplex_gradient(P: np.ndarray, cells: np.ndarray) -> Gradient:
+def _simplex_gradient(P: np.ndarray, cells: np.ndarray, tangent: np.ndarray | None = None) -> Gradient:
     m, c = cells.shape
     k, d = c - 1, P.shape[1]
     E = P[cells[:, 1:]] - P[cells[:, :1]]  # (m, k, d)
+    if tangent is not None:  # the edges' components in the plane of the corners' mean projector
+        T = tangent[cells]  # (m, c, d, k)
+        frame = np.linalg.eigh(np.einsum("mcdk,mcek->mde", T, T))[1][:, :, -k:]
+        E = np.einsum("mid,mda,mea->mie", E, frame, frame)
+        vol = np.sqrt(np.maximum(np.linalg.det(np.einsum("mid,mjd->mij", E, E)), 0.0)) / math.factorial(k)
+    else:
+        vol = simplex_volumes(P, cells)
     gram = np.einsum("mid,mjd->mij", E, E)
-    vol = simplex_volumes(P, cells)
     good = vol > 1e-12 * max(float(vol.max()), 1e-300)
     B = np.zeros((m, k, d))  # ∇λ_j, j = 1..k; degenerate cells keep 0 and measure 0
     B[good] = np.linalg.solve(gram[good], E[good])
@@ -184,7 +196,9 @@ def gradient_operator(geometry: Any, method: str = "auto") -> Gradient:
         raise MeshError(f"method must be 'auto', 'simplices' or 'least squares'; got {method!r}")
     cells = _simplices(geo)
     if method != "least squares" and cells is not None:
-        return _simplex_gradient(geo.points, cells)
+        # a cloud's local triangles are measured in their corners' mean tangent plane
+        tangent = geo._pca()[0][:, :, :geo.dim] if geo.source == "point cloud" else None
+        return _simplex_gradient(geo.points, cells, tangent)
     if method == "simplices":
         raise MeshError("this geometry has no simplices (a point cloud of intrinsic dimension other than 2)")
     return _cloud_gradient(geo)

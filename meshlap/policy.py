@@ -23,7 +23,17 @@ The policy for ``operator="auto"`` has no tuned threshold:
   step that averages it out (a scan's fine detail reads as noise too, so this is the user's
   call, not a threshold's); the kernel keeps what FEM cannot give: ``op @ f``,
   point-wise convergent rows;
-- an input without cells (a point cloud) gets the "kernel" pencil, the only one it can have;
+- a surface's point cloud gets the "fem" pencil on every point's local Delaunay star, each
+  triangle weighted by a third (most come from each of their three corners): the triangles
+  robust-laplacian's point-cloud Laplacian starts from, without its tufted cover; on 16,000
+  random sphere points 0.20% off on eigenvalues 1-9 against the kernel's 0.29% and
+  robust-laplacian's 7.8%;
+- a cloud whose normal noise the geometry measured and projected away
+  (:func:`meshlap.geometry.pointcloud.noise_ratio`, recorded) gets the "kernel" pencil: the
+  projected points keep a tangential jitter that makes the local triangles' shapes random,
+  while the kernel's width averages over many points (1% radial noise, 16,000 points: 0.26%
+  against FEM's 0.75%), as does a cloud along a curve or filling a volume, which has no local
+  triangles;
 - a kernel width ``h`` or an option of the kernel (``correction``, ``quadrature``, ...) asks for
   the kernel: "paper" with ``correction="none"``, "galerkin" with ``quadrature="galerkin"``,
   else "kernel".
@@ -50,7 +60,12 @@ Operator = Literal["auto", "fem", "kernel", "galerkin", "paper"]
 _REASONS = {
     "cells": "the input has cells: linear FEM on them (intrinsic Delaunay, lumped mass), point-wise rows "
              "fitted by the kernel",
-    "cloud": "the input has no cells (a point cloud): the corrected heat kernel on the points",
+    "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
+             "each), point-wise rows fitted by the kernel",
+    "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
+             "heat kernel, whose width averages what the projection leaves",
+    "cloud": "a point cloud without local triangles (a curve or a volume): the corrected heat kernel "
+             "on the points",
     "h": "a kernel width h was given: the corrected heat kernel at that width",
     "options": "options of the kernel were given ({}): the kernel they configure",
     "asked": "operator={!r} was asked for",
@@ -117,7 +132,11 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         raise MeshError(f"operator must be one of {', '.join(map(repr, OPERATORS))}; got {operator!r}")
     opts = {k: v for k, v in (kernel_options or {}).items() if v is not None}
     has_cells = geo.source != "point cloud" and (geo.faces is not None or geo.cells is not None)
+    stars = geo.source == "point cloud" and geo._cache.get("stars") is not None
+    projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
+    if "noise_ratio" in geo._cache:
+        measured["normal noise / spacing²"] = round(float(geo._cache["noise_ratio"]), 4)
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
         noise = surface_noise(geo) if opts.get("denoise") else 0.0  # 0.6 s of CPU at 100k vertices
@@ -134,11 +153,13 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
             operator, reason = "kernel", _REASONS["options"].format(", ".join(kernel))
         elif h is not None:
             operator, reason = "kernel", _REASONS["h"]
+        elif has_cells or stars and not projected:
+            operator, reason = "fem", _REASONS["cells" if has_cells else "stars"]
         else:
-            operator, reason = ("fem", _REASONS["cells"]) if has_cells else ("kernel", _REASONS["cloud"])
+            operator, reason = "kernel", _REASONS["noisy" if stars else "cloud"]
     else:
         reason = _REASONS["asked"].format(operator)
-    if operator in ("fem", "galerkin") and not has_cells:
+    if operator == "fem" and not (has_cells or stars) or operator == "galerkin" and not has_cells:
         raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \

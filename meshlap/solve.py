@@ -200,8 +200,11 @@ class PoissonSolver:
         lab[P] = label
         anchored = np.zeros(ncomp, dtype=bool)
         anchored[lab[self.fixed][lab[self.fixed] >= 0]] = True
-        self._label = lab[self.free]
-        self._floating = np.flatnonzero(~anchored)
+        # each floating part's free vertices, and the vertices without mass, found once for every solve
+        self._parts: list[Any] = [np.flatnonzero(lab[self.free] == c) for c in np.flatnonzero(~anchored)]
+        if len(self._parts) == 1 and len(self._parts[0]) == len(self.free):
+            self._parts = [slice(None)]  # one part, all free: no copies
+        self._missing = np.setdiff1d(np.flatnonzero(mass == 0), self.fixed)
         if solver == "auto":
             solver = "direct" if S.nnz <= _SPARSE_ROW_MAX * n else "cg"
         self.solver = solver
@@ -209,8 +212,7 @@ class PoissonSolver:
         with _one_blas_thread():
             if solver == "direct":
                 # one vertex of each floating part pinned at 0: A restricted to the others is SPD
-                first = np.array([np.flatnonzero(self._label == c)[0] for c in self._floating],
-                                 dtype=np.int64)
+                first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
                 self._keep = np.setdiff1d(np.arange(len(self.free)), first)
                 self._lu = _factor(A[self._keep][:, self._keep])
             else:
@@ -250,7 +252,9 @@ class PoissonSolver:
                 raise MeshError(f"values must hold one finite value per fixed vertex ({len(self.fixed)}); "
                                 f"got shape {g.shape}")
             phi[self.fixed] = g.reshape(len(self.fixed), -1)
-        rhs = B[self.free] + (self._S @ phi)[self.free]
+            rhs = B[self.free] + (self._S @ phi)[self.free]
+        else:
+            rhs = B[self.free]
         self._compatible(rhs)
         if self.solver == "direct":
             x = np.zeros_like(rhs)
@@ -260,27 +264,24 @@ class PoissonSolver:
                 x, it = _block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000)
             self.iterations.append(it)
         m = self.mass[self.free]
-        for c in self._floating:  # zero mean on each part without Dirichlet data
-            sel = self._label == c
+        for sel in self._parts:  # zero mean on each part without Dirichlet data
             x[sel] -= (m[sel] @ x[sel]) / m[sel].sum()
         phi[self.free] = x
-        missing = np.setdiff1d(np.flatnonzero(self.mass == 0), self.fixed)
-        if len(missing):  # vertices without mass: the kernel-weighted mean of their row
+        if len(self._missing):  # vertices without mass: the kernel-weighted mean of their row
             known = np.flatnonzero(self.mass > 0)
-            phi[missing] = _extend(self.op, known, phi[known])[missing]
+            phi[self._missing] = _extend(self.op, known, phi[known])[self._missing]
         return phi.reshape(b.shape)
 
     def _compatible(self, rhs: np.ndarray) -> None:
         """Project the data of parts without Dirichlet vertices onto the range of S (in place)."""
-        for c in self._floating:
-            sel = self._label == c
+        for sel in self._parts:
             total = rhs[sel].sum(axis=0)
             scale = np.abs(rhs[sel]).sum(axis=0)
             if np.any(np.abs(total) > 1e-8 * np.maximum(scale, 1e-300)):
                 warnings.warn("the data of a part without Dirichlet vertices do not integrate to zero "
                               "(∫f ≠ ∮q): solving for their projection", MeshWarning,
                               stacklevel=user_stacklevel())
-            rhs[sel] -= total / sel.sum()
+            rhs[sel] -= total / len(rhs[sel])
 
 
 def poisson(op: Any, f: Any = 0.0, *, dirichlet: Indexed = None, neumann: Indexed = None,

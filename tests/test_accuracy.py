@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import meshlap
-from meshlap import baselines, shapes, spectral
+from meshlap import baselines, samples, shapes, spectral
 from meshlap.assembly import grid as kernel
 from meshlap.corrections import moment_correction
 
@@ -281,3 +281,21 @@ def test_error_estimate_follows_the_exact_error():
     f, lap = shapes.sphere_functions()["x^2"]
     ratio = np.linalg.norm(op.error_estimate(f(V))) / np.linalg.norm(op @ f(V) - lap(V))
     assert 0.5 < ratio < 2
+
+
+def _largest_error(op, exact, k=10):
+    lam = spectral.eigs(op, k, tol=1e-6)[0]
+    return float(np.abs(lam[1:k] / exact[1:k] - 1).max())
+
+
+def test_the_kernel_on_a_cube_of_tetrahedra_and_on_a_sphere_cloud():
+    # measured (kept from the former resolution tests): the kernel on a 13³ cube of tetrahedra,
+    # Neumann, 2.6% against LaPy's 2.8%; on 8,000 random sphere points its first 16 eigenvalues
+    # 0.50% off (robust-laplacian on 16,000 points: 7.8%)
+    V, T = samples.cube_tetrahedra(12)
+    op = meshlap.laplacian(V, T, k=3, operator="kernel")
+    cube = math.pi**2 * np.array([0, 1, 1, 1, 2, 2, 2, 3, 4, 4], float)
+    assert op.correction == "richardson" and _largest_error(op, cube) < 0.03
+    P = samples.sphere_points(8000, "random", seed=0)
+    sphere = np.array([deg * (deg + 1) for deg in range(4) for _ in range(2 * deg + 1)], float)
+    assert _largest_error(meshlap.point_cloud_laplacian(P, operator="kernel"), sphere, 16) < 0.01

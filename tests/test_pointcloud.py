@@ -208,7 +208,7 @@ def test_arc_distance_needs_normals():
     P, _, _ = samples.flat_torus_points(400, seed=0)  # k = 2 in R⁴: codimension 2
     with pytest.raises(meshlap.MeshError, match="arc_distance needs normals"):
         meshlap.point_cloud_laplacian(P, arc_distance=True)
-    op = meshlap.point_cloud_laplacian(samples.sphere_points(800, "random", seed=0))
+    op = meshlap.point_cloud_laplacian(samples.sphere_points(800, "random", seed=0), operator="kernel")
     assert op.correction == "richardson" and op.arc_distance and op.pointwise
 
 
@@ -280,7 +280,7 @@ def test_coarse_torus_cloud_keeps_its_width_and_its_accuracy():
     # edges, where the point masses no longer integrate the kernel), 33% off (36% projected);
     # stopped at half the default, 5.0% against robust-laplacian's 6.7% (benchmarks/RESULTS.md)
     P = samples.torus_points(1000, "random")
-    op = meshlap.point_cloud_laplacian(P)
+    op = meshlap.point_cloud_laplacian(P, operator="kernel")
     assert op.geometry.notes == ""
     hv = op.widths.per_point(len(P))
     assert hv.min() >= meshlap.tuned.CLOUD_CAP_FLOOR * op.h * (1 - 1e-12) and hv.max() < op.h

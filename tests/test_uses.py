@@ -15,6 +15,7 @@ import meshlap
 from meshlap import HeatDistance, geodesic_distance, harmonic, poisson
 from meshlap.baselines import cotangent
 from meshlap.descriptors import project, reconstruct, shape_dna, wave_kernel_signature
+from meshlap.gradients import gradient_operator
 from meshlap.solve import PoissonSolver, boundary_measure
 
 
@@ -37,13 +38,13 @@ def sphere_mesh_op():
 
 def test_sphere_mesh_distances(sphere_mesh_op):
     V, op = sphere_mesh_op
-    D = HeatDistance(op).compute_many([0, 1])  # measured: mean 0.009, max 0.028
+    D = HeatDistance(op).compute_many([0, 1])  # measured: mean 0.0013, max 0.014
     mean, worst = _rel(D, _great_circle(V, [0, 1]))
-    assert mean < 0.015 and worst < 0.05
+    assert mean < 0.004 and worst < 0.03
 
 
-# measured: mean 0.009, max 0.028 (Fibonacci points); 0.009, 0.053 (random, 0.5% radial noise)
-@pytest.mark.parametrize("noise, tol", [(0.0, (0.015, 0.05)), (0.005, (0.015, 0.1))])
+# measured: mean 0.0011, max 0.012 (Fibonacci points); 0.0066, 0.059 (random, 0.5% radial noise)
+@pytest.mark.parametrize("noise, tol", [(0.0, (0.005, 0.03)), (0.005, (0.015, 0.1))])
 def test_sphere_cloud_distances(noise, tol):
     P = meshlap.shapes.fibonacci_sphere(2000)
     if noise:
@@ -58,7 +59,7 @@ def test_flat_square_is_euclidean():
     c = int(np.argmin(np.linalg.norm(V, axis=1)))
     d = HeatDistance(meshlap.laplacian(V, F)).compute(c)
     mean, worst = _rel(d[None], np.linalg.norm(V - V[c], axis=1)[None], near=0.1)
-    assert mean < 0.015 and worst < 0.15  # measured 0.009 / 0.088
+    assert mean < 0.015 and worst < 0.15  # measured 0.008 / 0.085
 
 
 def test_curve_and_its_cloud_in_r5():
@@ -69,10 +70,18 @@ def test_curve_and_its_cloud_in_r5():
         assert mean < 0.01 and worst < 0.02  # the chords of 400 steps: 0.5%
 
 
+def test_a_noisy_cloud_s_elements_lie_in_its_tangent_planes():
+    V, _ = meshlap.shapes.plane(2000, kind="stratified")
+    bumps = 0.2 * (2 / np.sqrt(2000)) * np.random.default_rng(0).standard_normal(len(V))
+    grad = gradient_operator(meshlap.point_cloud_laplacian(V + np.outer(bumps, [0, 0, 1])))
+    # the square's area 4, not the bumps' (measured 0.19% over; 0.82% with the triangles in R³)
+    assert abs(grad.w.sum() / 4 - 1) < 0.004
+
+
 def test_tetrahedra_convex_is_euclidean():
     V, T = meshlap.samples.cube_tetrahedra(10)
     s = int(np.argmin(np.linalg.norm(V - 0.5, axis=1)))
-    d = geodesic_distance(meshlap.laplacian(V, T, k=3), s)  # measured 0.039 / 0.136
+    d = geodesic_distance(meshlap.laplacian(V, T, k=3), s)  # measured 0.044 / 0.147
     mean, worst = _rel(d[None], np.linalg.norm(V - V[s], axis=1)[None], near=0.2)
     assert mean < 0.06 and worst < 0.2
 
@@ -113,12 +122,12 @@ def disc():
     return V, F, edge
 
 
-@pytest.mark.parametrize("kind, tol", [("cot", 5e-4), ("default", 0.03)])
+@pytest.mark.parametrize("kind, tol", [("cot", 5e-4), ("default", 1e-3)])
 def test_harmonic_and_poisson_on_a_disc(disc, kind, tol):
     V, F, edge = disc
     op = cotangent(V, F) if kind == "cot" else meshlap.laplacian(V, F)
     x, y = V[:, 0], V[:, 1]
-    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4, heat kernel 0.014
+    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4; default (FEM) 2e-4, Poisson 4.6e-4
     assert np.abs(u - (x**2 - y**2)).max() < tol
     u = poisson(op, 4.0, dirichlet={int(i): x[i] ** 2 + y[i] ** 2 for i in edge})
     assert np.abs(u - (x**2 + y**2)).max() < tol
@@ -129,9 +138,12 @@ def test_neumann_problem_and_its_compatibility(disc):
     op = meshlap.laplacian(V, F)
     x = V[:, 0]
     u = poisson(op, 0.0, neumann=(edge, x[edge]))  # ∂x/∂n = x on the unit circle; x has mean 0
-    assert np.abs(u - x).max() < 0.03  # measured 0.014
+    assert np.abs(u - x).max() < 1e-3  # measured 2e-4
     with pytest.warns(meshlap.MeshWarning, match="integrate to zero"):
-        poisson(op, 1.0)
+        u = poisson(op, 1.0)
+    # solved for the data less their mean: every row of the system holds, with one residual
+    residual = -op.S @ u - (-op.mass)
+    assert np.ptp(residual) < 1e-9 * op.mass.max()
 
 
 def test_harmonic_on_the_disc_s_cloud(disc):
@@ -232,7 +244,7 @@ def test_cli_distance(tmp_path, capsys):
     assert "indices must lie in [0, 799]" in capsys.readouterr().err
 
 
-def test_unreferenced_vertex_gets_its_neighbour_s_distance():
+def test_unreferenced_vertex_gets_its_neighbours_fitted_distance():
     V, F = meshlap.shapes.sphere(800, seed=0)
     V = np.vstack([V, [[0.0, 0.0, 1.01]]])  # in no face
     with warnings.catch_warnings():
@@ -240,6 +252,6 @@ def test_unreferenced_vertex_gets_its_neighbour_s_distance():
         op = meshlap.laplacian(V, F)
     d = geodesic_distance(op, 0)
     exact = _great_circle(V, [0])[0]
-    assert np.isfinite(d).all() and abs(d[-1] - exact[-1]) < 0.1  # measured 0.02 at n = 1500
+    assert np.isfinite(d).all() and abs(d[-1] - exact[-1]) < 0.05  # measured 0.019, the mean error
     with pytest.raises(meshlap.MeshError, match="no element"):
         geodesic_distance(op, 800)

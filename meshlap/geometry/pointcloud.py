@@ -123,7 +123,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         ``degenerate``, ``insecure`` (point counts), ``boundary`` ((n,) bool: cells that
         stay open, e.g. on the rim of an open surface), ``triangles`` (k = 2: the local
         Delaunay triangles, each once from its corner of smallest index; a triangle soup,
-        not a manifold mesh, used to precondition eigensolvers).
+        not a manifold mesh, used to precondition eigensolvers), ``stars`` (k = 2: every
+        point's own star, its centre first: most triangles three times, once from each corner).
 
     Examples
     --------
@@ -185,13 +186,11 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
             tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
             in_blocks(_masses2, len(todo), Q, nbr, counts, kt, todo, m, vor, st, flat, tri)
             open_cell[todo] = ~np.isfinite(vor)
-            # each triangle of the local stars once, from its corner of smallest index
+            # every point's local Delaunay star, its centre first
             r, slot = np.nonzero(tri[:, :, 0] >= 0)
-            a = nbr[r, tri[r, slot, 0]]
-            b = nbr[r, tri[r, slot, 1]]
-            own = (todo[r] < a) & (todo[r] < b)
             last[todo] = it
-            star_parts.append((it, np.column_stack([todo[r], a, b])[own]))
+            star = np.column_stack([todo[r], nbr[r, tri[r, slot, 0]], nbr[r, tri[r, slot, 1]]])
+            star_parts.append((it, star))
         elif k == 3:
             m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
             in_blocks(_masses3, len(todo), Q, nbr, counts, kt, todo, m, st, hull)
@@ -246,7 +245,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     # a recomputed star replaces the earlier one
     tris = [t[last[t[:, 0]] == it] for it, t in star_parts]
-    triangles = uniq[np.concatenate(tris)] if tris else np.zeros((0, 3), np.int64)
+    stars = uniq[np.concatenate(tris)] if tris else np.zeros((0, 3), np.int64)
+    triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])]  # each once
     full = mass[np.searchsorted(uniq, rep)] / share
     boundary = open_cell[np.searchsorted(uniq, rep)]
     positive = full[full > 0]
@@ -259,6 +259,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "insecure": insecure,
         "boundary": boundary,
         "triangles": triangles,
+        "stars": stars,
     }
     return full, info
 
@@ -389,6 +390,8 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     cells = info.get("triangles") if k == 2 else None
     geo = Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
                    source="point cloud", notes=notes)
+    if k == 2:  # the cells of the cloud's FEM pencil (meshlap.fem.simplicial_cells)
+        geo._cache["stars"] = info["stars"]
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
