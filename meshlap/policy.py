@@ -126,7 +126,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     >>> import meshlap
     >>> g = meshlap.geometry.point_cloud_geometry(meshlap.samples.sphere_points(500), 2)
     >>> decide(g).operator, decide(g, h=0.01).reason.startswith("a kernel width")
-    ('kernel', True)
+    ('fem', True)
     """
     if operator not in OPERATORS:
         raise MeshError(f"operator must be one of {', '.join(map(repr, OPERATORS))}; got {operator!r}")

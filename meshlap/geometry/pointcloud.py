@@ -396,6 +396,6 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
         geo._cache["input_points"] = raw
-    if ratio is not None:  # of the points as given: the resolution report reads it
+    if ratio is not None:  # of the points as given: op.decision records it
         geo._cache["noise_ratio"] = ratio
     return geo
