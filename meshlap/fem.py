@@ -37,7 +37,7 @@ from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
 __all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
-           "simplicial_cells", "surface_noise", "welded"]
+           "simplicial_cells", "surface_noise", "voronoi_areas", "welded"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -162,6 +162,43 @@ def _gram_from_lengths(L: np.ndarray) -> np.ndarray:
     G[:, 0, 0], G[:, 1, 1] = l01**2, l20**2
     G[:, 0, 1] = G[:, 1, 0] = 0.5 * (l01**2 + l20**2 - l12**2)
     return G
+
+
+def voronoi_areas(lengths: np.ndarray) -> np.ndarray:
+    """Each triangle corner's mixed Voronoi area (Meyer, Desbrun, Schröder and Barr 2003).
+
+    In a triangle without an obtuse angle, corner i gets the part of the triangle nearer to it
+    than to the other corners (its circumcentric area, (l_ij² cot θ_k + l_ik² cot θ_j) / 8); in
+    an obtuse one, whose circumcentre lies outside, the obtuse corner gets half the area and the
+    others a quarter. The three parts sum to the area.
+
+    Parameters
+    ----------
+    lengths : (m, 3) ndarray
+        ``lengths[f, c]`` the length of the side from corner c to corner c + 1.
+
+    Returns
+    -------
+    (m, 3) ndarray
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> voronoi_areas(np.array([[1.0, 1.0, 1.0], [1.0, np.sqrt(2), 1.0]])).round(4).tolist()
+    [[0.1443, 0.1443, 0.1443], [0.25, 0.125, 0.125]]
+    """
+    L = np.asarray(lengths, dtype=np.float64)
+    l2 = L * L
+    s = L.sum(axis=1) / 2
+    area = np.sqrt(np.maximum(s * (s - L[:, 0]) * (s - L[:, 1]) * (s - L[:, 2]), 0.0))
+    prev = np.roll(l2, 1, axis=1)  # the side ending at corner c
+    across = np.roll(l2, -1, axis=1)  # the side opposite corner c
+    dot = (l2 + prev - across) / 2  # |side c| |side c-1| cos θ_c
+    cot = dot / np.maximum(2 * area, 1e-300)[:, None]  # cos / sin, with 2 area = |c| |c-1| sin θ_c
+    circum = (l2 * np.roll(cot, -2, axis=1) + prev * np.roll(cot, -1, axis=1)) / 8
+    obtuse = dot < 0
+    split = np.where(obtuse, area[:, None] / 2, area[:, None] / 4)
+    return np.where(obtuse.any(axis=1)[:, None], split, circum)
 
 
 def cell_matrices(P: np.ndarray | None, cells: np.ndarray, gram: np.ndarray | None = None
@@ -380,15 +417,19 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     cells = rep[cells]
     distinct = np.all(np.sort(cells, axis=1)[:, 1:] != np.sort(cells, axis=1)[:, :-1], axis=1)
     cells = cells[distinct]
-    gram = None
+    gram = lengths = None
     if cells.shape[1] == 3 and intrinsic:
         cells, lengths = intrinsic_delaunay(P, cells)
         gram = _gram_from_lengths(lengths)
+    elif cells.shape[1] == 3:
+        lengths = np.linalg.norm(P[np.roll(cells, -1, axis=1)] - P[cells], axis=2)
     K, C, _ = cell_matrices(P, cells, gram)
     third = 1 / 3 if geo.source == "point cloud" else 1.0  # each star triangle from each corner
     S = -_scatter(cells, third * K, n)
     Cm = _scatter(cells, third * C, n)
     m = np.asarray(Cm.sum(axis=1)).ravel()
+    if mass == "lumped" and lengths is not None:
+        m = np.bincount(cells.ravel(), third * voronoi_areas(lengths).ravel(), minlength=n)
     if mass != "lumped":
         inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
         w = 0.25 if mass == "blend" else 0.5
