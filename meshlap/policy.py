@@ -3,7 +3,7 @@
 The builders are mechanisms, each deterministic and named (``operator=``):
 
 ========== =================================================================================
-"fem"      linear finite elements on the mesh's cells, intrinsic Delaunay, lumped mass
+"fem"      linear finite elements on the mesh's cells, intrinsic Delaunay, lumped (Voronoi) mass
            (:mod:`meshlap.fem`): the symmetric pencil ``(S, M)``
 "kernel"   the corrected heat kernel on the vertices (Richardson kernel, arc distances, mirror
            images; :class:`meshlap.MeshLaplacian`)
@@ -58,7 +58,7 @@ OPERATORS = ("auto", "fem", "kernel", "galerkin", "paper")
 Operator = Literal["auto", "fem", "kernel", "galerkin", "paper"]
 
 _REASONS = {
-    "cells": "the input has cells: linear FEM on them (intrinsic Delaunay, lumped mass), point-wise rows "
+    "cells": "the input has cells: linear FEM on them (intrinsic Delaunay, Voronoi mass), point-wise rows "
              "fitted by the kernel",
     "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
              "each), point-wise rows fitted by the kernel",
