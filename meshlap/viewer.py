@@ -161,7 +161,7 @@ def show_modes(op: Any, k: int = 6, *, eig: tuple[np.ndarray, np.ndarray] | None
     >>> V, F = meshlap.shapes.sphere(500, seed=0)
     >>> plot = show_modes(meshlap.laplacian(V, F), 3)
     >>> [obj.text for obj in plot.objects if hasattr(obj, "text")][0]   # l(l + 1) = 2
-    'φ1  λ = 1.998'
+    'φ1  λ = 2'
     """
     from .inputs import boundary_triangles
     from .spectral import eigs
