@@ -127,7 +127,7 @@ def test_harmonic_and_poisson_on_a_disc(disc, kind, tol):
     V, F, edge = disc
     op = cotangent(V, F) if kind == "cot" else meshlap.laplacian(V, F)
     x, y = V[:, 0], V[:, 1]
-    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4; default (FEM) 2e-4, Poisson 4.6e-4
+    u = harmonic(op, edge, (x**2 - y**2)[edge])  # measured: cot 2e-4; default (FEM) 2e-4, Poisson 4.6e-6
     assert np.abs(u - (x**2 - y**2)).max() < tol
     u = poisson(op, 4.0, dirichlet={int(i): x[i] ** 2 + y[i] ** 2 for i in edge})
     assert np.abs(u - (x**2 + y**2)).max() < tol
@@ -154,9 +154,10 @@ def test_harmonic_on_the_disc_s_cloud(disc):
         warnings.simplefilter("ignore", meshlap.MeshWarning)
         u = harmonic(meshlap.point_cloud_laplacian(V), rim, (x**2 - y**2)[rim])
     err = np.abs(u - (x**2 - y**2))
-    # the cloud's heat-kernel operator has a boundary layer under Dirichlet data: measured 0.040
-    # within r ≤ 0.5, 0.20 at r = 0.96 (the mesh's operator: 0.014 everywhere, cotangent 2e-4)
-    assert err[np.hypot(x, y) <= 0.5].max() < 0.06 and err.max() < 0.3
+    # the cloud's FEM pencil on its local Delaunay stars: measured 2.1e-4 everywhere, as the mesh's
+    # (the kernel's pencil had a boundary layer under Dirichlet data: 0.040 within r ≤ 0.5, 0.20 at
+    # r = 0.96)
+    assert err.max() < 1e-3
 
 
 def test_solver_reuses_its_factorisation_for_many_right_hand_sides(disc):
