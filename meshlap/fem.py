@@ -16,8 +16,8 @@ The default mass is lumped: on triangles each vertex's mixed Voronoi area (Meyer
 Schröder and Barr 2003; libigl's default mass, with the cotangent stiffness its pencil), on
 segments and tetrahedra the row sums D = diag(C·1) of the consistent mass C. Read point-wise,
 M⁻¹ S f, the Voronoi areas keep the cotangent Laplacian's accuracy at the vertices (0.37% on a
-2,000-vertex sphere, where D gives 8.2%). The option "blend" takes ½(C + D): since D − C is a graph Laplacian with
-weights C_ij > 0, C ⪯ ½(C + D) ⪯ D, so by min-max every eigenvalue of the blended pencil lies
+2,000-vertex sphere, where D gives 8.2%). The option "blend" takes ½(C + D): since D − C is a
+graph Laplacian with weights C_ij > 0, C ⪯ ½(C + D) ⪯ D, so by min-max every eigenvalue of the blended pencil lies
 between the lumped one and the consistent (Galerkin, upper-bound) one, and on a uniform mesh
 their leading O(ē²λ) terms, equal and opposite, cancel. It is moved onto the diagonal D (what
 every solver here expects) by the congruence S' = Bᵀ S B, B = I + ¼ D⁻¹(D − C), exact to first
