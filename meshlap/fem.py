@@ -17,11 +17,12 @@ Schröder and Barr 2003; libigl's default mass, with the cotangent stiffness its
 segments and tetrahedra the row sums D = diag(C·1) of the consistent mass C. Read point-wise,
 M⁻¹ S f, the Voronoi areas keep the cotangent Laplacian's accuracy at the vertices (0.37% on a
 2,000-vertex sphere, where D gives 8.2%). The option "blend" takes ½(C + D): since D − C is a
-graph Laplacian with weights C_ij > 0, C ⪯ ½(C + D) ⪯ D, so by min-max every eigenvalue of the blended pencil lies
-between the lumped one and the consistent (Galerkin, upper-bound) one, and on a uniform mesh
-their leading O(ē²λ) terms, equal and opposite, cancel. It is moved onto the diagonal D (what
-every solver here expects) by the congruence S' = Bᵀ S B, B = I + ¼ D⁻¹(D − C), exact to first
-order in D⁻¹(D − C) = O(ē²λ) on a mode of eigenvalue λ; it keeps one zero eigenvalue per part.
+graph Laplacian with weights C_ij > 0, C ⪯ ½(C + D) ⪯ D, so by min-max every eigenvalue of the
+blended pencil lies between the lumped one and the consistent (Galerkin, upper-bound) one, and
+on a uniform mesh their leading O(ē²λ) terms, equal and opposite, cancel. It is moved onto the
+diagonal D (what every solver here expects) by the congruence S' = Bᵀ S B, B = I + ¼ D⁻¹(D − C),
+exact to first order in D⁻¹(D − C) = O(ē²λ) on a mode of eigenvalue λ; it keeps one zero
+eigenvalue per part.
 Measured against FEM refined 16× (docs/default.md): 4× ahead of the lumped mass on a random
 sphere, but 1.2-2× behind it on coarse real meshes (spot, fandisk, decimated spot), whose
 error is the shape the coarse elements miss, not the mass: hence not the default.
