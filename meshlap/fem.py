@@ -270,11 +270,14 @@ def simplicial_cells(geo: Any) -> np.ndarray | None:
     >>> simplicial_cells(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(100, seed=0))).shape[1]
     3
     """
-    if geo.faces is not None:
-        return geo.faces.triangles()
-    if geo.source == "point cloud":
-        return geo._cache.get("stars")
-    return geo.cells
+    return _weighted_cells(geo)[0]
+
+
+def _weighted_cells(geo: Any) -> tuple[np.ndarray | None, float]:
+    # cells the geometry's own stage chose for FEM (a cloud's stars, each counted a third) first
+    if "fem_cells" in geo._cache:
+        return geo._cache["fem_cells"]
+    return (geo.faces.triangles() if geo.faces is not None else geo.cells), 1.0
 
 
 def welded(geo: Any) -> np.ndarray | None:
@@ -413,7 +416,7 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     """
     if mass not in FEM_MASSES:
         raise MeshError(f"mass must be one of {', '.join(FEM_MASSES)}; got {mass!r}")
-    cells = simplicial_cells(geo)
+    cells, weight = _weighted_cells(geo)
     if cells is None:
         raise MeshError(f"linear FEM needs cells (faces, segments or tetrahedra); this {geo.source} has none")
     P, n = (geo.points if points is None else points), geo.n_points
@@ -428,12 +431,11 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     elif cells.shape[1] == 3:
         lengths = np.linalg.norm(P[np.roll(cells, -1, axis=1)] - P[cells], axis=2)
     K, C, _ = cell_matrices(P, cells, gram)
-    third = 1 / 3 if geo.source == "point cloud" else 1.0  # each star triangle from each corner
-    S = -_scatter(cells, third * K, n)
-    Cm = _scatter(cells, third * C, n)
+    S = -_scatter(cells, weight * K, n)
+    Cm = _scatter(cells, weight * C, n)
     m = np.asarray(Cm.sum(axis=1)).ravel()
     if mass == "lumped" and lengths is not None:
-        m = np.bincount(cells.ravel(), third * voronoi_areas(lengths).ravel(), minlength=n)
+        m = np.bincount(cells.ravel(), weight * voronoi_areas(lengths).ravel(), minlength=n)
     if mass != "lumped":
         inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
         w = 0.25 if mass == "blend" else 0.5

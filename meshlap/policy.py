@@ -132,7 +132,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         raise MeshError(f"operator must be one of {', '.join(map(repr, OPERATORS))}; got {operator!r}")
     opts = {k: v for k, v in (kernel_options or {}).items() if v is not None}
     has_cells = geo.source != "point cloud" and (geo.faces is not None or geo.cells is not None)
-    stars = geo.source == "point cloud" and geo._cache.get("stars") is not None
+    stars = geo.source == "point cloud" and "fem_cells" in geo._cache
     projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
     if "noise_ratio" in geo._cache:

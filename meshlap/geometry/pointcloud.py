@@ -390,8 +390,8 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     cells = info.get("triangles") if k == 2 else None
     geo = Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
                    source="point cloud", notes=notes)
-    if k == 2:  # the cells of the cloud's FEM pencil (meshlap.fem.simplicial_cells)
-        geo._cache["stars"] = info["stars"]
+    if k == 2:  # the FEM pencil's cells and their weight: each triangle is in its three corners' stars
+        geo._cache["fem_cells"] = (info["stars"], 1 / 3)
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
