@@ -119,20 +119,22 @@ def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.n
 
 def count_shift(lam: np.ndarray, k: int, floor: float) -> tuple[float, int]:
     """The shift σ for the count and how many of the computed values ``lam`` (ascending, at
-    least k) lie below it: halfway from λ_k to the first computed value that is not its tie
-    (within ``_TIE`` of λ_k's scale), or that far above λ_k where every computed value ties.
+    least k) lie below it: halfway from λ_k's last tie (within ``_TIE`` of λ_k's scale) to the
+    first computed value that is not one, or ``_TIE`` above λ_k where every computed value ties.
 
     Examples
     --------
     >>> count_shift(np.array([0.0, 2.0, 2.0, 2.0, 6.0]), 2, 0.01)   # λ_2's ties join the count
     (4.0, 4)
+    >>> count_shift(np.array([0.0, 2.0, 2.0015, 2.003]), 2, 0.01)   # σ above the last tie
+    (2.00225, 3)
     """
     top = float(lam[k - 1])
     tie = _TIE * max(abs(top), floor)
     above = np.flatnonzero(lam[k:] > top + tie)
     if len(above):
         j = k + int(above[0])
-        return 0.5 * (top + float(lam[j])), j
+        return 0.5 * (float(lam[j - 1]) + float(lam[j])), j
     return top + tie, len(lam)
 
 

@@ -122,6 +122,24 @@ def test_a_skipped_eigenvalue_is_found_by_the_count():
     assert v.passed.all()
 
 
+def test_a_cluster_split_by_the_tie_window_is_counted_above_its_last_tie():
+    """λ_k opens a cluster that spreads past the tie window (0, then 12, 12.006, 12.009, 12.013
+    and 12.015: a random cloud's l = 3 modes): the count's σ lies above the last computed tie,
+    not halfway from λ_k, so the values between λ_k and σ are all computed and the count
+    proves the result complete on the second run (it raised EigenError before)."""
+    d = np.array([0.0, 12.0, 12.006, 12.009, 12.013, 12.015, 20.0, 21.0])
+    A = np.diag(d)
+
+    def solver(want):
+        return d[:want + 1], np.eye(8)[:, :want + 1], 1
+
+    info = {}
+    lam, _ = _eigcheck.first_verified([_eigcheck.Attempt("solver", solver)], 2, lambda Y: A @ Y,
+                                      np.ones(8), 1e-8, 0.01, lambda s: int((d < s).sum()), info=info)
+    assert lam.tolist() == [0.0, 12.0] and info["complete"]
+    assert info["tried"] == ["solver", "solver"] and 12.009 < info["shift"] < 12.013
+
+
 def test_returned_pairs_are_within_tol_on_the_test_meshes():
     """The bounds eigs reports hold: each eigenvalue within tol · max(λ, λ_k/100) of dense eigh."""
     for V, F, kw in ((*shapes.sphere(1500, kind="random", seed=7), {}),
