@@ -202,7 +202,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     """
     from .errors import EigenError
 
-    want, tried, best, spent = k, [], None, 0.0
+    want, tried, best, spent, seen, known = k, [], None, 0.0, 0, None
     queue = list(attempts)
     while queue:
         attempt = queue.pop(0)
@@ -214,7 +214,17 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
         began = time.perf_counter()
         if counter is not None and not attempt.exact:
             shift, j = count_shift(lam, k, floor)
-            count = counter(shift)
+            if j == len(lam) > max(seen, k):
+                # λ_k's cluster runs past every computed value: a count here would only ask for
+                # more (in 3-D it costs what the solve does), so the solver runs again first
+                seen, want = len(lam), 2 * len(lam) - k + 1
+                queue.insert(0, attempt)
+                continue
+            if known is not None and not ((lam > min(shift, known[0])) & (lam < max(shift, known[0]))).any():
+                shift, count = known  # no computed value between the two shifts: the same count
+            else:
+                count = counter(shift)
+            known = (shift, count)
             if count is not None and count > j and count + 1 > want:
                 # more eigenvalues below σ than computed (skipped, or ties of λ_k past the
                 # block): the same solver again, asked for all of them
