@@ -2,14 +2,15 @@
 
     python benchmarks/bench_cloud_cap.py          # printed, a markdown table
 
-The default widths of a surface's point cloud, h_w = min(4a², β/κ_w²), raised to at least
-f·4a² for f in ``FLOORS`` (f = 0: the cap alone; f = 1: no cap) and passed as explicit per-point
-widths; largest relative error of eigenvalues 1-9 against the exact values, and
-robust-laplacian's ``point_cloud_laplacian`` on the same points.
+The kernel's default widths on a surface's point cloud (``operator="kernel"``),
+h_w = min(4a², β/κ_w²), raised to at least f·4a² for f in ``FLOORS`` (f = 0: the cap alone;
+f = 1: no cap) and passed as explicit per-point widths; largest relative error of eigenvalues
+1-9 against the exact values, and robust-laplacian's ``point_cloud_laplacian`` on the same points.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 import warnings
 from pathlib import Path
@@ -36,6 +37,7 @@ def clouds():
 
 
 def main() -> int:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()  # no options: --help
     print("| cloud | capped widths / 4a² (min-median) | " + " | ".join(f"floor {f:g}" for f in FLOORS)
           + " | robust-laplacian |")
     print("|---|---|" + "---|" * (len(FLOORS) + 1))

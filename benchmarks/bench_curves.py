@@ -1,18 +1,22 @@
-"""Eigenvalues on curves: the Galerkin pencil on the segments beside linear FEM.
+"""Eigenvalues on curves: the default and the named builders on the segments beside linear FEM.
 
-    python benchmarks/bench_curves.py
+    python benchmarks/bench_curves.py                   # 24 curves, writes its RESULTS.md section
+    python benchmarks/bench_curves.py --quick --no-write  # n = 60 and 200 only, prints
 
 Closed curves (a circle, an ellipse 2:1, a trefoil knot in R³) and an open arc, sampled at
 60, 200 and 1,000 uniform or random parameters; the exact eigenvalues of a closed curve of
 length ℓ are (2πm/ℓ)², of an open one (Neumann) (πm/ℓ)², ℓ from a fine sampling. Largest
-relative error of eigenvalues 1-9 for the Galerkin pencil (``operator="galerkin"``), the
-vertex pencil (``operator="kernel"``) and linear FEM on the segments
-(``meshlap.baselines.cotangent(V, E)``, lumped mass).
+relative error of eigenvalues 1-9 for the default (``meshlap.laplacian(V, E)``, what
+``op.decision`` chose), the Galerkin pencil (``operator="galerkin"``), the vertex pencil
+(``operator="kernel"``), the paper's operator (``operator="paper"``) and linear FEM on the
+segments (``meshlap.baselines.cotangent(V, E)``, lumped mass).
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -59,34 +63,48 @@ def err(lam: np.ndarray, ref: np.ndarray) -> float:
     return float(np.abs(lam[1:K] / ref[1:K] - 1).max())
 
 
+def eigs_error(op, ref: np.ndarray) -> float:
+    return err(spectral.eigs(op, K, tol=1e-9)[0], ref)
+
+
 def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="n = 60 and 200 only")
+    ap.add_argument("--no-write", action="store_true", help="print only")
+    args = ap.parse_args()
     warnings.simplefilter("ignore")
-    head = ("| curve | sampling | n | Galerkin pencil | vertex pencil | linear FEM | Galerkin / FEM "
-            "|\n|---|---|---|---|---|---|---|")
+    head = ("| curve | sampling | n | default | Galerkin pencil | vertex pencil | paper's | linear FEM "
+            "| default / FEM | Galerkin / default |\n|---|---|---|---|---|---|---|---|---|---|")
     lines = [head]
     print(head, flush=True)
     for name in ("circle", "ellipse", "trefoil", "open arc"):
         for kind in ("uniform", "random"):
-            for n in (60, 200, 1000):
+            for n in (60, 200) if args.quick else (60, 200, 1000):
                 V, E, ref = curve(name, kind, n)
-                op = meshlap.laplacian(V, E, operator="galerkin")
-                ours = err(spectral.eigs(op, K, tol=1e-9)[0], ref)
+                default = meshlap.laplacian(V, E)
+                ours = eigs_error(default, ref)
+                gal = eigs_error(meshlap.laplacian(V, E, operator="galerkin"), ref)
                 vert = meshlap.laplacian(V, E, operator="kernel")
-                v = err(spectral.eigs(vert, K, tol=1e-9)[0], ref)
+                v = eigs_error(vert, ref)
+                paper = eigs_error(meshlap.laplacian(V, E, operator="paper"), ref)
                 cot = baselines.cotangent(V, E)
                 lam = eigsh(sp.csc_matrix(-cot.S), K, sp.diags(cot.mass).tocsc(), sigma=-1e-6)[0]
                 fem = err(np.sort(lam), ref)
                 fell = "" if vert.correction == "richardson" else f" ({vert.correction})"
-                kept = "" if op.quadrature == "galerkin" else " (vertex)"
-                line = (f"| {name} | {kind} | {n:,} | {ours:.4%}{kept} | "
-                        f"{v:.4%}{fell} | {fem:.4%} | {ours / fem:.2f} |")
+                line = (f"| {name} | {kind} | {n:,} | {ours:.4%} ({default.decision.operator}) | {gal:.4%} | "
+                        f"{v:.4%}{fell} | {paper:.4%} | {fem:.4%} | {ours / fem:.2f} | {gal / ours:.2f} |")
                 lines.append(line)
                 print(line, flush=True)
-    body = ["Command: `python benchmarks/bench_curves.py`. Largest relative error of eigenvalues 1-9 against "
-            "(2πm/ℓ)² (closed) or (πm/ℓ)² (open, Neumann); (vertex): the Galerkin pencil's check failed "
-            "and the vertex pencil stayed; a correction in parentheses: the vertex pencil fell back to "
-            "it; linear FEM: `meshlap.baselines.cotangent(V, E)`.", ""] + lines
-    write_section("Curves: the Galerkin pencil on segments", body)
+    quick = " --quick" if args.quick else ""
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    body = [f"Command: `python benchmarks/bench_curves.py{quick}` ({stamp}). "
+            "Largest relative error of eigenvalues 1-9 against "
+            "(2πm/ℓ)² (closed) or (πm/ℓ)² (open, Neumann); default: `meshlap.laplacian(V, E)`, the builder "
+            "`op.decision` chose in parentheses; Galerkin, vertex and paper's: `operator=\"galerkin\"`, "
+            "`\"kernel\"`, `\"paper\"`; a correction in parentheses: the vertex pencil's check failed and "
+            "it fell back to it; linear FEM: `meshlap.baselines.cotangent(V, E)`.", ""] + lines
+    if not args.no_write:
+        write_section("Curves: eigenvalues on segments", body)
     return 0
 
 

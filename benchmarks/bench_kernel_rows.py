@@ -1,5 +1,5 @@
-"""The default's kernel rows and the moment scale's product, before and after issue 19's
-branch i19k, alternated in one process (CPU seconds, best of ``--repeat``).
+"""The corrected kernel's rows (``operator="kernel"``) and the moment scale's product, before and
+after issue 19's branch i19k, alternated in one process (CPU seconds, best of ``--repeat``).
 
     python benchmarks/bench_kernel_rows.py                     # 16k random sphere, default h
     python benchmarks/bench_kernel_rows.py --n 100000 --h-edges 1

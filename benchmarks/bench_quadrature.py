@@ -1,19 +1,23 @@
-"""What each ingredient of the Galerkin pencil buys, on the coarse rows of bench_spectra.py.
+"""What each ingredient of the Galerkin pencil (``operator="galerkin"``) buys, on the coarse rows of
+bench_spectra.py.
 
-    python benchmarks/bench_quadrature.py
+    python benchmarks/bench_quadrature.py             # writes its section of RESULTS.md
+    python benchmarks/bench_quadrature.py --no-write  # prints only
 
 Largest relative error of eigenvalues 1-9 (references as in bench_spectra.py: exact for the
 sphere and the Neumann square, libigl's cotangent FEM on the mesh refined 16× for the torus
 and the cube surface) for: the vertex pencil (one point per vertex, ``quadrature="vertex"``);
 the kernel integrated over the triangles (3 points each) with a plain Gaussian or the
 Richardson kernel; with the lumped mass as it is, the consistent mass, or the congruence that
-carries the consistent mass onto the lumped one (the default); at h = c·ē² for three c; and
+carries the consistent mass onto the lumped one (as built); at h = c·ē² for three c; and
 without the mirror images (square) or the unfolded distances across creases (cube).
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -59,7 +63,10 @@ def cases():
 
 
 def main() -> int:
-    cols = ["vertex pencil", "Gaussian, C", "Richardson, lumped", "Richardson, C", "default (congruence)",
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--no-write", action="store_true", help="print only")
+    args = ap.parse_args()
+    cols = ["vertex pencil", "Gaussian, C", "Richardson, lumped", "Richardson, C", "as built (congruence)",
             "h = 0.25 ē²", "h = 1 ē²", "no images / no unfolding"]
     head = "| input | " + " | ".join(cols) + " |\n|---|" + "---|" * len(cols)
     lines = [head]
@@ -88,10 +95,13 @@ def main() -> int:
         line = f"| {name} | " + " | ".join(row) + " |"
         lines.append(line)
         print(line, flush=True)
-    body = ["Command: `python benchmarks/bench_quadrature.py` (2 cores). Largest relative error of "
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    body = [f"Command: `python benchmarks/bench_quadrature.py` (2 cores; {stamp}). The Galerkin pencil is "
+            "the named builder `operator=\"galerkin\"`, not the default (FEM). Largest relative error of "
             "eigenvalues 1-9; C: the consistent mass; h = 0.5 ē² unless the column says otherwise; the "
             "references are bench_spectra's.", ""] + lines
-    write_section("Galerkin pencil: what each ingredient buys", body)
+    if not args.no_write:
+        write_section("Galerkin pencil: what each ingredient buys", body)
     return 0
 
 

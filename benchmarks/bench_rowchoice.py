@@ -5,8 +5,8 @@
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --repeat 7
     python benchmarks/bench_rowchoice.py --base /tmp/base --n 16000 --noise 0.01
 
-The base's modules of the stage (rowchoice, highorder, _fit_kernel, _neighbours and the small
-dense algebra they compile, meshlap/_dense.py) are loaded under other names beside this checkout's,
+The base's modules of the stage (``MODULES``: rowchoice, highorder and the kernels they compile,
+meshlap/_dense.py's small dense algebra) are loaded under other names beside this checkout's,
 everything else shared; the two are run alternately on
 `meshlap.shapes.sphere(n, kind="random", seed=0)` (radial noise of the given level, seed 1),
 best of ``--repeat`` by CPU time (`time.process_time`: other processes' load counts less),
@@ -38,20 +38,23 @@ import numpy as np
 import meshlap
 from meshlap.corrections import rowchoice
 
-# in the order they import each other
+# in the order they import each other; a module the base does not have is skipped
 MODULES = ("_dense", "corrections/_neighbours", "corrections/_fit_kernel", "corrections/highorder",
-           "corrections/_ranks", "corrections/rowchoice")
+           "corrections/_ranks", "corrections/_gather", "corrections/_levels", "corrections/rowchoice")
 
 
 def load_base(root: Path):
     """The base's rowchoice module, its relative imports made absolute (the stage's own modules
     as base_*, the rest of meshlap as this checkout's)."""
-    for where in MODULES:
+    present = [w for w in MODULES if (root / "meshlap" / f"{w}.py").exists()]
+    own = "|".join(w.rsplit("/", 1)[-1] for w in present)
+    for where in present:
         name = where.rsplit("/", 1)[-1]
+        package = ".".join(["meshlap", *where.split("/")[:-1]])  # what "from .x" means in that file
         src = (root / "meshlap" / f"{where}.py").read_text()
-        own = r"^from \.\.?(_dense|_neighbours|_fit_kernel|highorder|_ranks) import"
-        rest = r"^from \.\.?(\w*) import"
-        for pattern, repl in ((own, r"from base_\1 import"), (rest, r"from meshlap.\1 import")):
+        for pattern, repl in ((rf"^from \.\.?({own}) import", r"from base_\1 import"),
+                              (r"^from \.\.(\w+) import", r"from meshlap.\1 import"),
+                              (r"^from \.(\w+) import", rf"from {package}.\1 import")):
             src = re.sub(pattern, repl, src, flags=re.M)
         # numba caches compiled functions by their file: the rewritten modules get files of their own
         tag = hashlib.sha1(str(root.resolve()).encode()).hexdigest()[:12]

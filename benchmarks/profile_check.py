@@ -1,6 +1,6 @@
 """Where the semidefiniteness check's time goes (issue 19, branch i19c).
 
-Builds the default operator on a random n-vertex sphere at h = f · ē² with ``check_psd=False``
+Builds the corrected kernel on a random n-vertex sphere at h = f · ē² with ``check_psd=False``
 (the Richardson rows, unchecked), then runs the check on its rows under cProfile: its CPU and
 wall seconds, LOBPCG's iterations and error ratios, the verdict, and the split among the
 cotangent factor, its solves, the block products and the rest.

@@ -42,3 +42,9 @@ def write_section(title: str, lines: list[str], script: str | None = None) -> No
         section = section.rstrip() + "\n\n"
         text = text.replace(match.group(0), section) if match else text.rstrip() + "\n\n" + section
     RESULTS.write_text(text.rstrip() + "\n")
+
+
+if __name__ == "__main__":  # a module the scripts import: run, it only answers --help
+    import argparse
+
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
