@@ -66,6 +66,8 @@ def test_policy_decisions():
     arc = np.c_[np.cos(np.arange(200) * 0.0314), np.sin(np.arange(200) * 0.0314)]
     curve = meshlap.point_cloud_laplacian(arc, k=1)
     assert curve.decision.operator == "kernel" and "curve" in curve.decision.reason
+    segments = np.c_[np.arange(199), np.arange(1, 200)]
+    assert meshlap.laplacian(arc, segments).decision.operator == "galerkin"
     assert "cloud" in meshlap.laplacian(meshlap.geometry.point_cloud_geometry(V)).decision.reason
     with pytest.raises(MeshError, match="operator must be one of"):
         meshlap.laplacian(V, F, operator="cot")

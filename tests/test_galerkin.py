@@ -1,6 +1,7 @@
 """The Galerkin pencil: symmetric, semidefinite, and its spectra on coarse meshes."""
 
 import math
+from pathlib import Path
 
 import igl
 import numpy as np
@@ -12,6 +13,8 @@ from scipy.sparse.linalg import eigsh
 import meshlap
 from meshlap import MeshError, shapes, spectral, tuned
 from meshlap.corrections import features, galerkin
+
+DATA = Path(__file__).parent / "data"
 
 
 def kernel_laplacian(*args, **kwargs):
@@ -214,6 +217,21 @@ def test_curves_galerkin_pencil(closed):
     lam = np.sort(eigsh(sp.csc_matrix(-fem.S), 10, sp.diags(fem.mass).tocsc(), sigma=-1e-6)[0])
     fem_err = _err(lam, exact)
     assert err < bound and err < 0.6 * fem_err
+
+
+def test_a_real_boundary_loop_takes_the_galerkin_pencil_by_default():
+    """The Stanford bunny's longest boundary loop (55 vertices, segments 4.3× apart in length):
+    a closed polyline of length ℓ is intrinsically a circle, eigenvalues (2πm/ℓ)². The default
+    is the Galerkin pencil, measured 0.81% against linear FEM's 5.8% (bench_loops.py)."""
+    V, F = igl.read_triangle_mesh(str(DATA / "stanford-bunny.obj"))
+    P = V[igl.boundary_loop(F)]
+    ell = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum()
+    exact = np.r_[0.0, np.repeat((2 * np.pi * np.arange(1, 6) / ell) ** 2, 2)][:10]
+    E = np.column_stack([np.arange(len(P)), (np.arange(len(P)) + 1) % len(P)])
+    op = meshlap.laplacian(P, E)
+    err = _err(spectral.eigs(op, 10)[0], exact)
+    fem_err = _err(spectral.eigs(meshlap.baselines.cotangent(P, E), 10)[0], exact)
+    assert op.decision.operator == "galerkin" and err < 0.012 and err < 0.25 * fem_err
 
 
 def test_curves_couple_along_their_arc_only():
