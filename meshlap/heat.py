@@ -26,13 +26,13 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
+from ._shiftinvert import factor as _factor
 from .errors import MeshError
 from .geometry.validation import check_function
 from .spectral import (
     _SPARSE_ROW_MAX,
     _check_mass,
     _cot_stiffness,
-    _factor,
     _mesh_of,
     _one_blas_thread,
     _restricted_S,

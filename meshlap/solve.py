@@ -36,11 +36,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from . import _lobpcg
+from ._shiftinvert import factor as _factor
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
 from .gradients import gradient_operator
-from .spectral import _SPARSE_ROW_MAX, _check_mass, _extend, _factor, _one_blas_thread
+from .spectral import _SPARSE_ROW_MAX, _check_mass, _extend, _one_blas_thread
 
 __all__ = ["PoissonSolver", "boundary_measure", "harmonic", "poisson"]
 

@@ -38,7 +38,7 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
-from . import _eigcheck, _lobpcg
+from . import _eigcheck, _lobpcg, _shiftinvert
 from ._jit import in_blocks, jit
 from .errors import MeshError
 from .geometry import spatial_order
@@ -244,12 +244,6 @@ def _cot_stiffness(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> sp.csc_matrix
     return K
 
 
-def _factor(A: sp.spmatrix):
-    """Sparse LU of a symmetric positive definite matrix (symmetric ordering, no pivoting)."""
-    return sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                          options={"SymmetricMode": True})
-
-
 # -- the public solver ------------------------------------------------------------------------
 def eigs(
     op: Any,
@@ -391,12 +385,12 @@ def eigs(
 
     exact = _eigcheck.Attempt("dense", dense, exact=True)
     # one factorization for every run: a retry asked for more pairs reuses it (3-D: most of the time)
-    inverse = functools.cache(lambda: _shift_operator(S_P(), m))
+    inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m)))
     runs: list = []
 
     def shift_invert(want: int):
         # a retry (the count found more below σ, or λ_k's ties go on) keeps the earlier pairs
-        lam, X, it = _shift_invert(*inverse(), m, want, tol, seed, runs[-1] if runs else None)
+        lam, X, it = _shiftinvert.shift_invert(*inverse(), m, want, tol, seed, runs[-1] if runs else None)
         runs.append((lam, X))
         return lam, X, it
 
@@ -435,38 +429,6 @@ def eigs(
 
 def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ₁ = 2)
     return 4.0 * math.pi / float(m.sum())
-
-
-def _shift_operator(S: sp.csr_matrix, m: np.ndarray):
-    # -S and the solve with -S + σM at a small negative shift -σ (below the zero eigenvalues)
-    sigma = 1e-3 * _scale_shift(m)
-    A = sp.csc_matrix(-0.5 * (S + S.T))
-    return A, sigma, _factor(A + sp.diags(sigma * m)).solve
-
-
-def _shift_invert(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, tol: float, seed: int,
-                  known: tuple[np.ndarray, np.ndarray] | None = None):
-    """The k + 1 eigenpairs nearest the shift (the last one: the gap above λ_k). ``known``:
-    pairs of an earlier run, kept, and the Lanczos runs on their M-orthogonal complement
-    (deflated), where it finds what that run skipped: Lanczos from one start vector sees one
-    vector of an eigenspace, and a symmetric mesh has exactly equal eigenvalues."""
-    n = len(m)
-    lam0, X0 = (np.zeros(0), np.zeros((n, 0))) if known is None else known
-    want = min(k + 1, n - 1) - len(lam0) + 1 if len(lam0) else min(k + 1, n - 1)
-    MX0 = m[:, None] * X0
-
-    def apply(y: np.ndarray) -> np.ndarray:  # P (A + σM)⁻¹ Pᵀ, P = I - X₀X₀ᵀM
-        z = solve(y - MX0 @ (X0.T @ y))
-        return z - X0 @ (MX0.T @ z)
-
-    OPinv = sp.linalg.LinearOperator(A.shape, matvec=apply, dtype=np.float64)
-    v0 = np.random.default_rng(seed).standard_normal(n)
-    v0 -= X0 @ (MX0.T @ v0)
-    lam, X = sp.linalg.eigsh(A, k=min(want, n - 1 - len(lam0)), M=sp.diags(m).tocsc(), sigma=-sigma,
-                             OPinv=OPinv, tol=tol, v0=v0)
-    lam, X = np.concatenate([lam0, lam]), np.hstack([X0, X])
-    order = np.argsort(lam)
-    return lam[order], X[:, order], 0
 
 
 def _start_width(k: int, least: int, n: int) -> int:
