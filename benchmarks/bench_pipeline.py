@@ -84,9 +84,9 @@ def main(argv=None) -> int:
             "build |", "|---|---|---|---|"]
     for case in cases:
         d, p = measure(case, None), measure(case, "none")
-        rows.append(f"| {case['what']} | {case['eig']} | {d['eig']:.2%} / {d['e2']:.2g} / {d['t']:.1f} s "
-                    f"({d['pencil']} pencil, {d['nnz']:.0f} per row) | {p['eig']:.2%} / {p['e2']:.2g} / "
-                    f"{p['t']:.1f} s |")
+        rows.append(f"| {case['what']} | {case['eig']} | {100 * d['eig']:.2g}% / {d['e2']:.2g} / "
+                    f"{d['t']:.1f} s ({d['pencil']} pencil, {d['nnz']:.0f} per row) | "
+                    f"{100 * p['eig']:.2g}% / {p['e2']:.2g} / {p['t']:.1f} s |")
         print(rows[-1], flush=True)
     cmd = "python benchmarks/bench_pipeline.py" + (" --quick" if args.quick else "")
     lines = [f"Command: `{cmd}` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, 2 cores, shared; "

@@ -192,7 +192,8 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
         faces = np.array(faces)  # as a user passes a uniform mesh
     lam, cpu, warn, dec = meshlap_default(mesh.V, faces, k, **SURFACE_OPTIONS)
     row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.V), "parts": n_parts,
-           "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn}
+           "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
+           "sigma": noise_reading(V, F)}
     for name, (plam, pcpu, pwarn) in peers(V, F, k).items():
         row[f"err_{name}"] = err(plam, R, n_parts)
         row[f"cpu_{name}"] = pcpu
@@ -209,6 +210,12 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
              "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu}
     finish(cloud, [cloud["err_robust"]], rcpu)
     return row, cloud
+
+
+def noise_reading(V: np.ndarray, F: np.ndarray) -> float:
+    """σ̂ / ē: the normal noise that cubic height fits read (meshlap.denoise.normal_noise), in mean
+    edges; the clean meshes' readings beside the noisy rows' show what a threshold would face."""
+    return meshlap.denoise.normal_noise(V) / rc.mean_edge(V, F)
 
 
 def tet_row(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> dict:
@@ -233,7 +240,8 @@ def noisy_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> l
         Vn = V + (sigma * e * rng.standard_normal(len(V)))[:, None] * N
         lam, cpu, warn, dec = meshlap_default(Vn, F, k)
         dlam = meshlap_default(Vn, F, k, denoise=True)[0]
-        row = {"name": entry["name"], "noise": sigma, "n": len(V), "err_default": err(lam, R, n_parts),
+        row = {"name": entry["name"], "noise": sigma, "n": len(V), "sigma": noise_reading(Vn, F),
+               "err_default": err(lam, R, n_parts),
                "err_denoise": err(dlam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn}
         for name, (plam, pcpu, _) in peers(Vn, F, k).items():
             row[f"err_{name}"], row[f"cpu_{name}"] = err(plam, R, n_parts), pcpu
@@ -289,14 +297,14 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
            + summary(settled, "the best peer") + ".", "",
            *by_kind(surf, "the best peer"), "",
            "| mesh | kind | n | parts | ref | ref Δ | default | COT | LaPy | robust | ratio | "
-           "CPU default s | CPU COT s | CPU ratio | decision | warnings |",
-           "|" + "---|" * 16]
+           "CPU default s | CPU COT s | CPU ratio | σ̂ / ē | decision | warnings |",
+           "|" + "---|" * 17]
     for x in surf:
         out.append(f"| {x['name']} | {x['kind']} | {x['n']} | {x['parts']} | {lv(x['name'])} | "
                    f"{pct(refs[x['name']]['spread'])} | {pct(x['err_default'])} | {pct(x['err_COT'])} | "
                    f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
-                   f"{x['cpu_default']:.2f} | {x['cpu_COT']:.3f} | {x['cpu_ratio']:.3g} | {x['decision']} | "
-                   f"{x['warnings']} |")
+                   f"{x['cpu_default']:.2f} | {x['cpu_COT']:.3f} | {x['cpu_ratio']:.3g} | {x['sigma']:.3f} | "
+                   f"{x['decision']} | {x['warnings']} |")
     out += ["", "### The vertices alone as a point cloud: meshlap.point_cloud_laplacian against "
             "robust_laplacian.point_cloud_laplacian", "", "Summary: " + summary(cloud, "robust-laplacian")
             + " (CPU against robust-laplacian's).", "",
@@ -317,12 +325,22 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
     out += ["", "### Noise along the normals, against the clean mesh's reference", ""]
     for s in NOISE:
         out.append(f"- {s} mean edges: " + summary([x for x in noisy if x["noise"] == s], "the best peer"))
-    out += ["", "`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a heat "
+    clean = np.array([x["sigma"] for x in surf])
+    worst = max(surf, key=lambda x: x["sigma"]) if surf else None
+    out += ["", "The noise the fits read (σ̂ / ē) on the clean surfaces: median "
+            f"{np.median(clean):.3f}, 90th percentile {np.quantile(clean, 0.9):.3f}, largest "
+            f"{worst['sigma']:.3f} ({worst['name']}); on the noisy rows "
+            + ", ".join(f"{s} ē: {min(x['sigma'] for x in noisy if x['noise'] == s):.3f}-"
+                        f"{max(x['sigma'] for x in noisy if x['noise'] == s):.3f}" for s in NOISE)
+            + f"; {int((clean >= min(x['sigma'] for x in noisy)).sum())} clean surfaces read at least the "
+            "least of the noisy rows' readings (why `denoise` is the user's call).", ""] \
+        if surf and noisy else [""]
+    out += ["`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a heat "
             "step of time (2σ̂)² (meshlap.denoise).", "",
-            "| mesh | noise (mean edges) | default | denoise=True | COT | LaPy | robust | ratio | "
-            "CPU ratio | warnings |", "|" + "---|" * 10]
+            "| mesh | noise (mean edges) | σ̂ / ē | default | denoise=True | COT | LaPy | robust | ratio | "
+            "CPU ratio | warnings |", "|" + "---|" * 11]
     for x in noisy:
-        out.append(f"| {x['name']} | {x['noise']} | {pct(x['err_default'])} | "
+        out.append(f"| {x['name']} | {x['noise']} | {x['sigma']:.3f} | {pct(x['err_default'])} | "
                    f"{pct(x.get('err_denoise', float('nan')))} | {pct(x['err_COT'])} | "
                    f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
                    f"{x['cpu_ratio']:.3g} | {x['warnings']} |")
@@ -444,7 +462,7 @@ def render(folder: Path) -> None:
             for key, v in r.items():
                 if key in ("n", "parts"):
                     row[key] = int(v) if v else 0
-                elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise"):
+                elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise", "sigma"):
                     row[key] = float(v) if v else float("nan")
                 else:
                     row[key] = v
