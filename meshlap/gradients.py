@@ -16,7 +16,9 @@ n vertex values to one vector of R^d per *element*, with the elements' measures 
   (the top k eigenvectors of the sum of the corners' projectors onto their principal axes): a
   cloud samples a surface, and the triangles' tilt by the noise across it would lengthen every
   path (by 2% on a sphere of 10,000 points with 0.5% radial noise), while the mean plane is the
-  triangle's own to O(h²) on a smooth surface;
+  triangle's own to O(h²) on a smooth surface. So are a mesh's triangles when its operator was
+  built on denoised positions (``denoise=True``; the gradient of such an operator reads
+  ``op.pencil_points``): the heat step leaves them tilted by what noise remains;
   a cloud along a curve (k = 1) is joined to each point's
   nearest neighbour on either side along its tangent, the neighbours that set its mass;
 * other point clouds (and ``method="least squares"``): the elements are the points, with
@@ -40,7 +42,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import MeshError
-from .geometry import Geometry, simplex_volumes
+from .geometry import Geometry, frames, simplex_volumes
 
 __all__ = ["Gradient", "gradient_operator"]
 
@@ -62,12 +64,19 @@ class Gradient:
         Ambient dimension.
     kind : str
         "simplices" or "least squares".
+    cells : (E, k+1) int ndarray or None
+        The simplices (None for least squares, whose elements are the points).
+    tangent : bool
+        Whether the simplices are measured in their corners' mean tangent plane (a point
+        cloud's, a denoised mesh's) rather than in their own.
     """
 
     G: sp.csr_matrix
     w: np.ndarray
     d: int
     kind: str
+    cells: np.ndarray | None = None
+    tangent: bool = False
 
     @property
     def n_elements(self) -> int:
@@ -134,7 +143,7 @@ def _simplex_gradient(P: np.ndarray, cells: np.ndarray, tangent: np.ndarray | No
     rows = (np.arange(m)[:, None, None] * d + np.arange(d)[None, None, :]).repeat(c, axis=1)
     cols = np.broadcast_to(cells[:, :, None], (m, c, d))
     G = sp.csr_matrix((grads.ravel(), (rows.ravel(), cols.ravel())), shape=(m * d, len(P)))
-    return Gradient(G, np.where(good, vol, 0.0), d, "simplices")
+    return Gradient(G, np.where(good, vol, 0.0), d, "simplices", cells=cells, tangent=tangent is not None)
 
 
 def _cloud_gradient(geo: Geometry) -> Gradient:
@@ -171,7 +180,9 @@ def gradient_operator(geometry: Any, method: str = "auto") -> Gradient:
     Parameters
     ----------
     geometry : Geometry or MeshLaplacian
-        A mesh (curve, surface, tetrahedra) or a point cloud.
+        A mesh (curve, surface, tetrahedra) or a point cloud. An operator's simplices are
+        measured at the positions its pencil was built on (``op.pencil_points``: after the
+        heat step of ``denoise=True``), so that ``Gᵀ W G`` is its FEM stiffness.
     method : {"auto", "simplices", "least squares"}
         ``"auto"``: the simplices of a mesh or of a cloud's local triangles, else least squares.
 
@@ -196,9 +207,13 @@ def gradient_operator(geometry: Any, method: str = "auto") -> Gradient:
         raise MeshError(f"method must be 'auto', 'simplices' or 'least squares'; got {method!r}")
     cells = _simplices(geo)
     if method != "least squares" and cells is not None:
-        # a cloud's local triangles are measured in their corners' mean tangent plane
-        tangent = geo._pca()[0][:, :, :geo.dim] if geo.source == "point cloud" else None
-        return _simplex_gradient(geo.points, cells, tangent)
+        P = getattr(geometry, "pencil_points", geo.points)
+        tangent = None  # a cloud's local triangles and a denoised mesh's are measured in their
+        if geo.source == "point cloud":  # corners' mean tangent plane
+            tangent = geo._pca()[0][:, :, :geo.dim]
+        elif P is not geo.points:
+            tangent = frames.pca_frames(P, geo.dim)[0][:, :, :geo.dim]
+        return _simplex_gradient(P, cells, tangent)
     if method == "simplices":
         raise MeshError("this geometry has no simplices (a point cloud of intrinsic dimension other than 2)")
     return _cloud_gradient(geo)

@@ -249,6 +249,14 @@ class MeshLaplacian(LumpedLaplacian):
     faces = property(lambda self: self.geometry.faces, doc="The faces of a surface mesh, else None.")
     mass = property(lambda self: self._built.assemble().mass if self.options.quadrature == "fem"
                     else self.geometry.mass, doc="Lumped masses m_p: the geometry's, or the FEM pencil's.")
+
+    @property
+    def pencil_points(self) -> np.ndarray:
+        """Positions the pencil was built on, which gradients, divergences and distances use: with
+        ``denoise=True`` those after its heat step (builds the pencil), else the geometry's."""
+        moved = self._built.assemble().points if self.options.denoise else None
+        return self.geometry.points if moved is None else moved
+
     n_vertices = property(lambda self: self.geometry.n_points, doc="Rows of the operator (builds nothing).")
     decision = property(lambda self: self._decision or policy.decide(self.geometry, _named(self.options)),
                         doc="Which operator was built and why (:mod:`meshlap.policy`).")

@@ -53,6 +53,8 @@ class Pencil:
     narrowed: float = 0.0  # the Galerkin pencil's area whose width its feature size narrowed
     #: the masses the pencil goes with, where they are not the geometry's (the FEM pencil's)
     mass: np.ndarray | None = field(default=None, repr=False)
+    #: the positions it was built on, where not the geometry's (the FEM pencil's with denoise=True)
+    points: np.ndarray | None = field(default=None, repr=False)
 
 
 def guard_for(geo: Geometry, opts: Options, h: float, images: bool) -> MemoryGuard:
@@ -142,16 +144,17 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
         report(0.5, "FEM pencil")
     S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass)
     sigma = fem.surface_noise(geo) if opts.denoise else 0.0
+    points = None
     if sigma > 0:  # asked for: FEM on the positions after a heat step that averages the noise out
         if report is not None:
             report(0.7, "denoised positions")
-        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass,
-                              points=denoise.denoised(geo.points, S, m, sigma))
+        points = denoise.denoised(geo.points, S, m, sigma)
+        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if report is not None:
         report(1.0, "done")
-    return Pencil(L, None if opts.pointwise == "fit" else L, "fem", quadrature="fem", mass=m)
+    return Pencil(L, None if opts.pointwise == "fit" else L, "fem", quadrature="fem", mass=m, points=points)
 
 
 def _apart(geo: Geometry, out: Pencil) -> None:

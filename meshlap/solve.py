@@ -85,7 +85,8 @@ def _indexed(data: Indexed, n: int, what: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def boundary_measure(geometry: Any) -> np.ndarray:
-    """Each vertex's share of the boundary's (k-1)-measure: the weights of Neumann data.
+    """Each vertex's share of the boundary's (k-1)-measure: the weights of Neumann data (an
+    operator's: at the positions its pencil was built on, ``op.pencil_points``).
 
     Examples
     --------
@@ -98,7 +99,7 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     if not isinstance(geo, Geometry):
         raise MeshError("Neumann data need the geometry's boundary: pass an operator that carries it "
                         "(op.geometry) or a Geometry")
-    P, n = geo.points, geo.n_points
+    P, n = getattr(geometry, "pencil_points", geo.points), geo.n_points
     if geo.faces is not None or (geo.cells is not None and geo.source != "point cloud"):
         cells = geo.faces.triangles() if geo.faces is not None else geo.cells
         c = cells.shape[1]
@@ -225,11 +226,11 @@ class PoissonSolver:
         K = None
         geo = getattr(op, "geometry", None)
         if geo is not None:
-            K = sp.csc_matrix(gradient_operator(geo).stiffness()[self.free][:, self.free])
+            K = sp.csc_matrix(gradient_operator(op).stiffness()[self.free][:, self.free])
         sigma = 1e-3 * 4.0 * math.pi / float(m.sum())
         return _lobpcg.CotPreconditioner(K, m, np.asarray(A.diagonal()), sigma)
 
-    def solve(self, b: Any, values: Any = None) -> np.ndarray:
+    def solve(self, b: Any, values: Any = None, *, compatible: bool = False) -> np.ndarray:
         """φ with ``(-S φ)_i = b_i`` at the free vertices and φ = ``values`` at the fixed ones.
 
         Parameters
@@ -238,12 +239,16 @@ class PoissonSolver:
             Integrated right-hand side (its entries at fixed vertices are ignored).
         values : (len(fixed),) or (len(fixed), s) array_like, optional
             Dirichlet values (default 0).
+        compatible : bool, default False
+            ``b`` is a finite float64 array known to sum to zero over every part without
+            Dirichlet vertices (a divergence ``-Gᵀ W X``, as the heat method's): its check and
+            projection are skipped.
 
         Returns
         -------
         (n,) or (n, s) ndarray
         """
-        b = check_function(b, self.n, "b")
+        b = np.asarray(b) if compatible else check_function(b, self.n, "b")
         B = b.reshape(self.n, -1)
         s = B.shape[1]
         phi = np.zeros((self.n, s))
@@ -256,7 +261,8 @@ class PoissonSolver:
             rhs = B[self.free] + (self._S @ phi)[self.free]
         else:
             rhs = B[self.free]
-        self._compatible(rhs)
+        if not compatible:
+            self._compatible(rhs)
         if self.solver == "direct":
             x = np.zeros_like(rhs)
             x[self._keep] = self._lu.solve(np.asfortranarray(rhs[self._keep]))

@@ -62,7 +62,7 @@ class SavedLaplacian(LumpedLaplacian):
     Behaves like the operator it was saved from: ``op @ f``, ``L``, ``L_sym``, ``M``, ``S``,
     ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction`` (None
     for operators without them, such as the cotangent Laplacian), and when the geometry was
-    saved ``V``, ``faces``, ``geometry`` and ``dim``.
+    saved ``V``, ``faces``, ``geometry``, ``dim`` and ``pencil_points``.
 
     Examples
     --------
@@ -78,7 +78,7 @@ class SavedLaplacian(LumpedLaplacian):
 
     def __init__(self, applied: sp.csr_matrix, symmetric: sp.csr_matrix, mass: np.ndarray,
                  params: dict[str, Any], S: sp.csr_matrix | None = None,
-                 geometry: Geometry | None = None) -> None:
+                 geometry: Geometry | None = None, pencil_points: np.ndarray | None = None) -> None:
         self._applied, self._sym, self.mass, self._S = applied, symmetric, mass, S
         self._exact_S = S is not None  # S stored as such (the cotangent Laplacian's), not M @ L_sym
         self.name = str(params.get("name", "BSW"))
@@ -94,6 +94,7 @@ class SavedLaplacian(LumpedLaplacian):
             self.geometry, self.dim, self.faces = geometry, geometry.dim, geometry.faces
             P = geometry.points
             self.V = P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
+            self.pencil_points = P if pencil_points is None else pencil_points
 
     @property
     def L(self) -> sp.csr_matrix:
@@ -169,6 +170,9 @@ def _geometry_arrays(op: Any) -> dict[str, Any]:
     for key in ("boundary", "cells"):
         if getattr(geo, key) is not None:
             out[key] = getattr(geo, key)
+    moved = getattr(op, "pencil_points", None)
+    if moved is not None and moved is not geo.points:  # denoise=True: gradients and distances read them
+        out["pencil_points"] = moved
     return out
 
 
@@ -368,4 +372,5 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
         elif "sym_data" in data:
             sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None
-    return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo)
+        moved = data["pencil_points"] if "pencil_points" in data else None
+    return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo, pencil_points=moved)
