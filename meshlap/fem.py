@@ -40,8 +40,8 @@ from ._jit import jit
 from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
-__all__ = ["FEM_MASSES", "cell_matrices", "fem_pencil", "intrinsic_delaunay", "part_labels", "separate_parts",
-           "simplicial_cells", "surface_noise", "voronoi_areas", "welded"]
+__all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay", "part_labels",
+           "separate_parts", "simplicial_cells", "surface_noise", "voronoi_areas", "welded"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -442,13 +442,22 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
         B = sp.identity(n, format="csr") + w * (sp.identity(n) - sp.diags(inv) @ Cm)
         S = B.T @ S @ B
         S = 0.5 * (S + S.T)
-    return _expand(sp.csr_matrix(S), m, rep)
+    return expand_copies(sp.csr_matrix(S), m, rep)
 
 
-def _expand(S: sp.csr_matrix, m: np.ndarray, rep: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
-    # copies share their representative's mass equally and are tied to it by a spring as stiff
-    # as its own diagonal entry; a vertex in no cell (unreferenced) gets a small mass and a
-    # diagonal entry of the same ratio: their modes lie above the mesh's own
+def expand_copies(S: sp.csr_matrix, m: np.ndarray, rep: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
+    """A pencil built on welded cells (``rep[cells]``) back on every vertex: copies share their
+    representative's mass equally and are tied to it by a spring as stiff as its own diagonal
+    entry; a vertex in no cell gets a small mass and a diagonal entry of the same ratio, so
+    their modes lie above the mesh's own.
+
+    Examples
+    --------
+    >>> S = sp.csr_matrix(np.array([[-1.0, 1, 0], [1, -1, 0], [0, 0, 0]]))
+    >>> S2, m2 = expand_copies(S, np.array([1.0, 1.0, 0.0]), np.array([0, 1, 1]))
+    >>> m2.tolist(), bool(abs(S2 @ np.ones(3)).max() < 1e-12)
+    ([1.0, 0.5, 0.5], True)
+    """
     n = len(m)
     count = np.bincount(rep, minlength=n).astype(float)
     d = np.abs(S.diagonal())

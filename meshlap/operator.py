@@ -247,8 +247,15 @@ class MeshLaplacian(LumpedLaplacian):
     # -- what the stages decided ---------------------------------------------------------
     dim = property(lambda self: self.geometry.dim, doc="Intrinsic dimension k.")
     faces = property(lambda self: self.geometry.faces, doc="The faces of a surface mesh, else None.")
-    mass = property(lambda self: self._built.assemble().mass if self.options.quadrature == "fem"
-                    else self.geometry.mass, doc="Lumped masses m_p: the geometry's, or the FEM pencil's.")
+    @property
+    def mass(self) -> np.ndarray:
+        """Lumped masses m_p: the geometry's, or the pencil's own (FEM's; the Galerkin pencil's on
+        welded copies)."""
+        if self.options.quadrature in ("fem", "galerkin"):
+            own = self._built.assemble().mass
+            if own is not None:
+                return own
+        return self.geometry.mass
 
     @property
     def pencil_points(self) -> np.ndarray:

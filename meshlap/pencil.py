@@ -24,7 +24,8 @@ import scipy.sparse as sp
 from . import assembly, corrections, denoise, fem
 from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshWarning, user_stacklevel
-from .geometry import Geometry
+from .geometry import Geometry, frames
+from .geometry.polygons import Polygons
 from .options import Options
 from .tuned import GALERKIN_H_SCALE, NOISE_ROUGHNESS
 from .widths import Widths
@@ -104,12 +105,17 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         return
     if report is not None:
         report(0.95, "Galerkin pencil")
-    tri = gal.simplices(geo)
+    tri, weld = gal.simplices(geo), fem.welded(geo)
+    if weld is not None:  # copies of a vertex welded, as FEM's: a seam is no boundary
+        tri = weld[tri]
+        tri = tri[np.all(np.sort(tri, axis=1)[:, 1:] != np.sort(tri, axis=1)[:, :-1], axis=1)]
     h = GALERKIN_H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
     dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
     # the vertex pencil's boundary samples (one sampling per build), reflected across for the
     # quadrature points within the Galerkin kernel's cut-off
-    boundary = geo.boundary_samples(cutoff_radius(widths.largest, opts.tol)) if opts.neumann else None
+    radius = cutoff_radius(widths.largest, opts.tol)
+    boundary = None if not opts.neumann else geo.boundary_samples(radius) if weld is None else \
+        _welded_boundary(geo, tri, radius)
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
     surface = geo.faces is not None and geo.ambient_dim == 3
     folds = gal.creases(geo.points, tri) if surface else None
@@ -122,10 +128,12 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         hv = corrections.features.feature_widths(geo.points, geo.normals(), grooves, h)
     S, m = gal.galerkin_pencil(geo.points, tri, h, geo.dim, dog=dog, crease_edges=folds, boundary=boundary,
                                tol=opts.pencil_tol, guard=guard, h_vertex=hv)
+    if weld is not None:
+        S, m = fem.expand_copies(sp.csr_matrix(S), m, weld)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if dog and opts.check_psd:
-        margin, reason = corrections.psd.check(L, geo.mass, geo.points, _psd_faces(geo), "Galerkin pencil")
+        margin, reason = corrections.psd.check(L, m, geo.points, _psd_faces(geo), "Galerkin pencil")
         if reason is not None:
             warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
                           f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning,
@@ -133,9 +141,24 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
             return  # the vertex pencil stays
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
+    if weld is not None:  # copies share their representative's mass
+        out.mass = m
     out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
     if not opts.pointwise:
         out.L = L
+
+
+def _welded_boundary(geo: Geometry, cells: np.ndarray, radius: float) -> tuple | None:
+    # the boundary of the welded cells, sampled as Geometry.boundary_samples does: a seam
+    # between copies is none, so the kernel is not mirrored across it
+    if geo.dim == 1:
+        samples = frames.boundary_samples_curve(geo.points, cells)
+    elif cells.shape[1] == 3:
+        tri = Polygons(cells.ravel().astype(np.int64), np.arange(0, 3 * len(cells) + 1, 3, dtype=np.int64))
+        samples = frames.boundary_samples_surface(geo.points, tri, max(radius / 16, geo.spacing / 4))
+    else:
+        return geo.boundary_samples(radius)
+    return samples if len(samples[0]) else None
 
 
 def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None) -> Pencil:

@@ -234,6 +234,28 @@ def test_a_real_boundary_loop_takes_the_galerkin_pencil_by_default():
     assert op.decision.operator == "galerkin" and err < 0.012 and err < 0.25 * fem_err
 
 
+def test_copies_are_welded_for_the_galerkin_pencil():
+    """A closed polyline given as a chain whose last point repeats its first, and a sphere cut
+    along a seam of duplicated vertices: the Galerkin pencil welds the copies as FEM does (the
+    curve's default gave the open arc's (m/2)², the sphere 3.1 for l(l+1) = 2)."""
+    t = np.linspace(0, 2 * np.pi, 401)
+    P, E = np.c_[np.cos(t), np.sin(t)], np.c_[np.arange(400), np.arange(1, 401)]
+    op = meshlap.laplacian(P, E)
+    assert op.decision.operator == "galerkin"
+    assert np.allclose(spectral.eigs(op, 5)[0], [0, 1, 1, 4, 4], atol=5e-3)
+    V, F = shapes.sphere(800, seed=0)
+    seam = np.flatnonzero(np.abs(V[:, 0]) < 0.08)
+    copy = np.arange(len(V))
+    copy[seam] = len(V) + np.arange(len(seam))
+    right = V[F].mean(axis=1)[:, 0] > 0
+    F2 = np.where(right[:, None], copy[F], F)
+    with pytest.warns(meshlap.MeshWarning, match="duplicate vertices"):
+        cut = meshlap.laplacian(np.vstack([V, V[seam]]), F2, operator="galerkin")
+    whole = meshlap.laplacian(V, F, operator="galerkin")
+    assert cut.quadrature == "galerkin"
+    assert np.allclose(spectral.eigs(cut, 9)[0], spectral.eigs(whole, 9)[0], rtol=1e-6, atol=1e-9)
+
+
 def test_curves_couple_along_their_arc_only():
     # two circles side by side: two zero eigenvalues, then 1 four times; a trefoil knot of 60
     # vertices, whose strands pass within the kernel's reach: measured 0.53% against linear
