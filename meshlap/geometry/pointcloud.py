@@ -243,8 +243,11 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                         f"{_MAX_NEIGHBORS} neighbours")
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
-    # a recomputed star replaces the earlier one
-    tris = [t[last[t[:, 0]] == it] for it, t in star_parts]
+    # a recomputed star replaces the earlier one where the wider search secured it; one that
+    # stayed insecure keeps its first, local star (the wider one reaches other sheets: a petal's
+    # rim takes triangles across to the next petal)
+    use = np.where(status == _INSECURE, 0, last)
+    tris = [t[use[t[:, 0]] == it] for it, t in star_parts]
     stars = uniq[np.concatenate(tris)] if tris else np.zeros((0, 3), np.int64)
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])]  # each once
     full = mass[np.searchsorted(uniq, rep)] / share
