@@ -21,6 +21,9 @@ __all__ = []
 # A neighbourhood whose k-th principal variance is below this fraction of the first has no
 # k-dimensional extent.
 _FLAT = 1e-10
+#: tan of the steepest chord from a point to a neighbour on its own sheet (60°; a 90° crease
+#: tilts its chords 45° from the fitted plane)
+_STEEP = 3.0**0.5
 # Triangles kept per star (a star in a Delaunay triangulation has 6 on average).
 _STAR_SLOTS = 24
 # status codes of one point's star
@@ -62,6 +65,23 @@ def _project(P, p, nbr, T, U):
             for b in range(P.shape[1]):
                 s += (P[nbr[j], b] - P[p, b]) * T[a, b]
             U[j, a] = s
+
+
+@jit()
+def _drop_steep(P, p, nbr, U, kt):
+    # a neighbour beyond the first kt (those the tangent plane comes from, kept as they are: a
+    # coarse crease's) whose chord leaves the tangent plane more steeply than _STEEP is on
+    # another sheet (a part or layer across the air) that the widened search reached: it takes
+    # no part in the star (U = 0 is skipped); a chord of length ρ on a surface of curvature κ
+    # leaves it at about ρκ/2, so this sheet's own points stay well below that
+    for j in range(kt, len(nbr)):
+        r2 = 0.0
+        for b in range(P.shape[1]):
+            r2 += (P[nbr[j], b] - P[p, b]) ** 2
+        t2 = U[j, 0] ** 2 + U[j, 1] ** 2
+        if r2 - t2 > _STEEP * _STEEP * t2:
+            U[j, 0] = 0.0
+            U[j, 1] = 0.0
 
 
 # -- k = 2: the Voronoi cell by half-plane clipping ---------------------------------------------
@@ -163,6 +183,7 @@ def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, f
             status[r] = _DEGENERATE
             continue
         _project(P, p, nbr[r, :K], T, U)
+        _drop_steep(P, p, nbr[r, :K], U, kt)
         out_star[r], out_vor[r], status[r] = _star2(U, K, tri[r])
 
 
