@@ -249,13 +249,9 @@ class MeshLaplacian(LumpedLaplacian):
     faces = property(lambda self: self.geometry.faces, doc="The faces of a surface mesh, else None.")
     @property
     def mass(self) -> np.ndarray:
-        """Lumped masses m_p: the geometry's, or the pencil's own (FEM's; the Galerkin pencil's on
-        welded copies)."""
-        if self.options.quadrature in ("fem", "galerkin"):
-            own = self._built.assemble().mass
-            if own is not None:
-                return own
-        return self.geometry.mass
+        """Lumped masses m_p: the pencil's own (FEM's; Galerkin's on welded copies), else the geometry's."""
+        own = self._built.assemble().mass if self.options.quadrature in ("fem", "galerkin") else None
+        return self.geometry.mass if own is None else own
 
     @property
     def pencil_points(self) -> np.ndarray:
