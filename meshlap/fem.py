@@ -41,7 +41,7 @@ from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
 __all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay", "part_labels",
-           "separate_parts", "simplicial_cells", "surface_noise", "voronoi_areas", "welded"]
+           "separate_parts", "simplicial_cells", "surface_noise", "voronoi_areas", "welded", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -302,6 +302,20 @@ def welded(geo: Any) -> np.ndarray | None:
     return geo._cached("weld", make)
 
 
+def welded_cells(cells: np.ndarray, rep: np.ndarray) -> np.ndarray:
+    """``cells`` on the representatives ``rep`` of coincident copies (:func:`welded`), without
+    the cells that welding collapses (two corners on one representative).
+
+    Examples
+    --------
+    >>> welded_cells(np.array([[0, 1, 2], [3, 1, 0]]), np.array([0, 1, 2, 0])).tolist()
+    [[0, 1, 2]]
+    """
+    c = rep[cells]
+    s = np.sort(c, axis=1)
+    return c[np.all(s[:, 1:] != s[:, :-1], axis=1)]
+
+
 def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
     """``(parts, label)``: the connected parts of a mesh's cells, copies welded (vertices in no
     cell get their own label, not counted); None for a point cloud.
@@ -421,9 +435,7 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
         raise MeshError(f"linear FEM needs cells (faces, segments or tetrahedra); this {geo.source} has none")
     P, n = (geo.points if points is None else points), geo.n_points
     rep = np.arange(n) if weld is None else np.asarray(weld, dtype=np.int64)
-    cells = rep[cells]
-    distinct = np.all(np.sort(cells, axis=1)[:, 1:] != np.sort(cells, axis=1)[:, :-1], axis=1)
-    cells = cells[distinct]
+    cells = welded_cells(cells, rep)
     gram = lengths = None
     if cells.shape[1] == 3 and intrinsic:
         cells, lengths = intrinsic_delaunay(P, cells)

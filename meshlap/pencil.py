@@ -24,8 +24,7 @@ import scipy.sparse as sp
 from . import assembly, corrections, denoise, fem
 from .assembly import Kernel, MemoryGuard, cutoff_radius
 from .errors import MeshWarning, user_stacklevel
-from .geometry import Geometry, frames
-from .geometry.polygons import Polygons
+from .geometry import Geometry
 from .options import Options
 from .tuned import GALERKIN_H_SCALE, NOISE_ROUGHNESS
 from .widths import Widths
@@ -107,15 +106,13 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         report(0.95, "Galerkin pencil")
     tri, weld = gal.simplices(geo), fem.welded(geo)
     if weld is not None:  # copies of a vertex welded, as FEM's: a seam is no boundary
-        tri = weld[tri]
-        tri = tri[np.all(np.sort(tri, axis=1)[:, 1:] != np.sort(tri, axis=1)[:, :-1], axis=1)]
+        tri = fem.welded_cells(tri, weld)
     h = GALERKIN_H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
     dog = not opts.plain  # its own semidefinite check below, whatever the vertex pencil's fell back to
     # the vertex pencil's boundary samples (one sampling per build), reflected across for the
     # quadrature points within the Galerkin kernel's cut-off
     radius = cutoff_radius(widths.largest, opts.tol)
-    boundary = None if not opts.neumann else geo.boundary_samples(radius) if weld is None else \
-        _welded_boundary(geo, tri, radius)
+    boundary = geo.boundary_samples(radius, None if weld is None else tri) if opts.neumann else None
     guard = MemoryGuard(len(tri) * tri.shape[1], opts.dtype, opts.max_memory, h)
     surface = geo.faces is not None and geo.ambient_dim == 3
     folds = gal.creases(geo.points, tri) if surface else None
@@ -146,19 +143,6 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
     out.narrowed = 0.0 if hv is None else float(geo.mass[hv < h].sum() / geo.mass.sum())
     if not opts.pointwise:
         out.L = L
-
-
-def _welded_boundary(geo: Geometry, cells: np.ndarray, radius: float) -> tuple | None:
-    # the boundary of the welded cells, sampled as Geometry.boundary_samples does: a seam
-    # between copies is none, so the kernel is not mirrored across it
-    if geo.dim == 1:
-        samples = frames.boundary_samples_curve(geo.points, cells)
-    elif cells.shape[1] == 3:
-        tri = Polygons(cells.ravel().astype(np.int64), np.arange(0, 3 * len(cells) + 1, 3, dtype=np.int64))
-        samples = frames.boundary_samples_surface(geo.points, tri, max(radius / 16, geo.spacing / 4))
-    else:
-        return geo.boundary_samples(radius)
-    return samples if len(samples[0]) else None
 
 
 def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None) -> Pencil:

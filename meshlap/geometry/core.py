@@ -164,15 +164,23 @@ class Geometry:
 
         return self._cached("edges", make)
 
-    def boundary_samples(self, radius: float) -> tuple[np.ndarray, np.ndarray] | None:
+    def boundary_samples(self, radius: float, cells: np.ndarray | None = None
+                         ) -> tuple[np.ndarray, np.ndarray] | None:
         """Samples of the boundary and the outward conormal there, spaced for the cut-off
-        ``radius`` (see :mod:`meshlap.geometry.frames`); None without a boundary."""
+        ``radius`` (see :mod:`meshlap.geometry.frames`); None without a boundary. ``cells``:
+        triangles or segments whose boundary to sample instead of the geometry's own (a pencil's
+        welded cells, on which a seam between copies is no boundary)."""
+        step = max(radius / 16, self.spacing / 4)
+        if cells is not None:
+            P = self.points
+            samples = (frames.boundary_samples_curve(P, cells) if cells.shape[1] == 2 else
+                       frames.boundary_samples_surface(P, check_faces(cells, self.n_points), step))
+            return samples if len(samples[0]) else None
 
         def make() -> tuple[np.ndarray, np.ndarray] | None:
             P = self.points
             if self.boundary is None or not self.boundary.any():
                 return None
-            step = max(radius / 16, self.spacing / 4)
             if self.faces is not None:
                 return frames.boundary_samples_surface(P, self.faces, step)
             if self.dim == 1 and self.cells is not None:
