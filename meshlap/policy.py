@@ -34,7 +34,9 @@ The policy for ``operator="auto"`` has no tuned threshold:
   random sphere points 0.20% off on eigenvalues 1-9 against the kernel's 0.29% and
   robust-laplacian's 7.8%;
 - a cloud whose normal noise the geometry measured and projected away
-  (:func:`meshlap.geometry.pointcloud.noise_ratio`, recorded) gets the "kernel" pencil: the
+  (:func:`meshlap.geometry.pointcloud.noise_reading`, recorded: noise above about 14% of the
+  spacing that cubic fits do not explain, where a coarse sampling's missed shape would be
+  explained) gets the "kernel" pencil: the
   projected points keep a tangential jitter that makes the local triangles' shapes random,
   while the kernel's width averages over many points (1% radial noise, 16,000 points: 0.26%
   against FEM's 0.75%), as does a cloud along a curve or filling a volume, which has no local
@@ -142,8 +144,10 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     stars = geo.source == "point cloud" and "fem_cells" in geo._cache
     projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
-    if "noise_ratio" in geo._cache:
-        measured["normal noise / spacing²"] = round(float(geo._cache["noise_ratio"]), 4)
+    if "noise_reading" in geo._cache:
+        reading = geo._cache["noise_reading"]
+        measured["normal noise / spacing²"] = round(reading.ratio, 4)
+        measured["share cubic fits leave"] = round(reading.unexplained, 3)
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
         noise = surface_noise(geo) if opts.get("denoise") else 0.0  # 0.6 s of CPU at 100k vertices

@@ -38,9 +38,10 @@ Messy input has defined behaviour, each with a :class:`~meshlap.validation.MeshW
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -50,14 +51,16 @@ from scipy.sparse.csgraph import connected_components
 from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
 from ..tuned import CLOUD_NOISY as NOISY
+from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
 from . import frames
 from .core import Geometry, check_points
 from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
 
-__all__ = ["NOISY", "noise_ratio", "point_cloud_geometry", "point_masses", "project_to_tangent"]
+__all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
+           "project_to_tangent"]
 
 
-# noise_ratio fits every ⌊n / _NOISE_SAMPLE⌋-th point's neighbourhood
+# noise_reading fits every ⌊n / _NOISE_SAMPLE⌋-th point's neighbourhood
 _NOISE_SAMPLE = 32768
 
 # First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
@@ -309,35 +312,59 @@ def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.n
     return out
 
 
-def noise_ratio(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = None) -> float:
-    """σ̂²/a²: the median normal noise variance of the points' 16-nearest neighbourhoods, over
-    the squared mean distance a to the 6 nearest neighbours.
+class NoiseReading(NamedTuple):
+    """What :func:`noise_reading` measured: ``ratio`` σ̂²/a² and ``unexplained``, the share of the
+    quadratic fits' residual that cubic fits leave."""
 
-    σ̂² is the residual of a quadratic height fit over each point's tangent k-plane (its PCA
-    frame), per degree of freedom left: the fit absorbs the surface's bending, which a plane's
-    residual would read as noise (it grows as a²·(aκ)²: 0.033 on 1,000 random points of a
-    torus of tube radius 0.4, whose quadratic residual is 1.5e-4). Clean samples of smooth
-    surfaces measure below 1e-3 (the cubic terms); 16,000 sphere points with 1% radial noise
-    0.095, 4,000 0.028. ``pca`` takes the frames of
-    :func:`meshlap.geometry.frames.pca_frames` when they exist.
+    ratio: float
+    unexplained: float
+
+    @property
+    def noisy(self) -> bool:
+        """Normal noise that matters (``ratio > NOISY``) and is noise: a richer fit does not
+        explain it (``unexplained ≥ UNEXPLAINED``)."""
+        return self.ratio > NOISY and self.unexplained >= UNEXPLAINED
+
+
+def _chi2_median(nu: int) -> float:
+    # Wilson-Hilferty: within 0.3% of the χ² median for ν ≥ 2
+    return nu * (1.0 - 2.0 / (9.0 * nu)) ** 3
+
+
+def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = None) -> NoiseReading:
+    """The points' normal noise: σ̂²/a², and how much of it is noise rather than missed shape.
+
+    σ̂² is the median residual of quadratic height fits over each point's tangent k-plane (its
+    PCA frame, 16 neighbours), normalized by the median of χ² with the fit's degrees of freedom
+    (what independent normal noise of variance σ² gives); a is the mean distance to the 6 nearest
+    neighbours. The quadratic absorbs the surface's bending, which a plane's residual would read
+    as noise (0.033 on 1,000 random points of a torus of tube radius 0.4, quadratic 1.5e-4).
+    ``unexplained`` is the same reading of cubic fits on the same neighbourhoods over σ̂²:
+    independent noise leaves it at 1 whatever the fit (0.97-1.01 on 500-16,000 noisy sphere
+    points), while shape the quadratic missed, a coarse sampling's vertex-scale detail, drops it
+    (0.33-0.87 on the vertices of 7 of the 9 real meshes of benchmarks/corpus.toml that read
+    above :data:`NOISY`; two decimated ones read 1.0 and 1.25). ``pca`` takes the frames
+    of :func:`meshlap.geometry.frames.pca_frames` when they exist.
 
     Examples
     --------
     >>> import meshlap
-    >>> bool(noise_ratio(meshlap.shapes.fibonacci_sphere(2000)) < 1e-3)
-    True
-    >>> bool(noise_ratio(meshlap.samples.sphere_points(16000, "noisy", seed=0)) > NOISY)
-    True
+    >>> noise_reading(meshlap.shapes.fibonacci_sphere(2000)).noisy
+    False
+    >>> r = noise_reading(meshlap.samples.sphere_points(16000, "noisy", seed=0))
+    >>> r.noisy, bool(r.ratio > NOISY), bool(r.unexplained > 0.95)
+    (True, True, True)
     """
     P = check_points(P)
     T, idx = frames.pca_frames(P, k) if pca is None else pca
-    # the monomials of degree ≤ 2 in the k tangent coordinates (fewer points than monomials fit
-    # exactly: no noise is seen)
-    pairs = [(i, j) for i in range(k) for j in range(i, k)]
+    # the monomials of degree ≤ 3 in the k tangent coordinates, by degree
+    powers = [c for deg in range(4) for c in itertools.combinations_with_replacement(range(k), deg)]
+    n_quad = sum(len(c) <= 2 for c in powers)
+    nu = (idx.shape[1] - n_quad, idx.shape[1] - len(powers))
     # a median needs no more than every point of a 32,768-point stride: the fits' cost stays
     # bounded (0.2 s of CPU) on clouds of millions
     T, idx = T[::max(1, len(P) // _NOISE_SAMPLE)], idx[::max(1, len(P) // _NOISE_SAMPLE)]
-    normal = np.empty(len(idx))
+    res = np.zeros((2, len(idx)))
     spacing = 0.0
     for a in range(0, len(idx), 65536):  # blocks bound the (block, K+1, d) temporaries
         nb = P[idx[a:a + 65536]]
@@ -345,13 +372,17 @@ def noise_ratio(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = 
         z = np.einsum("nkd,nda->nka", X, T[a:a + 65536, :, k:])  # heights along the normals
         u = np.einsum("nkd,nda->nka", X, T[a:a + 65536, :, :k])  # tangent coordinates
         u /= np.maximum(np.abs(u).max(axis=(1, 2), keepdims=True), 1e-300)  # conditioning
-        cols = [np.ones(u.shape[:2]), *np.moveaxis(u, 2, 0), *(u[..., i] * u[..., j] for i, j in pairs)]
-        Q, _ = np.linalg.qr(np.stack(cols, axis=2))
-        r = z - Q @ (np.swapaxes(Q, 1, 2) @ z)
-        normal[a:a + 65536] = (r**2).sum(axis=(1, 2)) / max(idx.shape[1] - len(cols), 1)
+        cols = np.stack([np.prod(u[..., list(c)], axis=2) for c in powers], axis=2)
+        for i, m in enumerate((n_quad, len(powers))):
+            if nu[i] >= 2:  # fewer points than monomials fit exactly: no noise is seen
+                Q, _ = np.linalg.qr(cols[..., :m])
+                r = z - Q @ (np.swapaxes(Q, 1, 2) @ z)
+                res[i, a:a + 65536] = (r**2).sum(axis=(1, 2))
         spacing += np.linalg.norm(nb[:, 1:7] - nb[:, :1], axis=2).sum()
     spacing /= len(idx) * min(6, idx.shape[1] - 1)
-    return float(np.median(normal)) / max(spacing * spacing, 1e-300)
+    quad, cubic = (float(np.median(res[i])) / _chi2_median(nu[i]) if nu[i] >= 2 else 0.0 for i in range(2))
+    unexplained = cubic / quad if quad > 0 and nu[1] >= 2 else 1.0
+    return NoiseReading(float(quad / max(spacing * spacing, 1e-300)), float(unexplained))
 
 
 def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **kwargs: Any) -> Geometry:
@@ -362,10 +393,10 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     (:func:`project_to_tangent`); the kernel then sees distances without most of the normal
     noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}, and the Richardson
     kernel's narrow half by (1 + 2σ²/h)^{-1/2}: a bias of about 1.5σ²/h that outgrows the O(h)
-    bias it removes. ``denoise=None`` (the default) projects when :func:`noise_ratio` exceeds
-    :data:`NOISY` (noise above about 14% of the spacing) and notes it in ``notes``; on 16,000
-    sphere points with 1% radial noise the default's first 9 eigenvalues go from 5.6% to
-    0.26% off (the paper's operator: 3.1%).
+    bias it removes. ``denoise=None`` (the default) projects when :func:`noise_reading` finds
+    noise (above about 14% of the spacing, :data:`NOISY`, and not explained by cubic fits) and
+    notes it in ``notes``; on 16,000 sphere points with 1% radial noise the default's first 9
+    eigenvalues go from 5.6% to 0.26% off (the paper's operator: 3.1%).
 
     Examples
     --------
@@ -377,14 +408,14 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     P = check_points(P)
     notes = ""
     pca = None
-    ratio = None
+    reading = None
     valid_k = isinstance(k, (int, np.integer)) and not isinstance(k, bool) and 1 <= k < P.shape[1]
     if denoise is None and valid_k and len(P) > 8:  # bad k: point_masses names the problem
         pca = frames.pca_frames(P, k)
-        ratio = noise_ratio(P, k, pca)
-        denoise = ratio > NOISY
+        reading = noise_reading(P, k, pca)
+        denoise = reading.noisy
         if denoise:
-            notes = f"denoised: normal noise {ratio:.3g} of the squared spacing"
+            notes = f"denoised: normal noise {reading.ratio:.3g} of the squared spacing"
     raw = P
     if denoise:
         P = project_to_tangent(P, k, kwargs.get("neighbors"))
@@ -399,6 +430,6 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
         geo._cache["input_points"] = raw
-    if ratio is not None:  # of the points as given: op.decision records it
-        geo._cache["noise_ratio"] = ratio
+    if reading is not None:  # of the points as given: op.decision records it
+        geo._cache["noise_reading"] = reading
     return geo
