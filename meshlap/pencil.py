@@ -156,7 +156,12 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
         if report is not None:
             report(0.7, "denoised positions")
         points = denoise.denoised(geo.points, S, m, sigma)
-        S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
+        S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
+        kept = denoise.kept_shapes(geo.points, points, m, m1, fem.part_labels(geo)[1], sigma / geo.spacing)
+        if kept is not points:  # parts the step shrank beyond the noise's share keep their positions
+            points = kept
+            S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
+        S, m = S1, m1
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
     if report is not None:
