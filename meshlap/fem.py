@@ -332,7 +332,7 @@ def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
         from scipy.sparse.csgraph import connected_components
 
         cells = simplicial_cells(geo)
-        if cells is None or geo.source == "point cloud":
+        if cells is None or not geo.tiled:
             return None
         n = geo.n_points
         rep = welded(geo)
@@ -384,7 +384,7 @@ def surface_noise(geo: Any) -> float:
     def make() -> float:
         from .denoise import normal_noise
 
-        if geo.faces is None or geo.ambient_dim != 3 or geo.source == "point cloud":
+        if geo.faces is None or geo.ambient_dim != 3:
             return 0.0
         sigma = normal_noise(geo.points)
         return sigma if sigma > 1e-3 * geo.spacing else 0.0

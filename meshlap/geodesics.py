@@ -124,7 +124,7 @@ def _sparse_pencils(op: Any, grad: Gradient) -> tuple[Any, Any]:
     the same two (its gradient's triangles are measured in their tangent planes, module notes).
     """
     S, geo = op.S, op.geometry
-    if S.nnz <= _SPARSE_ROW_MAX * op.n_vertices and not (grad.tangent and geo.source != "point cloud"):
+    if S.nnz <= _SPARSE_ROW_MAX * op.n_vertices and not (grad.tangent and geo.tiled):
         return op, op
     mass = np.asarray(op.mass, dtype=np.float64)
     K = grad.stiffness()

@@ -209,7 +209,7 @@ def gradient_operator(geometry: Any, method: str = "auto") -> Gradient:
     if method != "least squares" and cells is not None:
         P = getattr(geometry, "pencil_points", geo.points)
         tangent = None  # a cloud's local triangles and a denoised mesh's are measured in their
-        if geo.source == "point cloud":  # corners' mean tangent plane
+        if not geo.tiled:  # corners' mean tangent plane
             tangent = geo._pca()[0][:, :, :geo.dim]
         elif P is not geo.points:
             tangent = frames.pca_frames(P, geo.dim)[0][:, :, :geo.dim]

@@ -140,8 +140,8 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     if operator not in OPERATORS:
         raise MeshError(f"operator must be one of {', '.join(map(repr, OPERATORS))}; got {operator!r}")
     opts = {k: v for k, v in (kernel_options or {}).items() if v is not None}
-    has_cells = geo.source != "point cloud" and (geo.faces is not None or geo.cells is not None)
-    stars = geo.source == "point cloud" and "fem_cells" in geo._cache
+    has_cells = geo.tiled
+    stars = not has_cells and "fem_cells" in geo._cache
     projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
     if "noise_reading" in geo._cache:

@@ -100,7 +100,7 @@ def boundary_measure(geometry: Any) -> np.ndarray:
         raise MeshError("Neumann data need the geometry's boundary: pass an operator that carries it "
                         "(op.geometry) or a Geometry")
     P, n = getattr(geometry, "pencil_points", geo.points), geo.n_points
-    if geo.faces is not None or (geo.cells is not None and geo.source != "point cloud"):
+    if geo.tiled:
         cells = geo.faces.triangles() if geo.faces is not None else geo.cells
         c = cells.shape[1]
         if c == 2:  # a curve: its ends

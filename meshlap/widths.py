@@ -231,7 +231,7 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
         beta = check_positive(curvature_limit, "curvature_limit")
         base = h0 if h_vertex is None else h_vertex
         hv = curvature_h(geo.points, _neighbour_edges(geo), normals, base, beta)
-        if geo.source == "point cloud" and geo.dim == 2:
+        if not geo.tiled and geo.dim == 2:
             hv = np.maximum(hv, CLOUD_CAP_FLOOR * base)
         if (hv != base).any():
             check_h(float(hv.min()), "the smallest curvature-limited h")

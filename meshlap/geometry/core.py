@@ -112,6 +112,12 @@ class Geometry:
         return len(self.points)
 
     @property
+    def tiled(self) -> bool:
+        """Whether ``faces`` or ``cells`` tile the manifold, as a mesh's do (a point cloud's
+        ``cells`` are its points' local triangles, which overlap)."""
+        return (self.faces is not None or self.cells is not None) and self.source != "point cloud"
+
+    @property
     def codim(self) -> int:
         """d − k: 1 for surfaces in R³ and plane curves, where a normal is defined."""
         return self.ambient_dim - self.dim
@@ -147,7 +153,7 @@ class Geometry:
         def make() -> np.ndarray:
             if self.faces is not None:
                 e = self.faces.edges()
-            elif self.cells is not None and self.source != "point cloud":
+            elif self.tiled:
                 c = self.cells.shape[1]
                 e = np.concatenate([self.cells[:, [i, j]] for i in range(c) for j in range(i + 1, c)])
             else:
@@ -185,7 +191,7 @@ class Geometry:
                 return frames.boundary_samples_surface(P, self.faces, step)
             if self.dim == 1 and self.cells is not None:
                 return frames.boundary_samples_curve(P, self.cells)
-            if self.dim == 3 and self.cells is not None and self.source == "tetrahedra":
+            if self.dim == 3 and self.tiled:
                 return None if P.shape[1] > 3 else frames.boundary_samples_volume(P, self.cells, step)
             T, idx = self._pca()
             return frames.boundary_samples_cloud(P, self.boundary, T, idx, self.dim)
