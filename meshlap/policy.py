@@ -57,6 +57,7 @@ import numpy as np
 
 from .errors import MeshError
 from .fem import part_labels, surface_noise, welded
+from .geometry.pointcloud import noise_reading
 
 __all__ = ["OPERATORS", "Decision", "decide"]
 
@@ -69,6 +70,8 @@ _REASONS = {
              "fitted by the kernel",
     "segments": "a curve's segments: the corrected heat kernel integrated over them (consistent mass); a "
                 "segment has no shape to resolve, unlike a thin triangle",
+    "noisy surface": "the input has cells and normal noise (fits of every order leave it, spread as noise "
+                     "is): linear FEM on the positions after a heat step that averages it out",
     "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
              "each), point-wise rows fitted by the kernel",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
@@ -95,7 +98,10 @@ class Decision:
     reason : str
         Why, in a sentence.
     measured : dict
-        The quantities read from the input (vertices, cells, parts, welded copies).
+        The quantities read from the input (vertices, cells, parts, welded copies, noise).
+    denoise : bool
+        Whether the FEM pencil is built on the positions after a heat step that averages the
+        normal noise out (asked for, or read: :func:`meshlap.geometry.pointcloud.noise_reading`).
 
     Examples
     --------
@@ -109,6 +115,7 @@ class Decision:
     rows: str
     reason: str
     measured: dict = field(default_factory=dict)
+    denoise: bool = False
 
     def __str__(self) -> str:
         facts = ", ".join(f"{k}={v}" for k, v in self.measured.items())
@@ -144,13 +151,19 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     stars = not has_cells and "fem_cells" in geo._cache
     projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
+    denoise = opts.get("denoise")
+    read = denoise is None and operator == "auto" and h is None and not set(opts) - {"denoise"} and \
+        has_cells and geo.faces is not None and geo.dim == 2 and geo.ambient_dim == 3
+    if read:  # a surface's vertices read as a cloud's are: noise is what fits of any order leave
+        denoise = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2)).noisy
     if "noise_reading" in geo._cache:
         reading = geo._cache["noise_reading"]
         measured["normal noise / spacing²"] = round(reading.ratio, 4)
         measured["share cubic fits leave"] = round(reading.unexplained, 3)
+        measured["spread over noise's"] = round(reading.spread, 3)
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
-        noise = surface_noise(geo) if opts.get("denoise") else 0.0  # 0.6 s of CPU at 100k vertices
+        noise = surface_noise(geo) if denoise else 0.0  # 0.6 s of CPU at 100k vertices
         if noise > 0:
             measured["normal noise / mean edge"] = round(noise / geo.spacing, 4)
         weld = welded(geo)
@@ -167,7 +180,8 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         elif has_cells and geo.dim == 1:
             operator, reason = "galerkin", _REASONS["segments"]
         elif has_cells or stars and not projected:
-            operator, reason = "fem", _REASONS["cells" if has_cells else "stars"]
+            operator, reason = "fem", _REASONS["noisy surface" if read and denoise else
+                                               "cells" if has_cells else "stars"]
         else:
             operator, reason = "kernel", _REASONS["noisy" if stars else "cloud"]
     else:
@@ -177,4 +191,4 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
-    return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured)
+    return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured, bool(denoise))

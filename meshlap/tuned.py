@@ -13,7 +13,7 @@ from __future__ import annotations
 __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "CREASE_WIDTHS",
            "CURVATURE_LIMIT", "DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "FEATURE_FLOOR",
            "FEATURE_THIN_WIDTHS", "FEM_TIE", "GALERKIN_H_SCALE", "H_SCALE", "NOISE_AREA",
-           "NOISE_QUANTILE", "NOISE_ROUGHNESS", "NOISE_STEP", "NOISE_UNEXPLAINED", "PSD_RTOL",
+           "NOISE_QUANTILE", "NOISE_ROUGHNESS", "NOISE_SPREAD", "NOISE_STEP", "NOISE_UNEXPLAINED", "PSD_RTOL",
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
            "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW"]
@@ -87,6 +87,8 @@ ROW_MARGIN = 10.0
 CLOUD_NOISY = 0.02
 #: Share of it cubic fits must leave for it to be noise: noise leaves 1 (χ²-normalized), missed shape less
 NOISE_UNEXPLAINED = 0.9
+#: Their quartile ratio over χ²'s at most this for noise: 0.96-1.13 noisy scans, 1.45 a clean decimated knight
+NOISE_SPREAD = 1.25
 #: c of the denoising step τ = (cσ̂)²: spot, fandisk at 0.3ē of noise 16% → 5% (c = 1: 8%), clean unchanged
 NOISE_STEP = 2.0
 #: Area normal noise σ adds, in (σ/ē)² of a part's: 1.17-1.22 at 0.3ē on spot, cow, bunny, fertility, homer

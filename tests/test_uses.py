@@ -61,20 +61,22 @@ def _noisy_sphere(n=4000, sigma=0.01):
 
 def test_denoise_gives_the_distance_on_the_sphere_under_the_noise():
     # the rough mesh's own distance is longer than the great circle (its triangles' tilt adds
-    # about 2σ²/ē² = 5% to their area); with denoise=True the triangles of the denoised positions
-    # are measured in their tangent planes
+    # about 2σ²/ē² = 5% to their area); denoised (the default reads this noise: denoise=None),
+    # the triangles of the denoised positions are measured in their tangent planes
     V, F = _noisy_sphere()
     exact = _great_circle(V, [0, 1])
-    rough = _rel(HeatDistance(meshlap.laplacian(V, F)).compute_many([0, 1]), exact)
-    mean, worst = _rel(HeatDistance(meshlap.laplacian(V, F, denoise=True)).compute_many([0, 1]), exact)
-    assert rough[0] > 0.01  # measured 0.022: the default measures the mesh as given
+    rough = _rel(HeatDistance(meshlap.laplacian(V, F, denoise=False)).compute_many([0, 1]), exact)
+    op = meshlap.laplacian(V, F)
+    assert op.decision.denoise
+    mean, worst = _rel(HeatDistance(op).compute_many([0, 1]), exact)
+    assert rough[0] > 0.01  # measured 0.022: the mesh as given
     assert mean < 0.003 and worst < 0.02  # measured 0.0010 / 0.010 (with the input's gradient 0.024 / 0.040)
 
 
 def test_a_denoised_operator_s_uses_read_its_positions(tmp_path):
     V, F = _noisy_sphere()
     op = meshlap.laplacian(V, F, denoise=True)
-    plain = meshlap.laplacian(V, F)
+    plain = meshlap.laplacian(V, F, denoise=False)
     assert op.pencil_points is not op.geometry.points and plain.pencil_points is plain.geometry.points
     # the unit sphere's area 4π: measured 0.9998 (the input's triangles: 1.055)
     assert abs(gradient_operator(op).w.sum() / (4 * np.pi) - 1) < 0.003

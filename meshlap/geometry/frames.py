@@ -87,11 +87,13 @@ def _unit_normal_sums(V, T, N):  # pragma: no cover - compiled
             N[v, 0] = N[v, 1] = N[v, 2] = 0.0
 
 
-def pca_frames(P: np.ndarray, k: int, neighbors: int = 16) -> tuple[np.ndarray, np.ndarray]:
+def pca_frames(P: np.ndarray, k: int, neighbors: int = 16, rows: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Tangent bases from the principal axes of each point's ``neighbors`` nearest points.
 
     Returns ``(T, idx)``: T (n, d, d) with the k tangent axes first (largest variance first)
-    and the normal axes after them, and the neighbour indices (n, K+1), the point first.
+    and the normal axes after them, and the neighbour indices (n, K+1), the point first; for
+    the points ``rows`` only, if given.
 
     Examples
     --------
@@ -101,10 +103,11 @@ def pca_frames(P: np.ndarray, k: int, neighbors: int = 16) -> tuple[np.ndarray, 
     >>> bool(np.allclose(abs(T[:, :, 2]), [0, 0, 1]))      # the normal of the plane
     True
     """
-    n, d = P.shape
-    K = min(neighbors, n - 1)
-    _, idx = KDTree(P).query(P, k=K + 1)
+    d = P.shape[1]
+    K = min(neighbors, len(P) - 1)
+    _, idx = KDTree(P).query(P if rows is None else P[rows], k=K + 1)
     idx = np.asarray(idx, dtype=np.int64)
+    n = len(idx)
     T = np.empty((n, d, d))
     for a in range(0, n, 65536):  # blocks bound the (block, K+1, d) temporaries
         nb = P[idx[a:a + 65536]]

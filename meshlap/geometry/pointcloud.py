@@ -51,6 +51,7 @@ from scipy.sparse.csgraph import connected_components
 from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
 from ..tuned import CLOUD_NOISY as NOISY
+from ..tuned import NOISE_SPREAD as SPREAD
 from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
 from . import frames
 from .core import Geometry, check_points
@@ -60,8 +61,10 @@ __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud
            "project_to_tangent"]
 
 
-# noise_reading fits every ⌊n / _NOISE_SAMPLE⌋-th point's neighbourhood
-_NOISE_SAMPLE = 32768
+# the standard normal's upper quartile
+_Z75 = 0.6744897501960817
+# noise_reading fits this many points' neighbourhoods
+_NOISE_SAMPLE = 4096
 
 # First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
 # does not secure, up to _MAX_NEIGHBORS.
@@ -313,38 +316,50 @@ def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.n
 
 
 class NoiseReading(NamedTuple):
-    """What :func:`noise_reading` measured: ``ratio`` σ̂²/a² and ``unexplained``, the share of the
-    quadratic fits' residual that cubic fits leave."""
+    """What :func:`noise_reading` measured (its docstring): ``ratio`` σ̂²/a², ``unexplained`` the
+    share of it that cubic fits leave, ``spread`` the cubic residuals' quartile ratio over
+    independent noise's."""
 
     ratio: float
     unexplained: float
+    spread: float
 
     @property
     def noisy(self) -> bool:
-        """Normal noise that matters (``ratio > NOISY``) and is noise: a richer fit does not
-        explain it (``unexplained ≥ UNEXPLAINED``)."""
-        return self.ratio > NOISY and self.unexplained >= UNEXPLAINED
+        """Normal noise that matters (``ratio > NOISY``) and looks like independent noise: a
+        richer fit leaves it (``unexplained ≥ UNEXPLAINED``) and it is spread as χ² is
+        (``spread ≤ NOISE_SPREAD``)."""
+        return self.ratio > NOISY and self.unexplained >= UNEXPLAINED and self.spread <= SPREAD
 
 
-def _chi2_median(nu: int) -> float:
-    # Wilson-Hilferty: within 0.3% of the χ² median for ν ≥ 2
-    return nu * (1.0 - 2.0 / (9.0 * nu)) ** 3
+def _chi2_quantile(nu: int, z: float = 0.0) -> float:
+    # Wilson-Hilferty: the χ² quantile at the standard normal's z (the median at 0), within 1%
+    # for ν ≥ 5
+    c = 2.0 / (9.0 * nu)
+    return nu * (1.0 - c + z * math.sqrt(c)) ** 3
 
 
 def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = None) -> NoiseReading:
-    """The points' normal noise: σ̂²/a², and how much of it is noise rather than missed shape.
+    """The points' normal noise, and whether it is noise rather than shape the fits missed.
 
-    σ̂² is the median residual of quadratic height fits over each point's tangent k-plane (its
-    PCA frame, 16 neighbours), normalized by the median of χ² with the fit's degrees of freedom
-    (what independent normal noise of variance σ² gives); a is the mean distance to the 6 nearest
-    neighbours. The quadratic absorbs the surface's bending, which a plane's residual would read
-    as noise (0.033 on 1,000 random points of a torus of tube radius 0.4, quadratic 1.5e-4).
-    ``unexplained`` is the same reading of cubic fits on the same neighbourhoods over σ̂²:
-    independent noise leaves it at 1 whatever the fit (0.97-1.01 on 500-16,000 noisy sphere
-    points), while shape the quadratic missed, a coarse sampling's vertex-scale detail, drops it
-    (0.33-0.87 on the vertices of 7 of the 9 real meshes of benchmarks/corpus.toml that read
-    above :data:`NOISY`; two decimated ones read 1.0 and 1.25). ``pca`` takes the frames
-    of :func:`meshlap.geometry.frames.pca_frames` when they exist.
+    Height fits over each point's tangent k-plane (its PCA frame, 16 neighbours) leave, under
+    independent normal noise of variance σ², residual sums distributed as σ²χ²_ν (ν the
+    degrees of freedom left). Three readings test that model:
+
+    - ``ratio``: σ̂²/a², σ̂² the quadratic fits' median residual over the median of χ²_ν, a the
+      mean distance to the 6 nearest neighbours. The quadratic absorbs the surface's bending,
+      which a plane's residual would read as noise (0.033 on 1,000 random points of a torus of
+      tube radius 0.4, quadratic 1.5e-4).
+    - ``unexplained``: the same reading of cubic fits over σ̂². Noise leaves it at 1 whatever
+      the fit (0.97-1.01 on 500-16,000 noisy sphere points); a coarse sampling's missed shape
+      drops it (0.33-0.87 on 7 of the 9 real meshes of benchmarks/corpus.toml whose vertices
+      read above :data:`NOISY`).
+    - ``spread``: the cubic residuals' upper over lower quartile, over χ²_ν's (2.1 for ν = 7).
+      Noise is everywhere alike: 1.0 on the noisy spheres, 0.96-1.13 on five real scans with
+      0.3 mean edges of normal noise; shape is not: 1.45 and 2.7 on the other two of the 9 (a
+      decimated knight and a multi-part ant), 2-900 on clean meshes above ``NOISY``.
+
+    ``pca`` takes the frames of :func:`meshlap.geometry.frames.pca_frames` when they exist.
 
     Examples
     --------
@@ -352,18 +367,18 @@ def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None 
     >>> noise_reading(meshlap.shapes.fibonacci_sphere(2000)).noisy
     False
     >>> r = noise_reading(meshlap.samples.sphere_points(16000, "noisy", seed=0))
-    >>> r.noisy, bool(r.ratio > NOISY), bool(r.unexplained > 0.95)
-    (True, True, True)
+    >>> r.noisy, bool(r.ratio > NOISY), bool(r.unexplained > 0.95), bool(r.spread < 1.1)
+    (True, True, True, True)
     """
     P = check_points(P)
-    T, idx = frames.pca_frames(P, k) if pca is None else pca
+    # quartiles need no more than 4,096 evenly spread points (standard error about 3%): the
+    # fits' cost stays bounded (0.1 s of CPU) whatever the size
+    rows = np.unique(np.linspace(0, len(P) - 1, min(len(P), _NOISE_SAMPLE)).astype(np.int64))
+    T, idx = frames.pca_frames(P, k, rows=rows) if pca is None else (pca[0][rows], pca[1][rows])
     # the monomials of degree ≤ 3 in the k tangent coordinates, by degree
     powers = [c for deg in range(4) for c in itertools.combinations_with_replacement(range(k), deg)]
     n_quad = sum(len(c) <= 2 for c in powers)
     nu = (idx.shape[1] - n_quad, idx.shape[1] - len(powers))
-    # a median needs no more than every point of a 32,768-point stride: the fits' cost stays
-    # bounded (0.2 s of CPU) on clouds of millions
-    T, idx = T[::max(1, len(P) // _NOISE_SAMPLE)], idx[::max(1, len(P) // _NOISE_SAMPLE)]
     res = np.zeros((2, len(idx)))
     spacing = 0.0
     for a in range(0, len(idx), 65536):  # blocks bound the (block, K+1, d) temporaries
@@ -374,15 +389,19 @@ def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None 
         u /= np.maximum(np.abs(u).max(axis=(1, 2), keepdims=True), 1e-300)  # conditioning
         cols = np.stack([np.prod(u[..., list(c)], axis=2) for c in powers], axis=2)
         for i, m in enumerate((n_quad, len(powers))):
-            if nu[i] >= 2:  # fewer points than monomials fit exactly: no noise is seen
+            if nu[i] >= 5:  # too few points left over: no noise is seen
                 Q, _ = np.linalg.qr(cols[..., :m])
                 r = z - Q @ (np.swapaxes(Q, 1, 2) @ z)
                 res[i, a:a + 65536] = (r**2).sum(axis=(1, 2))
         spacing += np.linalg.norm(nb[:, 1:7] - nb[:, :1], axis=2).sum()
     spacing /= len(idx) * min(6, idx.shape[1] - 1)
-    quad, cubic = (float(np.median(res[i])) / _chi2_median(nu[i]) if nu[i] >= 2 else 0.0 for i in range(2))
-    unexplained = cubic / quad if quad > 0 and nu[1] >= 2 else 1.0
-    return NoiseReading(float(quad / max(spacing * spacing, 1e-300)), float(unexplained))
+    quad, cubic = (float(np.median(res[i])) / _chi2_quantile(nu[i]) if nu[i] >= 5 else 0.0 for i in range(2))
+    unexplained = spread = 1.0  # where cubic fits cannot be made, nothing tells noise from shape
+    if cubic > 0:
+        q1, q3 = np.percentile(res[1], [25, 75])
+        unexplained = cubic / quad
+        spread = float(q3 / max(q1, 1e-300)) / (_chi2_quantile(nu[1], _Z75) / _chi2_quantile(nu[1], -_Z75))
+    return NoiseReading(float(quad / max(spacing * spacing, 1e-300)), float(unexplained), float(spread))
 
 
 def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **kwargs: Any) -> Geometry:
