@@ -77,17 +77,12 @@ def timed(fn: Callable[[], np.ndarray]) -> tuple[np.ndarray | None, float, str]:
 
 
 def decision_text(op: object) -> str:
-    """A one-line summary of ``op.decision`` (what the default built), if the operator has one."""
+    """What the default built (``op.decision``): its pencil, and "+ denoise" where it took the
+    noise out of the positions first."""
     d = getattr(op, "decision", None)
     if d is None:
         return ""
-    if isinstance(d, dict):
-        return ", ".join(f"{k}={v}" for k, v in list(d.items())[:2])[:70]
-    for name in ("summary", "built", "builder"):
-        if hasattr(d, name):
-            v = getattr(d, name)
-            return str(v() if callable(v) else v)[:70]
-    return str(d).splitlines()[0][:70]
+    return str(getattr(d, "operator", d)) + (" + denoise" if getattr(d, "denoise", False) else "")
 
 
 # -- the operators ------------------------------------------------------------------------------
@@ -333,7 +328,12 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
             + ", ".join(f"{s} ē: {min(x['sigma'] for x in noisy if x['noise'] == s):.3f}-"
                         f"{max(x['sigma'] for x in noisy if x['noise'] == s):.3f}" for s in NOISE)
             + f"; {int((clean >= min(x['sigma'] for x in noisy)).sum())} clean surfaces read at least the "
-            "least of the noisy rows' readings (why `denoise` is the user's call).", ""] \
+            "least of the noisy rows' readings, so σ̂ alone does not tell noise. The default denoises where "
+            "the vertices' fits read noise of every order and spread as independent noise's "
+            "(`geometry.pointcloud.noise_reading`): "
+            + ", ".join(f"{sum('denoise' in x['decision'] for x in noisy if x['noise'] == s)} of the "
+                        f"{sum(x['noise'] == s for x in noisy)} rows at {s} ē" for s in NOISE)
+            + f", {sum('denoise' in x['decision'] for x in surf)} of the {len(surf)} clean surfaces.", ""] \
         if surf and noisy else [""]
     out += ["`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a heat "
             "step of time (2σ̂)² (meshlap.denoise).", "",

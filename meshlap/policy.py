@@ -58,6 +58,7 @@ import numpy as np
 from .errors import MeshError
 from .fem import part_labels, surface_noise, welded
 from .geometry.pointcloud import noise_reading
+from .tuned import NOISE_AREA, NOISE_FLOOR
 
 __all__ = ["OPERATORS", "Decision", "decide"]
 
@@ -71,7 +72,7 @@ _REASONS = {
     "segments": "a curve's segments: the corrected heat kernel integrated over them (consistent mass); a "
                 "segment has no shape to resolve, unlike a thin triangle",
     "noisy surface": "the input has cells and normal noise (fits of every order leave it, spread as noise "
-                     "is): linear FEM on the positions after a heat step that averages it out",
+                     "is, adding area): linear FEM on the positions after a heat step that averages it out",
     "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
              "each), point-wise rows fitted by the kernel",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
@@ -154,8 +155,9 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     denoise = opts.get("denoise")
     read = denoise is None and operator == "auto" and h is None and not set(opts) - {"denoise"} and \
         has_cells and geo.faces is not None and geo.dim == 2 and geo.ambient_dim == 3
-    if read:  # a surface's vertices read as a cloud's are: noise is what fits of any order leave
-        denoise = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2)).noisy
+    if read:  # a surface's vertices read as a cloud's are: independent noise whose area matters
+        reading = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2))
+        denoise = reading.independent and NOISE_AREA * reading.ratio >= NOISE_FLOOR
     if "noise_reading" in geo._cache:
         reading = geo._cache["noise_reading"]
         measured["normal noise / spacing²"] = round(reading.ratio, 4)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "CREASE_WIDTHS",
            "CURVATURE_LIMIT", "DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "FEATURE_FLOOR",
-           "FEATURE_THIN_WIDTHS", "FEM_TIE", "GALERKIN_H_SCALE", "H_SCALE", "NOISE_AREA",
+           "FEATURE_THIN_WIDTHS", "FEM_TIE", "GALERKIN_H_SCALE", "H_SCALE", "NOISE_AREA", "NOISE_FLOOR",
            "NOISE_QUANTILE", "NOISE_ROUGHNESS", "NOISE_SPREAD", "NOISE_STEP", "NOISE_UNEXPLAINED", "PSD_RTOL",
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
@@ -85,14 +85,16 @@ ROW_MARGIN = 10.0
 # -- noise (meshlap.geometry.pointcloud, meshlap.denoise) and welding (meshlap.fem) --------------
 #: A cloud's σ̂²/a² above which it is projected by default: clean < 1e-3, 1% noise 0.025-0.095 (pointclouds.md)
 CLOUD_NOISY = 0.02
-#: Share of it cubic fits must leave for it to be noise: noise leaves 1 (χ²-normalized), missed shape less
+#: Share of it cubic fits leave, within this of 1 for noise (χ²-normed): missed shape 0.33-0.87, rounding 1.4
 NOISE_UNEXPLAINED = 0.9
-#: Their quartile ratio over χ²'s at most this for noise: 0.96-1.13 noisy scans, 1.45 a clean decimated knight
+#: Their quartile ratio over χ²'s, within this of 1 for noise: noisy scans 0.96-1.13, a clean knight 1.45
 NOISE_SPREAD = 1.25
 #: c of the denoising step τ = (cσ̂)²: spot, fandisk at 0.3ē of noise 16% → 5% (c = 1: 8%), clean unchanged
 NOISE_STEP = 2.0
 #: Area normal noise σ adds, in (σ/ē)² of a part's: 1.17-1.22 at 0.3ē on spot, cow, bunny, fertility, homer
 NOISE_AREA = 2.2
+#: Area noise adds (NOISE_AREA·σ̂²/a²) below which a surface is left: under every corpus mesh's own error
+NOISE_FLOOR = 1e-4
 #: Quantile of the vertices' noise read: spot, fandisk lower quartile 0.014 and 0 clean, 0.27-0.29ē at 0.3ē
 NOISE_QUANTILE = 0.25
 #: Seam copies tied at this times their vertex's diagonal: their modes (~4× its own) above the smooth ones

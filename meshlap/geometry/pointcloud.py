@@ -325,11 +325,17 @@ class NoiseReading(NamedTuple):
     spread: float
 
     @property
+    def independent(self) -> bool:
+        """Whether the residual looks like independent noise: fits of either order leave the
+        same (``unexplained`` within UNEXPLAINED of 1) and it is spread as χ² is (``spread``
+        within NOISE_SPREAD of 1). Shape the fits missed leaves less to the cubic and is
+        spread unevenly; a residual at rounding level is spread too evenly."""
+        return (UNEXPLAINED <= self.unexplained <= 1 / UNEXPLAINED) and (1 / SPREAD <= self.spread <= SPREAD)
+
+    @property
     def noisy(self) -> bool:
-        """Normal noise that matters (``ratio > NOISY``) and looks like independent noise: a
-        richer fit leaves it (``unexplained ≥ UNEXPLAINED``) and it is spread as χ² is
-        (``spread ≤ NOISE_SPREAD``)."""
-        return self.ratio > NOISY and self.unexplained >= UNEXPLAINED and self.spread <= SPREAD
+        """Independent noise that matters to the kernel (``ratio > NOISY``)."""
+        return self.ratio > NOISY and self.independent
 
 
 def _chi2_quantile(nu: int, z: float = 0.0) -> float:
@@ -351,13 +357,17 @@ def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None 
       which a plane's residual would read as noise (0.033 on 1,000 random points of a torus of
       tube radius 0.4, quadratic 1.5e-4).
     - ``unexplained``: the same reading of cubic fits over σ̂². Noise leaves it at 1 whatever
-      the fit (0.97-1.01 on 500-16,000 noisy sphere points); a coarse sampling's missed shape
-      drops it (0.33-0.87 on 7 of the 9 real meshes of benchmarks/corpus.toml whose vertices
-      read above :data:`NOISY`).
+      the fit (0.96-1.03 on noisy spheres, 0.97-1.07 on five real scans with 0.3 mean edges of
+      normal noise); a coarse sampling's missed shape drops it (0.33-0.87 on 7 of the 9 real
+      meshes of benchmarks/corpus.toml whose vertices read above :data:`NOISY`), a residual at
+      rounding level (a clean sphere) leaves it at 1.4-1.6.
     - ``spread``: the cubic residuals' upper over lower quartile, over χ²_ν's (2.1 for ν = 7).
-      Noise is everywhere alike: 1.0 on the noisy spheres, 0.96-1.13 on five real scans with
-      0.3 mean edges of normal noise; shape is not: 1.45 and 2.7 on the other two of the 9 (a
-      decimated knight and a multi-part ant), 2-900 on clean meshes above ``NOISY``.
+      Noise is everywhere alike: 0.9-1.05 on the noisy spheres, 0.96-1.13 on the five noisy
+      scans; shape is not: 1.45 and 2.7 on the other two of the 9 (a decimated knight and a
+      multi-part ant), 1.7 to 10⁷ on the other clean meshes; rounding is too even (0.5).
+
+    :attr:`NoiseReading.independent` asks both to be near 1; :attr:`NoiseReading.noisy` also
+    asks the noise to matter to the kernel (``ratio > NOISY``).
 
     ``pca`` takes the frames of :func:`meshlap.geometry.frames.pca_frames` when they exist.
 
@@ -399,10 +409,11 @@ def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None 
     spacing /= len(idx) * min(6, idx.shape[1] - 1)
     quad, cubic = (float(np.median(res[i])) / _chi2_quantile(nu[i]) if nu[i] >= 5 else 0.0 for i in range(2))
     unexplained = spread = 1.0  # where cubic fits cannot be made, nothing tells noise from shape
-    if cubic > 0:
+    if nu[1] >= 5:
         q1, q3 = np.percentile(res[1], [25, 75])
-        unexplained = cubic / quad
-        spread = float(q3 / max(q1, 1e-300)) / (_chi2_quantile(nu[1], _Z75) / _chi2_quantile(nu[1], -_Z75))
+        unexplained = cubic / quad if quad > 0 else 0.0  # fits that leave nothing: no noise
+        chi2 = _chi2_quantile(nu[1], _Z75) / _chi2_quantile(nu[1], -_Z75)
+        spread = float(q3 / q1) / chi2 if q1 > 1e-12 * q3 else math.inf
     return NoiseReading(float(quad / max(spacing * spacing, 1e-300)), float(unexplained), float(spread))
 
 
