@@ -18,11 +18,12 @@ The policy for ``operator="auto"`` has no tuned threshold:
 
 - an input with cells gets the "fem" pencil: linear FEM on the intrinsic Delaunay triangulation of
   its cells (:mod:`meshlap.fem`), so its worst case is linear FEM there, and parts stay apart
-  (one zero eigenvalue per connected part); ``denoise=True`` measures a surface's normal noise
-  (:func:`meshlap.denoise.normal_noise`, recorded) and takes FEM on the positions after a heat
-  step that averages it out (a scan's fine detail reads as noise too, so this is the user's
-  call, not a threshold's); the kernel keeps what FEM cannot give: ``op @ f``,
-  point-wise convergent rows;
+  (one zero eigenvalue per connected part); a surface whose vertices read independent normal
+  noise (:func:`meshlap.geometry.pointcloud.noise_reading`: quadratic and cubic height fits
+  leave the same residual, spread as σ²χ² is, adding more than ``NOISE_FLOOR`` to the area;
+  recorded) gets FEM on the positions after a heat step that averages it out
+  (:mod:`meshlap.denoise`; ``denoise=True`` or ``False`` decides instead); the kernel keeps
+  what FEM cannot give: ``op @ f``, point-wise convergent rows;
 - a curve's segments get the "galerkin" pencil: the heat kernel integrated over the segments.
   Its failure on surfaces is a triangle too thin for the kernel's quadrature, and a segment has
   no shape; on the 24 synthetic curves of ``benchmarks/bench_curves.py`` it is 0.02-0.49× linear
