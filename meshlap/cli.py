@@ -59,8 +59,8 @@ def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -
     # the library's default operator (the one notebooks and scripts get), unless --correction
     options = {"h": args.h, "tol": args.tol, "dtype": dtype, "progress": args.progress or None,
                "correction": args.correction}
-    if getattr(args, "denoise", False):  # distance --denoise
-        options["denoise"] = True
+    if getattr(args, "denoise", None) is not None:  # distance --denoise / --no-denoise
+        options["denoise"] = args.denoise
     if _is_cloud(F):
         return point_cloud_laplacian(V, k=args.dim, **options)
     return laplacian(V, F, k=k, **options)

@@ -83,9 +83,10 @@ def add_distance_parser(sub: Any, shared: Callable[[argparse.ArgumentParser], No
     p.add_argument("--each", action="store_true",
                    help="one distance field per source (rows of a distance matrix) instead of the nearest")
     p.add_argument("--t", type=float, default=None, help="heat time (default: the mean spacing squared)")
-    p.add_argument("--denoise", action="store_true",
-                   help="the distance on the surface the input is a noisy sample of (meshlap.laplacian's "
-                        "denoise=True; a point cloud's projection): see docs/uses.md")
+    p.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=None,
+                   help="--denoise: the distance on the surface the input is a noisy sample of, whatever "
+                        "the noise reads (meshlap.laplacian's denoise=True; a point cloud's projection); "
+                        "--no-denoise: the mesh as given; default: where it reads as noise (docs/uses.md)")
     p.add_argument("-o", "--output", help="save the distance to .npy, .txt or .csv")
     p.add_argument("--png", help="draw the distance on the mesh into this PNG")
     shared(p)

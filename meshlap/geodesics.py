@@ -39,18 +39,18 @@ Measured (largest relative error at d ≥ 0.1, three sources, 10,000 vertices): 
 each source's largest error has median 7.9% → 6.2% and maximum 17.2% → 12.7% (potpourri3d's
 9.0% and 17.6%).
 
-Denoised meshes. An operator built with ``denoise=True`` carries the positions its pencil was
-built on (``op.pencil_points``, after a heat step of the positions: :mod:`meshlap.denoise`);
+Denoised meshes. An operator whose pencil was built after a heat step of the positions
+(:mod:`meshlap.denoise`; ``op.decision.denoise``: where the vertices read independent noise, or
+``denoise=True``) carries the positions it was built on (``op.pencil_points``);
 the gradient, the source neighbourhoods and the shift read those, and the gradient measures each
 triangle in the mean tangent plane of its corners (:func:`~meshlap.gradients.gradient_operator`),
 as on a point cloud: the heat step damps the noise enough for the spectrum but leaves the
 triangles tilted, and tilt lengthens every path (a 50,000-vertex sphere with 0.23 mean edges of
 radial noise: its area is 15.8% over 4π as given, 5.3% after the heat step, 0.46% in the
 tangent planes). Both solves then take the gradient's stiffness ``Gᵀ W G``, the one whose metric
-X is a unit field of. Without ``denoise`` the distance is the mesh's as given (its own
-polyhedral distance, 0.44% off libigl's exact one on the 10,000-vertex noisy sphere): the noise
-read on real scans (0.07-0.11 mean edges) is often their detail, and tilt lengthens a path by
-about σ̂²/ē² (1.3% on that sphere, σ = 0.13 ē): taking it out would shorten theirs by 0.5-1.2%.
+X is a unit field of. Otherwise (a clean mesh, or ``denoise=False``) the distance is the mesh's
+as given (its own polyhedral distance, 0.44% off libigl's exact one on the 10,000-vertex noisy
+sphere built with ``denoise=False``, where tilt lengthens a path by about σ̂²/ē², 1.3%).
 
 The time step ``t = c ē²``, ē the geometry's mean spacing (``op.geometry.spacing``), c = 1:
 Crane et al.'s rule, and potpourri3d's, LaPy's and libigl's default. With log u the gradient's
@@ -176,8 +176,9 @@ class HeatDistance:
     ----------
     op : MeshLaplacian or SparseLaplacian
         An operator with ``.S``, ``.mass`` and ``.geometry`` (:func:`meshlap.laplacian`,
-        :func:`meshlap.point_cloud_laplacian`); built with ``denoise=True``, the distance is
-        that of the denoised surface, measured at ``op.pencil_points`` (module notes).
+        :func:`meshlap.point_cloud_laplacian`); where its pencil was denoised
+        (``op.decision.denoise``), the distance is that of the denoised surface, measured at
+        ``op.pencil_points`` (module notes).
     t : float, optional
         Heat time; default ``TIME_FACTOR · ē²`` with ē = ``op.geometry.spacing`` (module notes).
     solver : {"auto", "direct", "cg"}

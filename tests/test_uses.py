@@ -296,6 +296,15 @@ def test_cli_distance(tmp_path, capsys):
     assert D.shape == (2, 800) and _rel(D, _great_circle(V, [0, 3]))[0] < 0.03
     assert "heat-method distance from vertex 0, 3" in capsys.readouterr().out
     assert main(["distance", str(path), "--source", "0", "--denoise"]) == 0  # laplacian(..., denoise=True)
+    # a noisy sphere: the default denoises it (as --denoise), --no-denoise keeps the mesh as given
+    noisy = tmp_path / "noisy.obj"
+    meshlap.io.write_mesh(noisy, V * (1 + 0.01 * np.random.default_rng(0).standard_normal((800, 1))), F)
+    d = {}
+    for flag in ([], ["--denoise"], ["--no-denoise"]):
+        out = tmp_path / f"d{len(d)}.npy"
+        assert main(["distance", str(noisy), "--source", "0", *flag, "-o", str(out)]) == 0
+        d[tuple(flag)] = np.load(out)
+    assert np.array_equal(d[()], d[("--denoise",)]) and not np.allclose(d[()], d[("--no-denoise",)])
     capsys.readouterr()
     assert main(["distance", str(path), "--source", "800"]) == 1
     assert "indices must lie in [0, 799]" in capsys.readouterr().err
