@@ -117,7 +117,7 @@ def laplacian(
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
-                       denoise=chosen.denoise or bool(denoise), mass=mass, **{**kernel_options, **named})
+                       denoise=chosen.denoise, mass=mass, **{**kernel_options, **named})
     op._decision = chosen
     return op
 

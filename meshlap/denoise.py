@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
-from pykdtree.kdtree import KDTree
 
+from .geometry import frames
 from .tuned import NOISE_AREA, NOISE_QUANTILE, NOISE_STEP
 
 __all__ = ["NEIGHBOURS", "SAMPLE", "denoised", "kept_shapes", "normal_noise", "smoothed_points"]
@@ -66,23 +66,9 @@ def normal_noise(P: np.ndarray, normals: np.ndarray | None = None) -> float:
     if n < NEIGHBOURS or P.shape[1] != 3:
         return 0.0
     rows = np.arange(0, n, max(1, n // SAMPLE))
-    _, idx = KDTree(P).query(P[rows], k=NEIGHBOURS)
-    idx = idx.astype(np.int64)
-    idx = idx[(idx < n).all(axis=1)]
-    if not len(idx):
-        return 0.0
-    X = P[idx]
-    X = X - X.mean(axis=1, keepdims=True)
-    _, _, Vt = np.linalg.svd(X, full_matrices=False)
-    local = X @ np.swapaxes(Vt, 1, 2)  # tangent u, v and the height along the normal
-    u, v, z = local[..., 0], local[..., 1], local[..., 2]
-    A = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v, u**3, u * u * v, u * v * v, v**3], axis=2)
-    G = np.swapaxes(A, 1, 2) @ A
-    G += 1e-12 * np.einsum("mii->m", G)[:, None, None] * np.eye(A.shape[2])
-    coef = np.linalg.solve(G, np.swapaxes(A, 1, 2) @ z[..., None])
-    resid = z - (A @ coef)[..., 0]
-    var = (resid**2).sum(axis=1) / (NEIGHBOURS - A.shape[2])
-    return float(np.sqrt(np.quantile(var, NOISE_QUANTILE)))
+    T, idx = frames.pca_frames(P, 2, NEIGHBOURS - 1, rows)
+    res, dof = frames.height_residuals(P, T, idx, 2, (3,))
+    return float(np.sqrt(np.quantile(res[0] / dof[0], NOISE_QUANTILE)))
 
 
 def smoothed_points(P: np.ndarray, S: sp.spmatrix, m: np.ndarray, tau: float) -> np.ndarray:

@@ -202,6 +202,22 @@ def test_tetrahedral_mesh_within_fem():
     assert _error(lam, exact) < 0.1
 
 
+def test_the_noise_readings_do_not_depend_on_the_units():
+    # the fits' regularization once scaled with the coordinates: a 1,000-vertex sphere with
+    # 0.5% radial noise read 0.034 mean edges, the same in millimetres 0.124 (and the bunny,
+    # 0.15 units across, 0.00052 for 0.00035); now both readings are the same in any units
+    from meshlap.denoise import normal_noise
+    from meshlap.geometry.pointcloud import noise_reading
+
+    V, F = meshlap.shapes.sphere(1000, seed=0)
+    X = V * (1 + 0.005 * np.random.default_rng(0).standard_normal((len(V), 1)))
+    sigma, reading = normal_noise(X), noise_reading(X)
+    assert sigma / meshlap.geometry.from_mesh(V, F).spacing == pytest.approx(0.034, rel=0.02)
+    for scale in (1e-3, 1e3):
+        assert normal_noise(scale * X) == pytest.approx(scale * sigma, rel=1e-6)
+        assert np.allclose(noise_reading(scale * X), reading, rtol=1e-6)
+
+
 def test_denoise_takes_normal_noise_out_of_the_metric():
     # a unit sphere with 0.3 mean edges of noise along the normals: the default reads noise
     # (fits of every order leave it, spread as χ²), the measured noise is within 30% of it, and

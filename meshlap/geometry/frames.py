@@ -19,6 +19,8 @@ sample b with normal ν, which is what the mirror images of
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
@@ -29,7 +31,7 @@ from .polygons import Polygons
 
 __all__ = ["BoundaryFrames", "boundary_samples_cloud", "boundary_samples_curve",
            "boundary_samples_surface", "boundary_samples_volume", "frames_from_samples",
-           "knn_edges", "orient_normals", "pca_frames", "vertex_normals"]
+           "height_residuals", "knn_edges", "orient_normals", "pca_frames", "vertex_normals"]
 
 #: ``(band, b, nu)``: the points within the radius of the boundary, their nearest boundary
 #: sample and the outward unit conormal there; None when there is no boundary.
@@ -115,6 +117,46 @@ def pca_frames(P: np.ndarray, k: int, neighbors: int = 16, rows: np.ndarray | No
         _, v = np.linalg.eigh(np.einsum("nki,nkj->nij", X, X))
         T[a:a + 65536] = v[:, :, ::-1]  # largest variance first
     return T, idx
+
+
+def height_residuals(P: np.ndarray, T: np.ndarray, idx: np.ndarray, k: int, degrees: tuple[int, ...]
+                     ) -> tuple[np.ndarray, tuple[int, ...]]:
+    """Residual sums of least-squares fits of each neighbourhood's heights along its normals by
+    polynomials of the given degrees in its k tangent coordinates, and their degrees of freedom.
+
+    ``T, idx`` are :func:`pca_frames`' (the neighbourhoods, their frames). Returns ``res``
+    (len(degrees), m) and ``dof``: points per neighbourhood minus monomials; where a degree
+    leaves fewer than one, its row is zero (the fit is exact).
+
+    Examples
+    --------
+    >>> P = np.random.default_rng(0).normal(size=(300, 3)) * [1, 1, 0]
+    >>> T, idx = pca_frames(P, 2)
+    >>> res, dof = height_residuals(P, T, idx, 2, (2, 3))
+    >>> dof, bool(res.max() < 1e-20)             # a plane: nothing is left
+    ((11, 7), True)
+    """
+    # the monomials in the k tangent coordinates, by degree
+    powers = [c for deg in range(max(degrees) + 1)
+              for c in itertools.combinations_with_replacement(range(k), deg)]
+    sizes = [sum(len(c) <= deg for c in powers) for deg in degrees]
+    dof = tuple(idx.shape[1] - s for s in sizes)
+    res = np.zeros((len(degrees), len(idx)))
+    for a in range(0, len(idx), 65536):  # blocks bound the (block, K+1, monomials) temporaries
+        nb = P[idx[a:a + 65536]]
+        X = nb - nb.mean(axis=1, keepdims=True)
+        z = X @ T[a:a + 65536, :, k:]  # heights along the normals
+        u = X @ T[a:a + 65536, :, :k]  # tangent coordinates
+        u /= np.maximum(np.abs(u).max(axis=(1, 2), keepdims=True), 1e-300)  # conditioning
+        A = np.stack([np.prod(u[..., list(c)], axis=2) for c in powers], axis=2)
+        At = np.swapaxes(A, 1, 2)
+        G, b = At @ A, At @ z  # a lower degree's normal equations are their leading block
+        for i, m in enumerate(sizes):
+            if dof[i] >= 1:
+                Gm = G[:, :m, :m] + 1e-12 * np.einsum("nii->n", G[:, :m, :m])[:, None, None] * np.eye(m)
+                r = z - A[..., :m] @ np.linalg.solve(Gm, b[:, :m])
+                res[i, a:a + 65536] = (r**2).sum(axis=(1, 2))
+    return res, dof
 
 
 @jit()

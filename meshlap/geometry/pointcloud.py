@@ -38,7 +38,6 @@ Messy input has defined behaviour, each with a :class:`~meshlap.validation.MeshW
 
 from __future__ import annotations
 
-import itertools
 import math
 import warnings
 from typing import Any, NamedTuple
@@ -385,28 +384,9 @@ def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None 
     # fits' cost stays bounded (0.1 s of CPU) whatever the size
     rows = np.unique(np.linspace(0, len(P) - 1, min(len(P), _NOISE_SAMPLE)).astype(np.int64))
     T, idx = frames.pca_frames(P, k, rows=rows) if pca is None else (pca[0][rows], pca[1][rows])
-    # the monomials of degree ≤ 3 in the k tangent coordinates, by degree
-    powers = [c for deg in range(4) for c in itertools.combinations_with_replacement(range(k), deg)]
-    n_quad = sum(len(c) <= 2 for c in powers)
-    nu = (idx.shape[1] - n_quad, idx.shape[1] - len(powers))
-    res = np.zeros((2, len(idx)))
-    spacing = 0.0
-    for a in range(0, len(idx), 65536):  # blocks bound the (block, K+1, d) temporaries
-        nb = P[idx[a:a + 65536]]
-        X = nb - nb.mean(axis=1, keepdims=True)
-        z = X @ T[a:a + 65536, :, k:]  # heights along the normals
-        u = X @ T[a:a + 65536, :, :k]  # tangent coordinates
-        u /= np.maximum(np.abs(u).max(axis=(1, 2), keepdims=True), 1e-300)  # conditioning
-        A = np.stack([np.prod(u[..., list(c)], axis=2) for c in powers], axis=2)
-        At = np.swapaxes(A, 1, 2)
-        G, b = At @ A, At @ z  # the quadratic's normal equations are their leading block
-        for i, m in enumerate((n_quad, len(powers))):
-            if nu[i] >= 5:  # too few points left over: no noise is seen
-                Gm = G[:, :m, :m] + 1e-12 * np.einsum("nii->n", G[:, :m, :m])[:, None, None] * np.eye(m)
-                r = z - A[..., :m] @ np.linalg.solve(Gm, b[:, :m])
-                res[i, a:a + 65536] = (r**2).sum(axis=(1, 2))
-        spacing += np.linalg.norm(nb[:, 1:7] - nb[:, :1], axis=2).sum()
-    spacing /= len(idx) * min(6, idx.shape[1] - 1)
+    res, nu = frames.height_residuals(P, T, idx, k, (2, 3))
+    spacing = float(np.linalg.norm(P[idx[:, 1:7]] - P[idx[:, :1]], axis=2).mean())
+    # fewer than 5 degrees of freedom left: no noise is seen
     quad, cubic = (float(np.median(res[i])) / _chi2_quantile(nu[i]) if nu[i] >= 5 else 0.0 for i in range(2))
     unexplained = spread = 1.0  # where cubic fits cannot be made, nothing tells noise from shape
     if nu[1] >= 5:
