@@ -78,12 +78,13 @@ def timed(fn: Callable[[], np.ndarray]) -> tuple[np.ndarray | None, float, str]:
 
 
 def decision_text(op: object) -> str:
-    """What the default built (``op.decision``): its pencil, and "+ denoise" where it took the
-    noise out of the positions first."""
+    """What the default built (``op.decision``): its pencil, "+ denoise" where it took the
+    noise out of the positions first, and whether ``eigs`` solved the quadratic elements."""
     d = getattr(op, "decision", None)
     if d is None:
         return ""
-    return str(getattr(d, "operator", d)) + (" + denoise" if getattr(d, "denoise", False) else "")
+    return str(getattr(d, "operator", d)) + (" + denoise" if getattr(d, "denoise", False) else "") + \
+        (" (quadratic eigs)" if getattr(d, "elements", "linear") == "quadratic" else "")
 
 
 # -- the operators ------------------------------------------------------------------------------

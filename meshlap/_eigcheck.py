@@ -78,6 +78,22 @@ def scales(lam: np.ndarray, floor: float) -> np.ndarray:
     return np.maximum(np.abs(lam), max(0.01 * top, floor, 1e-300))
 
 
+def roundoff_floor(stiff: float, tol: float, scale: float) -> float:
+    """The yardstick ``floor`` of :func:`verify` for a pencil of scale ``scale`` whose stiffest
+    row has ``A_ii / m_i = stiff``: 1% of the scale, or what roundoff leaves of ``A x`` there
+    (4ε·stiff, over ``tol``), whichever is more. A mesh of tiny and large triangles has exact
+    null vectors (its parts' indicators) whose computed residual is above ``tol`` times 1% of
+    the scale.
+
+    Examples
+    --------
+    >>> roundoff_floor(4.0, 1e-8, 1.0), roundoff_floor(1e8, 1e-8, 1.0) > 0.01
+    (0.01, True)
+    """
+    eps = float(np.finfo(np.float64).eps)
+    return max(0.01 * scale, 4 * eps * stiff / max(tol, eps))
+
+
 def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.ndarray, X: np.ndarray,
            tol: float, floor: float, upper: float | None = None, allsum=_lobpcg._local) -> Verdict:
     """Check the pairs ``(lam[i], X[:, i])`` of ``A x = λ M x``, ``A = -S`` (module notes).

@@ -209,3 +209,16 @@ class _FirstCompileNotice(event.Listener):
 
 
 event.register("numba:compile", _FirstCompileNotice())
+
+
+def one_blas_thread() -> contextlib.AbstractContextManager:
+    """Keep BLAS on one thread while meshlap's threads share the products' rows.
+
+    The dense steps here are small (n × a few k); a threaded BLAS between two parallel
+    products competed with their spinning OpenMP workers and was measured 3-10× slower.
+    """
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # optional: without it BLAS keeps its own setting
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")

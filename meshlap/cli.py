@@ -188,7 +188,7 @@ def cmd_eigs(args: argparse.Namespace) -> int:
     _need_suffixes(args)
     op, V, F = _operator_from(args)
     t0 = time.perf_counter()
-    lam, phi = eigs(op, args.k)
+    lam, phi = eigs(op, args.k, elements=args.elements)
     seconds = time.perf_counter() - t0
     columns = {getattr(op, "name", "BSW"): lam}
     if args.compare_cot:
@@ -490,6 +490,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "M-orthonormal) of a mesh's operator, or of a saved one.")
     p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz from 'meshlap build'")
     p.add_argument("-k", type=_positive_int, default=10, help="number of eigenpairs (default 10)")
+    p.add_argument("--elements", choices=["auto", "linear", "quadratic"], default="auto",
+                   help="what to solve: the operator's pencil (linear) or, on a mesh, quadratic elements on "
+                        "its triangles (default: the operator's choice, op.elements)")
     _kernel_options(p)
     p.add_argument("-o", "--output", help="save eigenvalues and eigenvectors to this .npz")
     p.add_argument("--png", help="draw the first eigenfunctions on the surface into this PNG")

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
+from ._jit import one_blas_thread as _one_blas_thread
 from ._shiftinvert import factor as _factor
 from .errors import MeshError
 from .geometry.validation import check_function
@@ -34,7 +35,6 @@ from .spectral import (
     _check_mass,
     _cot_stiffness,
     _mesh_of,
-    _one_blas_thread,
     _restricted_S,
     apply_block,
     eigs,

@@ -263,6 +263,7 @@ class MeshLaplacian(LumpedLaplacian):
     n_vertices = property(lambda self: self.geometry.n_points, doc="Rows of the operator (builds nothing).")
     decision = property(lambda self: self._decision or policy.decide(self.geometry, _named(self.options)),
                         doc="Which operator was built and why (:mod:`meshlap.policy`).")
+    elements = property(lambda self: self.decision.elements, doc="What spectral.eigs solves (policy).")
 
     h = property(lambda self: self.widths.h, doc="Kernel width (the base width with per-point widths).")
     h_vertex = property(lambda self: self.widths.h_vertex, doc="Per-point widths, when they differ.")

@@ -46,6 +46,10 @@ The policy for ``operator="auto"`` has no tuned threshold:
   the kernel: "paper" with ``correction="none"``, "galerkin" with ``quadrature="galerkin"``,
   else "kernel".
 
+On a triangle or polygon mesh the FEM pencil's spectra come from the seven-node quadratic
+elements on the same triangles (``Decision.elements``, :mod:`meshlap.quadratic`): the same
+surface, at fourth order instead of second, with no choice left to make.
+
 The decision, with what it read, is kept on the operator as ``op.decision``.
 """
 
@@ -104,6 +108,10 @@ class Decision:
     denoise : bool
         Whether the FEM pencil is built on the positions after a heat step that averages the
         normal noise out (asked for, or read: :func:`meshlap.geometry.pointcloud.noise_reading`).
+    elements : str
+        What :func:`meshlap.spectral.eigs` solves: "quadratic" (the seven-node elements on the
+        same triangles, :mod:`meshlap.quadratic`) for the FEM pencil of a triangle or polygon
+        mesh, else "linear" (the pencil itself).
 
     Examples
     --------
@@ -118,6 +126,7 @@ class Decision:
     reason: str
     measured: dict = field(default_factory=dict)
     denoise: bool = False
+    elements: str = "linear"
 
     def __str__(self) -> str:
         facts = ", ".join(f"{k}={v}" for k, v in self.measured.items())
@@ -194,4 +203,6 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
-    return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured, bool(denoise))
+    quadratic = operator == "fem" and has_cells and geo.faces is not None and geo.dim == 2
+    return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured, bool(denoise),
+                    "quadratic" if quadratic else "linear")

@@ -36,12 +36,13 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from . import _lobpcg
+from ._jit import one_blas_thread as _one_blas_thread
 from ._shiftinvert import factor as _factor
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
 from .gradients import gradient_operator
-from .spectral import _SPARSE_ROW_MAX, _check_mass, _extend, _one_blas_thread
+from .spectral import _SPARSE_ROW_MAX, _check_mass, _extend
 
 __all__ = ["PoissonSolver", "boundary_measure", "harmonic", "poisson"]
 

@@ -27,7 +27,6 @@ frequency. The iteration itself (and the meaning of ``tol``: the eigenvalues' ac
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import math
 from typing import Any
@@ -38,8 +37,8 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
-from . import _eigcheck, _lobpcg, _shiftinvert
-from ._jit import in_blocks, jit
+from . import _eigcheck, _lobpcg, _shiftinvert, quadratic
+from ._jit import in_blocks, jit, one_blas_thread
 from .errors import MeshError
 from .geometry import spatial_order
 from .geometry.validation import check_faces, check_k, check_vertices
@@ -52,8 +51,7 @@ _METHODS = ("auto", "lobpcg", "shift-invert", "dense")
 _DENSE_MAX = 1200
 _SPARSE_ROW_MAX = 40
 # the fallbacks after a failed check: dense up to this many vertices with mass, shift-invert
-# for a dense-row operator up to this many stored entries (a 6,000-vertex sphere's default
-# operator, 5.1 M entries: 65 s on 2 cores, against 18 s for LOBPCG)
+# for a dense-row operator up to this many entries (5.1 M: 65 s on 2 cores, LOBPCG 18 s)
 _DENSE_FALLBACK = 4000
 _FALLBACK_NNZ = 8_000_000
 # the relative width of the k-th eigenvalue's cluster that LOBPCG's block must hold
@@ -62,19 +60,6 @@ _CLUSTER = 0.1
 # below ~0.3, as the start's error is then the two operators' difference (36 eigenpairs of a
 # 16k sphere: 7 iterations from a start to 0.3, 0.1, 0.03, 0.01 or 0.001, which took 5-8)
 _START_TOL = 0.1
-
-
-def _one_blas_thread() -> contextlib.AbstractContextManager:
-    """Keep BLAS on one thread while meshlap's threads share the products' rows.
-
-    The dense steps here are small (n × a few k); a threaded BLAS between two parallel
-    products competed with their spinning OpenMP workers and was measured 3-10× slower.
-    """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # optional: without it BLAS keeps its own setting
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
 
 
 # -- products with the operator ----------------------------------------------------------------
@@ -258,6 +243,7 @@ def eigs(
     progress: ProgressLike = None,
     count: bool | None = None,
     info: dict | None = None,
+    elements: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""The k smallest eigenpairs of ``-S φ = λ M φ`` (the symmetric form of -L), verified.
 
@@ -302,7 +288,12 @@ def eigs(
         ``tried``, ``iterations``, ``residuals`` (‖-Sφ - λMφ‖ in the M⁻¹ norm), ``bounds``
         (each eigenvalue's error bound over ``tol`` times its scale, all ≤ 1),
         ``orthogonality`` (largest entry of ``|ΦᵀMΦ - I|``), ``count``, ``shift`` and
-        ``complete`` (whether the count, or a dense solve, showed the k values are the lowest).
+        ``complete`` (whether the count, or a dense solve, showed the k values are the lowest),
+        ``elements``.
+    elements : {"auto", "linear", "quadratic"}, default "auto"
+        "linear": the pairs of ``op``'s pencil (S, M); "quadratic": of the seven-node elements
+        on the same triangles (:mod:`meshlap.quadratic`), read at the vertices, M-orthonormal;
+        "auto": ``op.elements`` (quadratic for the default on a polygon mesh).
 
     Returns
     -------
@@ -322,13 +313,10 @@ def eigs(
     Every returned pair is checked with fresh products (:mod:`meshlap._eigcheck`): the block
     is M-orthonormal and each eigenvalue's error bound from its residual (Kato–Temple over its
     cluster, Bauer–Fike where no gap is known) is within ``tol · max(λ, λ_k / 100, 1% of
-    4π/area)``. Pairs that fail are recomputed: LOBPCG with a wider block and twice the
-    iterations, shift-invert (sparse LU, for operators of at most 8 M entries), a dense solve
-    (up to 4,000 vertices with mass); then :class:`meshlap.EigenError`. See docs/spectral.md.
-
-    Vertices with zero mass have no row in the symmetric problem; it is solved on the others,
-    and φ there is the kernel-weighted mean of its neighbours (the λ → 0 Nyström extension),
-    or 0 where that row of L is empty.
+    4π/area, roundoff's floor)``. Pairs that fail are recomputed (LOBPCG wider, shift-invert,
+    dense up to 4,000 vertices), else :class:`meshlap.EigenError`. See docs/spectral.md.
+    Vertices with zero mass have no row in the problem; φ there is the kernel-weighted mean
+    of its neighbours (the λ → 0 Nyström extension), or 0 where that row of L is empty.
 
     Examples
     --------
@@ -347,9 +335,20 @@ def eigs(
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
     if count not in (None, True, False):
         raise MeshError(f"count must be None, True or False; got {count!r}")
+    if elements not in ("auto", "linear", "quadratic"):
+        raise MeshError(f"elements must be 'auto', 'linear' or 'quadratic'; got {elements!r}")
     mass, P = _check_mass(op)
     n_p = len(P)
     k = check_k(k, n_p)
+    if elements == "auto":
+        elements = getattr(op, "elements", "linear")
+    if elements == "quadratic":  # the same pairs' better approximation, verified on its own pencil
+        lam, X = eigs(quadratic.fine_pencil(op), k, method=method, tol=tol, maxiter=maxiter, extra=extra,
+                      seed=seed, progress=progress, count=count, info=info)
+    if info is not None:
+        info["elements"] = elements
+    if elements == "quadratic":
+        return lam, _normalize_signs(quadratic.at_vertices(op, X))
     m = mass[P]
     matrix_free = getattr(op, "matrix_free", False)
     nnz = 0 if matrix_free else symmetric_L(op).nnz
@@ -419,8 +418,10 @@ def eigs(
         LX = symmetric_L(op) @ full if sparse else apply_block(op, full)
         return -m[:, None] * np.asarray(LX)[P]
 
-    with _one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
-        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, 0.01 * _scale_shift(m), counter,
+    stiff = 0.0 if matrix_free else float(np.abs(symmetric_L(op).diagonal()[P]).max())  # max S_ii / m_i
+    with one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
+        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol,
+                                          _eigcheck.roundoff_floor(stiff, tol, _scale_shift(m)), counter,
                                           bool(count), info=info)
     if report is not None:
         report(1.0, "done")
@@ -479,7 +480,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
     T = _lobpcg.CotPreconditioner(K, m, diag, sigma)
     rng = np.random.default_rng(seed)
     X0 = rng.standard_normal((n_p, _start_width(k, nb, n_p) if adapt and K is not None else nb))[order]
-    with _one_blas_thread():
+    with one_blas_thread():
         if K is not None:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
             # (the same factorization, without ½ D⁻¹), to a residual of _START_TOL

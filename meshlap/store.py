@@ -62,7 +62,8 @@ class SavedLaplacian(LumpedLaplacian):
     Behaves like the operator it was saved from: ``op @ f``, ``L``, ``L_sym``, ``M``, ``S``,
     ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction`` (None
     for operators without them, such as the cotangent Laplacian), and when the geometry was
-    saved ``V``, ``faces``, ``geometry``, ``dim`` and ``pencil_points``.
+    saved ``V``, ``faces``, ``geometry``, ``dim``, ``pencil_points`` and ``elements`` (what
+    :func:`meshlap.spectral.eigs` solves; "linear" without the geometry).
 
     Examples
     --------
@@ -90,6 +91,8 @@ class SavedLaplacian(LumpedLaplacian):
         self.h_vertex = params.get("h_vertex")
         self.exact = self.tol == 0.0
         self.dtype = applied.dtype
+        # what spectral.eigs solves: the quadratic elements need the saved geometry
+        self.elements = str(params.get("elements") or "linear") if geometry is not None else "linear"
         if geometry is not None:  # only then: code that looks for op.V falls back without it
             self.geometry, self.dim, self.faces = geometry, geometry.dim, geometry.faces
             P = geometry.points
@@ -269,7 +272,7 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
         if getattr(op, "h_vertex", None) is not None:
             arrays["h_vertex"] = op.h_vertex
         if mesh:
-            arrays.update(_geometry_arrays(op))
+            arrays.update(_geometry_arrays(op), elements=np.array(getattr(op, "elements", "linear")))
     if "data" in arrays:
         arrays["format"] = np.array("csr")
     arrays.update(meshlap_format=np.array(FORMAT_VERSION), meshlap_version=np.array(__version__),
@@ -357,7 +360,7 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
                 f"reads version {FORMAT_VERSION}: build and save the operator again")
         mass = data["mass"]
         n = len(mass)
-        params = {k: data[k].item() for k in (*_PARAMS, "h_auto", "name", "correction", "dtype")
+        params = {k: data[k].item() for k in (*_PARAMS, "h_auto", "name", "correction", "dtype", "elements")
                   if k in data}
         if "h_vertex" in data:
             params["h_vertex"] = data["h_vertex"]

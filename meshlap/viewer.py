@@ -160,8 +160,8 @@ def show_modes(op: Any, k: int = 6, *, eig: tuple[np.ndarray, np.ndarray] | None
     >>> import meshlap
     >>> V, F = meshlap.shapes.sphere(500, seed=0)
     >>> plot = show_modes(meshlap.laplacian(V, F), 3)
-    >>> [obj.text for obj in plot.objects if hasattr(obj, "text")][0]   # l(l + 1) = 2
-    'φ1  λ = 2'
+    >>> [obj.text for obj in plot.objects if hasattr(obj, "text")][0]   # 2 on the inscribed polyhedron
+    'φ1  λ = 2.013'
     """
     from .inputs import boundary_triangles
     from .spectral import eigs

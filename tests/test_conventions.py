@@ -111,12 +111,14 @@ def test_scipy_eigsh_and_lobpcg_on_the_pair(pair):
 
 
 def test_spectral_eigs_agrees(sphere):
-    """meshlap's own eigensolver on the operator: the same spectrum as eigsh on the pair."""
+    """meshlap's own eigensolver on the pair (``elements="linear"``): the same spectrum as eigsh."""
     op = meshlap.laplacian(*sphere)
-    lam, _ = meshlap.spectral.eigs(op, 10)
+    lam, _ = meshlap.spectral.eigs(op, 10, elements="linear")
     assert spectrum_error(lam) < TOL
     ref = sla.eigsh(-op.S, 10, op.M, sigma=-1e-6)[0]
     assert np.abs(np.sort(ref)[1:] / lam[1:] - 1).max() < 1e-6
+    # by default eigs solves quadratic elements on the same triangles: l(l+1) as closely
+    assert spectrum_error(meshlap.spectral.eigs(op, 10)[0]) < TOL
 
 
 def test_point_cloud_pair_idiom():

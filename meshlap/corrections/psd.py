@@ -152,7 +152,8 @@ def smallest_eigenvalue(L: sp.csr_matrix, mass: np.ndarray, V: np.ndarray, faces
     indicator of w, and that bound is returned.
     """
     from .. import _lobpcg
-    from ..spectral import _cot_stiffness, _one_blas_thread, _scale_shift, apply_block
+    from .._jit import one_blas_thread as _one_blas_thread
+    from ..spectral import _cot_stiffness, _scale_shift, apply_block
 
     diag = L.diagonal() if known is None else known[0]  # once: a pass over every entry
     scale = float(np.max(-diag))
@@ -234,7 +235,7 @@ def _dense_lowest(Lp: sp.csr_matrix, m: np.ndarray) -> float:
     # the smallest eigenvalue of (-S, M) by LAPACK, on one BLAS thread: a threaded BLAS on a
     # busy machine spins while it waits for its other threads, and the first build's check of
     # a 500-vertex mesh took 1-2 s of CPU instead of 0.05 s
-    from ..spectral import _one_blas_thread
+    from .._jit import one_blas_thread as _one_blas_thread
 
     S = m[:, None] * Lp.toarray()
     with _one_blas_thread():

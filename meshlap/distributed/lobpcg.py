@@ -52,6 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _eigcheck, _lobpcg, baselines, spectral
+from .._jit import one_blas_thread
 from ..errors import EigenError, MeshError
 from ..geometry.validation import check_faces, check_k, check_vertices
 from ..progress import ProgressLike, make_progress
@@ -410,7 +411,7 @@ def eigs(
             width = spectral._start_width(goal, goal + more, n_p) if adapt and not wide else goal + more
             X0 = np.random.default_rng([seed + wide, rank]).standard_normal((len(P), min(width, n_p)))
             start = None
-            with spectral._one_blas_thread():
+            with one_blas_thread():
                 if Kg is not None:
                     # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as
                     # preconditioner, after one step of inverse iteration on the random block, as on
@@ -442,7 +443,7 @@ def eigs(
     sparse = gathered is not None and gathered.nnz() <= spectral._SPARSE_ROW_MAX * op.n_vertices
     counted = gathered is not None and ((sparse and small) if count is None else bool(count))
     checked: dict = {}
-    with spectral._one_blas_thread():
+    with one_blas_thread():
         lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, 0.01 * sigma,
                                           gathered.count if counted else None, bool(count), allsum,
                                           info=checked)
