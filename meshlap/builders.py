@@ -87,7 +87,8 @@ def laplacian(
         "fem": the mass of the pencil, lumped (on triangles the mixed Voronoi areas, as libigl's).
         "blend", ½(consistent + lumped), puts every eigenvalue
         between the lumped and the consistent FEM's: 4× more accurate on irregular fine meshes
-        (a random sphere), 1.2-2× less on coarse real ones (:mod:`meshlap.fem`).
+        (a random sphere), 1.2-2× less on coarse real ones (:mod:`meshlap.fem`). A named mass
+        keeps :func:`~meshlap.spectral.eigs` on the pencil (``op.elements``: "linear").
     **kernel_options
         Options of the kernel builder (:class:`MeshLaplacian`: ``correction``, ``quadrature``,
         ``pointwise``, ``neumann``, ...); giving one asks for the kernel.
@@ -113,7 +114,7 @@ def laplacian(
         V, F, k = _held_input(V, k)
     geo = as_geometry(V, F, k)
     chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None,
-                                       "denoise": denoise})
+                                       "denoise": denoise, "mass": None if mass == "lumped" else mass})
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,

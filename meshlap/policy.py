@@ -48,7 +48,10 @@ The policy for ``operator="auto"`` has no tuned threshold:
 
 On a triangle or polygon mesh the FEM pencil's spectra come from the seven-node quadratic
 elements on the same triangles (``Decision.elements``, :mod:`meshlap.quadratic`): the same
-surface, at fourth order instead of second, with no choice left to make.
+surface, at fourth order instead of second. The one limit is their cost: a sparse LU of about
+six unknowns per vertex, which grows as N^1.5; beyond ``QUADRATIC_MAX_UNKNOWNS`` (about 16,500
+vertices, 13.5 s for 10 pairs on 2 cores) eigs solves the linear pencil, whose error is then
+smallest, unless asked for ``elements="quadratic"``.
 
 The decision, with what it read, is kept on the operator as ``op.decision``.
 """
@@ -63,7 +66,8 @@ import numpy as np
 from .errors import MeshError
 from .fem import part_labels, surface_noise, welded
 from .geometry.pointcloud import noise_reading
-from .tuned import NOISE_AREA, NOISE_FLOOR
+from .quadratic import unknowns as n_quadratic
+from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
 
 __all__ = ["OPERATORS", "Decision", "decide"]
 
@@ -90,6 +94,10 @@ _REASONS = {
 }
 
 
+#: options of the FEM pencil itself, which do not ask for the kernel
+_FEM_OWN = {"denoise", "mass"}
+
+
 @dataclass(frozen=True)
 class Decision:
     """What :func:`decide` chose and why.
@@ -111,7 +119,8 @@ class Decision:
     elements : str
         What :func:`meshlap.spectral.eigs` solves: "quadratic" (the seven-node elements on the
         same triangles, :mod:`meshlap.quadratic`) for the FEM pencil of a triangle or polygon
-        mesh, else "linear" (the pencil itself).
+        mesh of at most ``QUADRATIC_MAX_UNKNOWNS`` of their unknowns (about 16,500 vertices;
+        recorded as ``measured["quadratic unknowns"]``), else "linear" (the pencil itself).
 
     Examples
     --------
@@ -146,7 +155,8 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     h : float or array_like, optional
         A kernel width, if given (it asks for the kernel).
     kernel_options : dict, optional
-        The kernel's options given (``correction``, ``quadrature``, ...): they ask for it.
+        The kernel's options given (``correction``, ``quadrature``, ...): they ask for it; the
+        FEM pencil's own (``denoise``, ``mass``) do not, but a named mass keeps ``eigs`` on it.
 
     Examples
     --------
@@ -163,7 +173,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     projected = "input_points" in geo._cache  # the cloud's noise moved its points
     measured: dict = {"vertices": geo.n_points, "k": geo.dim}
     denoise = opts.get("denoise")
-    read = denoise is None and operator == "auto" and h is None and not set(opts) - {"denoise"} and \
+    read = denoise is None and operator == "auto" and h is None and not set(opts) - _FEM_OWN and \
         has_cells and geo.faces is not None and geo.dim == 2 and geo.ambient_dim == 3
     if read:  # a surface's vertices read as a cloud's are: independent noise whose area matters
         reading = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2))
@@ -185,7 +195,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
             operator, reason = "paper", _REASONS["options"].format("correction='none'")
         elif opts.get("quadrature") == "galerkin":
             operator, reason = "galerkin", _REASONS["options"].format("quadrature='galerkin'")
-        elif kernel := sorted(set(opts) - {"denoise"}):  # denoise is the FEM pencil's own option
+        elif kernel := sorted(set(opts) - _FEM_OWN):
             operator, reason = "kernel", _REASONS["options"].format(", ".join(kernel))
         elif h is not None:
             operator, reason = "kernel", _REASONS["h"]
@@ -203,6 +213,11 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
-    quadratic = operator == "fem" and has_cells and geo.faces is not None and geo.dim == 2
+    # a mass named for the pencil asks for the pencil's own spectra
+    quadratic = operator == "fem" and has_cells and geo.faces is not None and geo.dim == 2 and \
+        "mass" not in opts
+    if quadratic:  # n + edges + triangles, edges ≈ 1.5 triangles: the cost, not the accuracy, limits it
+        measured["quadratic unknowns"] = unknowns = n_quadratic(geo)
+        quadratic = unknowns <= QUADRATIC_MAX_UNKNOWNS
     return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured, bool(denoise),
                     "quadratic" if quadratic else "linear")

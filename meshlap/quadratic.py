@@ -30,7 +30,7 @@ from . import fem
 from .errors import MeshError
 from .lumped import SparseLaplacian
 
-__all__ = ["at_vertices", "element_matrices", "fine_pencil", "quadratic_pencil"]
+__all__ = ["at_vertices", "element_matrices", "fine_pencil", "quadratic_pencil", "unknowns"]
 
 # Dunavant's 6-point rule, exact to degree 4 (the stiffness of cubics' gradients), barycentric
 _A, _B, _WA = 0.445948490915965, 0.108103018168070, 0.223381589678011
@@ -87,6 +87,19 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         G[:, 6] = 27 * grad_b
         K += wq * np.einsum("mad,mbd->mab", G, G)
     return K * area[:, None, None], area[:, None] * NODE_WEIGHTS[None, :]
+
+
+def unknowns(geo: Any) -> int:
+    """About how many unknowns :func:`quadratic_pencil` has for a polygon mesh: its vertices,
+    edges (1.5 per fan triangle) and triangles, without building anything.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> unknowns(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(1000, seed=0)))   # 1,000 + 4,990
+    5990
+    """
+    return int(geo.n_points + 2.5 * int((geo.faces.sizes - 2).sum()))
 
 
 def quadratic_pencil(geo: Any, points: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:

@@ -98,3 +98,15 @@ def test_the_command_line_names_the_elements(capsys, tmp_path):
         expected = spectral.eigs(op, 5, elements=elements)[0]
         np.testing.assert_allclose(np.load(tmp_path / "e.npz")["eigenvalues"], expected, rtol=1e-7, atol=1e-9)
     capsys.readouterr()
+
+
+def test_the_policy_records_why_and_where_it_stops():
+    from meshlap.tuned import QUADRATIC_MAX_UNKNOWNS
+
+    V, F = meshlap.shapes.sphere(500, seed=0)
+    d = meshlap.laplacian(V, F).decision
+    assert d.elements == "quadratic" and d.measured["quadratic unknowns"] == 500 + 2.5 * len(F)
+    assert meshlap.laplacian(V, F, mass="blend").elements == "linear"  # a named mass: its own pencil
+    assert meshlap.laplacian(V, F, operator="kernel").elements == "linear"
+    big = meshlap.laplacian(*meshlap.shapes.sphere(17_000, seed=0)).decision  # 102,000 unknowns
+    assert big.elements == "linear" and big.measured["quadratic unknowns"] > QUADRATIC_MAX_UNKNOWNS
