@@ -40,8 +40,9 @@ from ._jit import jit
 from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
-__all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay", "part_labels",
-           "separate_parts", "simplicial_cells", "surface_noise", "voronoi_areas", "welded", "welded_cells"]
+__all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "gram_from_lengths",
+           "intrinsic_delaunay", "part_labels", "separate_parts", "simplicial_cells", "surface_noise",
+           "voronoi_areas", "welded", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -159,8 +160,15 @@ def intrinsic_delaunay(P: np.ndarray, tri: np.ndarray, max_passes: int = 1000
     return F, L
 
 
-def _gram_from_lengths(L: np.ndarray) -> np.ndarray:
-    # triangles (corners 0, 1, 2; L[:, c] the side c -> c+1): E1 = p1 - p0, E2 = p2 - p0
+def gram_from_lengths(L: np.ndarray) -> np.ndarray:
+    """Gram matrices E Eᵀ of triangles (E1 = p1 - p0, E2 = p2 - p0) from their side lengths,
+    ``L[:, c]`` the side c -> c + 1: what :func:`cell_matrices` reads in place of positions.
+
+    Examples
+    --------
+    >>> gram_from_lengths(np.array([[3.0, 5.0, 4.0]]))[0].tolist()   # the right angle at corner 0
+    [[9.0, 0.0], [0.0, 16.0]]
+    """
     l01, l12, l20 = L[:, 0], L[:, 1], L[:, 2]
     G = np.empty((len(L), 2, 2))
     G[:, 0, 0], G[:, 1, 1] = l01**2, l20**2
@@ -439,7 +447,7 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     gram = lengths = None
     if cells.shape[1] == 3 and intrinsic:
         cells, lengths = intrinsic_delaunay(P, cells)
-        gram = _gram_from_lengths(lengths)
+        gram = gram_from_lengths(lengths)
     elif cells.shape[1] == 3:
         lengths = np.linalg.norm(P[np.roll(cells, -1, axis=1)] - P[cells], axis=2)
     K, C, _ = cell_matrices(P, cells, gram)

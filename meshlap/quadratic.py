@@ -13,10 +13,10 @@ but a corner's vanishes there).
 
 The polyhedral surface is the one linear FEM discretizes (the element is flat in the triangle's
 intrinsic metric), so the linear pencil's own limit is what it approximates better: on the 50 real
-surfaces of ``benchmarks/bench_real.py`` eigenvalues 1-9 are 0.001-8% off against linear FEM on the
-4× and 16× refinement, where the best of libigl's cotangent Laplacian, LaPy and robust-laplacian
-is 0.07-35% off (benchmarks/RESULTS.md). It costs the degrees of freedom of the vertices, the edges
-and the triangles, about six per vertex.
+surfaces of ``benchmarks/bench_real.py``, against linear FEM on the 4× and 16× refinement, its
+largest error of eigenvalues 1-9 is a median 0.028× (worst 0.89×) that of the best of libigl's
+cotangent Laplacian, LaPy and robust-laplacian (benchmarks/RESULTS.md). It costs the degrees of
+freedom of the vertices, the edges and the triangles, about six per vertex.
 """
 
 from __future__ import annotations
@@ -48,7 +48,8 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     lengths : (m, 3) ndarray
-        ``lengths[f, c]`` the length of the side from corner c to corner c + 1 (positive area).
+        ``lengths[f, c]`` the length of the side from corner c to corner c + 1; a degenerate
+        triangle (as :func:`meshlap.fem.cell_matrices` judges it) gets zero matrices.
 
     Returns
     -------
@@ -69,10 +70,13 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     0.5
     """
     L = np.asarray(lengths, dtype=np.float64)
+    _, _, vol = fem.cell_matrices(None, np.zeros((len(L), 3), np.int64), fem.gram_from_lengths(L))
+    ok = vol > 0
+    L = np.where(ok[:, None], L, 1.0)  # a unit equilateral stand-in, zeroed by its area below
     l01, l12, l20 = L[:, 0], L[:, 1], L[:, 2]
     x = (l01**2 + l20**2 - l12**2) / (2 * l01)  # the triangle laid out: (0, 0), (l01, 0), (x, y)
     y = np.sqrt(np.maximum(l20**2 - x**2, 0.0))
-    area = 0.5 * l01 * y
+    area = np.where(ok, 0.5 * l01 * y, 0.0)
     g1 = np.stack([1 / l01, -x / (l01 * y)], axis=1)
     g2 = np.stack([np.zeros_like(x), 1 / y], axis=1)
     g = np.stack([-g1 - g2, g1, g2], axis=1)  # (m, 3, 2) gradients of the barycentrics
@@ -139,10 +143,6 @@ def quadratic_pencil(geo: Any, points: np.ndarray | None = None) -> tuple[sp.csr
     if weld is not None:
         cells = fem.welded_cells(cells, weld)
     tri, lengths = fem.intrinsic_delaunay(geo.points if points is None else points, cells)
-    s = lengths.sum(axis=1) / 2
-    area2 = s * (s - lengths[:, 0]) * (s - lengths[:, 1]) * (s - lengths[:, 2])
-    keep = area2 > 1e-24 * np.maximum(lengths.max(axis=1), 1e-300) ** 4  # no zero-area triangle
-    tri, lengths = tri[keep], lengths[keep]
     K, w = element_matrices(lengths)
     sides = np.sort(np.concatenate([tri[:, list(p)] for p in _SIDES]), axis=1)
     edges, which = np.unique(sides, axis=0, return_inverse=True)

@@ -342,12 +342,13 @@ def eigs(
     k = check_k(k, n_p)
     if elements == "auto":
         elements = getattr(op, "elements", "linear")
-    if elements == "quadratic":  # the same pairs' better approximation, verified on its own pencil
-        lam, X = eigs(quadratic.fine_pencil(op), k, method=method, tol=tol, maxiter=maxiter, extra=extra,
-                      seed=seed, progress=progress, count=count, info=info)
     if info is not None:
         info["elements"] = elements
-    if elements == "quadratic":
+    if elements == "quadratic":  # the same pairs' better approximation, verified on its own pencil
+        lam, X = eigs(quadratic.fine_pencil(op), k, method=method, tol=tol, maxiter=maxiter, extra=extra,
+                      seed=seed, progress=progress, count=count, info=info, elements="linear")
+        if info is not None:
+            info["elements"] = "quadratic"
         return lam, _normalize_signs(quadratic.at_vertices(op, X))
     m = mass[P]
     matrix_free = getattr(op, "matrix_free", False)
