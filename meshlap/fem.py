@@ -41,7 +41,7 @@ from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
 __all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "gram_from_lengths",
-           "intrinsic_delaunay", "part_labels", "separate_parts", "simplicial_cells", "surface_noise",
+           "intrinsic_delaunay", "lumped_pencil", "part_labels", "separate_parts", "simplicial_cells",
            "voronoi_areas", "welded", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
@@ -378,26 +378,18 @@ def separate_parts(L: sp.csr_matrix, label: np.ndarray) -> sp.csr_matrix:
     return out.tocsr().astype(L.dtype)
 
 
-def surface_noise(geo: Any) -> float:
-    """The normal noise σ̂ of a surface mesh in R³ (:func:`meshlap.denoise.normal_noise`), once
-    per geometry; 0 for other inputs and where it is below a thousandth of the mean edge (its
-    heat step would move nothing).
+def lumped_pencil(geo: Any) -> tuple[sp.csr_matrix, np.ndarray]:
+    """:func:`fem_pencil` of the geometry with its copies welded and the lumped mass, once per
+    geometry (the denoising step and the default's pencil share it).
 
     Examples
     --------
     >>> import meshlap
-    >>> surface_noise(meshlap.geometry.from_mesh(*meshlap.shapes.sphere(2000, seed=0)))
-    0.0
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(500, seed=0))
+    >>> lumped_pencil(g)[0] is lumped_pencil(g)[0]
+    True
     """
-    def make() -> float:
-        from .denoise import normal_noise
-
-        if geo.faces is None or geo.ambient_dim != 3:
-            return 0.0
-        sigma = normal_noise(geo.points)
-        return sigma if sigma > 1e-3 * geo.spacing else 0.0
-
-    return geo._cached("normal_noise", make)
+    return geo._cached("lumped_pencil", lambda: fem_pencil(geo, weld=welded(geo)))
 
 
 def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lumped",

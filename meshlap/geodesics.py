@@ -39,14 +39,14 @@ Measured (largest relative error at d ≥ 0.1, three sources, 10,000 vertices): 
 each source's largest error has median 7.9% → 6.2% and maximum 17.2% → 12.7% (potpourri3d's
 9.0% and 17.6%).
 
-Denoised meshes. An operator whose pencil was built after a heat step of the positions
+Denoised meshes. An operator whose pencil was built after a denoising step of the positions
 (:mod:`meshlap.denoise`; ``op.decision.denoise``: where the vertices read independent noise, or
 ``denoise=True``) carries the positions it was built on (``op.pencil_points``);
 the gradient, the source neighbourhoods and the shift read those, and the gradient measures each
 triangle in the mean tangent plane of its corners (:func:`~meshlap.gradients.gradient_operator`),
-as on a point cloud: the heat step damps the noise enough for the spectrum but leaves the
+as on a point cloud: the step damps the noise enough for the spectrum but leaves the
 triangles tilted, and tilt lengthens every path (a 50,000-vertex sphere with 0.23 mean edges of
-radial noise: its area is 15.8% over 4π as given, 5.3% after the heat step, 0.46% in the
+radial noise: its area is 15.9% over 4π as given, 6.4% after the step, 0.72% in the
 tangent planes). Both solves then take the gradient's stiffness ``Gᵀ W G``, the one whose metric
 X is a unit field of. Otherwise (a clean mesh, or ``denoise=False``) the distance is the mesh's
 as given (its own polyhedral distance, 0.44% off libigl's exact one on the 10,000-vertex noisy

@@ -18,7 +18,7 @@ n vertex values to one vector of R^d per *element*, with the elements' measures 
   path (by 2% on a sphere of 10,000 points with 0.5% radial noise), while the mean plane is the
   triangle's own to O(h²) on a smooth surface. So are a mesh's triangles when its operator was
   built on denoised positions (``denoise=True``; the gradient of such an operator reads
-  ``op.pencil_points``): the heat step leaves them tilted by what noise remains;
+  ``op.pencil_points``): the denoising step leaves them tilted by what noise remains;
   a cloud along a curve (k = 1) is joined to each point's
   nearest neighbour on either side along its tangent, the neighbours that set its mass;
 * other point clouds (and ``method="least squares"``): the elements are the points, with
@@ -182,7 +182,7 @@ def gradient_operator(geometry: Any, method: str = "auto") -> Gradient:
     geometry : Geometry or MeshLaplacian
         A mesh (curve, surface, tetrahedra) or a point cloud. An operator's simplices are
         measured at the positions its pencil was built on (``op.pencil_points``: after the
-        heat step of ``denoise=True``), so that ``Gᵀ W G`` is its FEM stiffness.
+        denoising step of ``denoise=True``), so that ``Gᵀ W G`` is its FEM stiffness.
     method : {"auto", "simplices", "least squares"}
         ``"auto"``: the simplices of a mesh or of a cloud's local triangles, else least squares.
 

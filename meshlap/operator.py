@@ -256,7 +256,7 @@ class MeshLaplacian(LumpedLaplacian):
     @property
     def pencil_points(self) -> np.ndarray:
         """Positions the pencil was built on, which gradients, divergences and distances use: with
-        ``denoise=True`` those after its heat step (builds the pencil), else the geometry's."""
+        ``denoise=True`` those after its denoising step (builds the pencil), else the geometry's."""
         moved = self._built.assemble().points if self.options.denoise else None
         return self.geometry.points if moved is None else moved
 

@@ -69,7 +69,7 @@ class Options:
     #: the Galerkin pencil's width narrower next to creases and on thin parts
     #: (:mod:`meshlap.corrections.features`): None where its width is automatic
     feature_width: bool | None = None
-    #: the FEM pencil on positions denoised by a heat step (:mod:`meshlap.denoise`)
+    #: the FEM pencil on positions denoised by a bi-Laplacian step (:mod:`meshlap.denoise`)
     denoise: bool = False
     #: the FEM pencil's mass (:func:`meshlap.fem.fem_pencil`)
     mass: str = "lumped"

@@ -149,15 +149,17 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
     # no kernel: linear FEM on the cells, copies of a vertex welded (meshlap.fem)
     if report is not None:
         report(0.5, "FEM pencil")
-    S, m = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass)
-    sigma = fem.surface_noise(geo) if opts.denoise else 0.0
+    S, m = fem.lumped_pencil(geo) if opts.mass == "lumped" else \
+        fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass)
+    step = denoise.noise_step(geo) if opts.denoise else None
     points = None
-    if sigma > 0:  # asked for: FEM on the positions after a heat step that averages the noise out
+    if step is not None and step.sigma > 0:  # FEM on the positions after a step that takes the noise out
         if report is not None:
             report(0.7, "denoised positions")
-        points = denoise.denoised(geo.points, S, m, sigma)
+        points = step.points
         S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
-        kept = denoise.kept_shapes(geo.points, points, m, m1, fem.part_labels(geo)[1], sigma / geo.spacing)
+        labels = fem.part_labels(geo)[1]
+        kept = denoise.kept_shapes(geo.points, points, m, m1, labels, step.sigma / geo.spacing)
         if kept is not points:  # parts the step shrank beyond the noise's share keep their positions
             points = kept
             S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)

@@ -18,12 +18,14 @@ The policy for ``operator="auto"`` has no tuned threshold:
 
 - an input with cells gets the "fem" pencil: linear FEM on the intrinsic Delaunay triangulation of
   its cells (:mod:`meshlap.fem`), so its worst case is linear FEM there, and parts stay apart
-  (one zero eigenvalue per connected part); a surface whose vertices read independent normal
-  noise (:func:`meshlap.geometry.pointcloud.noise_reading`: quadratic and cubic height fits
-  leave the same residual, spread as σ²χ² is, adding more than ``NOISE_FLOOR`` to the area;
-  recorded) gets FEM on the positions after a heat step that averages it out
-  (:mod:`meshlap.denoise`; ``denoise=True`` or ``False`` decides instead); the kernel keeps
-  what FEM cannot give: ``op @ f``, point-wise convergent rows;
+  (one zero eigenvalue per connected part); a surface whose vertices carry normal noise adding
+  more than ``NOISE_FLOOR`` to the area gets FEM on the positions after a bi-Laplacian step
+  that takes it out (:mod:`meshlap.denoise`; ``denoise=True`` or ``False`` decides instead)
+  where either of two tests of independent noise says so (recorded): the height fits'
+  residuals (:func:`meshlap.geometry.pointcloud.noise_reading`: quadratic and cubic fits leave
+  the same, spread as σ²χ² is), or what the step takes out (:func:`meshlap.denoise.noise_share`:
+  at least half of it alternates across edges as white noise does, a bound that needs no
+  constant); the kernel keeps what FEM cannot give: ``op @ f``, point-wise convergent rows;
 - a curve's segments get the "galerkin" pencil: the heat kernel integrated over the segments.
   Its failure on surfaces is a triangle too thin for the kernel's quadrature, and a segment has
   no shape; on the 24 synthetic curves of ``benchmarks/bench_curves.py`` it is 0.02-0.49× linear
@@ -63,8 +65,9 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .denoise import noise_step, surface_noise
 from .errors import MeshError
-from .fem import part_labels, surface_noise, welded
+from .fem import part_labels, welded
 from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
 from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
@@ -81,7 +84,8 @@ _REASONS = {
     "segments": "a curve's segments: the corrected heat kernel integrated over them (consistent mass); a "
                 "segment has no shape to resolve, unlike a thin triangle",
     "noisy surface": "the input has cells and normal noise (fits of every order leave it, spread as noise "
-                     "is, adding area): linear FEM on the positions after a heat step that averages it out",
+                     "is, or most of what a smoothing step takes out is), adding area: linear FEM on the "
+                     "positions after a bi-Laplacian step that takes it out",
     "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
              "each), point-wise rows fitted by the kernel",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
@@ -114,7 +118,7 @@ class Decision:
     measured : dict
         The quantities read from the input (vertices, cells, parts, welded copies, noise).
     denoise : bool
-        Whether the FEM pencil is built on the positions after a heat step that averages the
+        Whether the FEM pencil is built on the positions after a bi-Laplacian step that takes the
         normal noise out (asked for, or read: :func:`meshlap.geometry.pointcloud.noise_reading`).
     elements : str
         What :func:`meshlap.spectral.eigs` solves: "quadratic" (the seven-node elements on the
@@ -177,15 +181,18 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         has_cells and geo.faces is not None and geo.dim == 2 and geo.ambient_dim == 3
     if read:  # a surface's vertices read as a cloud's are: independent noise whose area matters
         reading = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2))
-        denoise = reading.independent and NOISE_AREA * reading.ratio >= NOISE_FLOOR
+        denoise = NOISE_AREA * reading.ratio >= NOISE_FLOOR and (
+            reading.independent or noise_step(geo).share >= 0.5)
     if "noise_reading" in geo._cache:
         reading = geo._cache["noise_reading"]
         measured["normal noise / spacing²"] = round(reading.ratio, 4)
         measured["share cubic fits leave"] = round(reading.unexplained, 3)
         measured["spread over noise's"] = round(reading.spread, 3)
+    if "noise_step" in geo._cache:
+        measured["noise share of the step's removal ≥"] = round(geo._cache["noise_step"].share, 3)
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
-        noise = surface_noise(geo) if denoise else 0.0  # 0.6 s of CPU at 100k vertices
+        noise = surface_noise(geo) if denoise else 0.0
         if noise > 0:
             measured["normal noise / mean edge"] = round(noise / geo.spacing, 4)
         weld = welded(geo)

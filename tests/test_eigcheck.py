@@ -60,6 +60,21 @@ def test_k_parts_and_k_zero_eigenvalues_converge_at_once():
     assert np.abs(lam[:4]).max() < 1e-10 and np.ptp(lam[4:]) < 1e-6 and abs(lam[4] - 2) < 0.05
 
 
+def test_zero_modes_of_parts_a_thousand_times_apart_in_size_are_verified(monkeypatch):
+    """A unit sphere beside one of radius 1e-3 (masses 1e-8 against 1e-2, L_ii up to 1e7): the
+    parts' indicators are exact zero modes, but what roundoff leaves of A x on the small part's
+    rows is above tol times 1% of the scale; the check's floor includes it
+    (``_eigcheck.roundoff_floor``). With the 1% floor alone no solver passed (measured)."""
+    V, F = shapes.sphere(400, seed=0)
+    v, f = shapes.sphere(100, seed=1)
+    op = meshlap.laplacian(np.vstack([V, 1e-3 * v + [3, 0, 0]]), np.vstack([F, f + len(V)]))
+    lam, phi = spectral.eigs(op, 6, elements="linear")
+    assert np.abs(lam[:2]).max() < 1e-6 and abs(lam[2] - 2) < 0.01
+    monkeypatch.setattr(_eigcheck, "roundoff_floor", lambda stiff, tol, scale: 0.01 * scale)
+    with pytest.raises(meshlap.EigenError):
+        spectral.eigs(op, 6, elements="linear")
+
+
 def test_sparse_pencil_is_counted_and_ties_past_k_are_computed():
     """The cotangent pencil of four parts, k = 8: four zeros and 4 of the 12 values ≈ 2. The
     solver runs again until a computed value lies above λ_8's cluster; the count at σ between

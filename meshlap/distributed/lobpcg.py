@@ -382,6 +382,8 @@ def eigs(
 
     diag = -m * op.diagonal()[P]
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
+    # the check's yardstick near λ = 0: what roundoff leaves of A x on the stiffest row of any rank
+    stiff = comm.allreduce(float(np.abs(diag / m).max()) if len(P) else 0.0, op=MPI.MAX)
     glob = None
     if mesh is None:
         K, Kg = _cloud_block(op, P, m, allsum), None
@@ -444,7 +446,8 @@ def eigs(
     counted = gathered is not None and ((sparse and small) if count is None else bool(count))
     checked: dict = {}
     with one_blas_thread():
-        lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, 0.01 * sigma,
+        floor = _eigcheck.roundoff_floor(stiff, tol, sigma)
+        lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, floor,
                                           gathered.count if counted else None, bool(count), allsum,
                                           info=checked)
     if info is not None:
