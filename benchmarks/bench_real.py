@@ -3,6 +3,7 @@
     python benchmarks/bench_real.py                      # the whole corpus; RESULTS.md and the CSV
     python benchmarks/bench_real.py --only cow,spot --no-write
     python benchmarks/bench_real.py --max-n 3000 --corpus /path/to/corpus
+    python benchmarks/bench_real.py --only spot,cow --no-write --noise-step 3   # another denoising step
 
 The corpus (benchmarks/corpus.toml; files written by build_corpus.py, outside the repository)
 is read from ``--corpus``, else $MESHLAP_CORPUS, else benchmarks/corpus (which git ignores);
@@ -397,11 +398,17 @@ def main() -> None:
                     "only with --no-write")
     ap.add_argument("--render", action="store_true", help="rewrite RESULTS.md's section from the CSV and "
                     "the cached references, running nothing")
+    ap.add_argument("--noise-step", type=float, default=None, help="c of the denoising step τ = (cσ̂)² "
+                    "(tuned.NOISE_STEP); other than the default only with --no-write")
     args = ap.parse_args()
     if args.mass != "lumped":
         if not args.no_write:
             ap.error("--mass blend measures an option, not the default: add --no-write")
         SURFACE_OPTIONS["mass"] = args.mass
+    if args.noise_step is not None:
+        if not args.no_write:
+            ap.error("--noise-step measures another constant, not the default: add --no-write")
+        meshlap.denoise.NOISE_STEP = args.noise_step
     folder = rc.corpus_dir(args.corpus)
     if args.render:
         render(folder)

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
+from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._shiftinvert import factor as _factor
 from .errors import MeshError
@@ -258,26 +259,8 @@ class ImplicitHeat:
         return self._a * R / self.m[:, None] + self._b * self._lu.solve(np.asfortranarray(R))
 
     def _pcg(self, B: np.ndarray, X: np.ndarray) -> np.ndarray:
-        R = B - self._apply(X)
-        bnorm = np.maximum(np.linalg.norm(B, axis=0), 1e-300)
-        Zp = self._precondition(R)
-        Pd = Zp.copy()
-        rz = np.sum(R * Zp, axis=0)
-        it = 0
-        while it < 1000:
-            active = np.linalg.norm(R, axis=0) > self.rtol * bnorm
-            if not active.any():
-                break
-            it += 1
-            AP = self._apply(Pd[:, active])
-            alpha = rz[active] / np.sum(Pd[:, active] * AP, axis=0)
-            X[:, active] += alpha * Pd[:, active]
-            R[:, active] -= alpha * AP
-            Zp = self._precondition(R[:, active])
-            rz_new = np.sum(R[:, active] * Zp, axis=0)
-            Pd[:, active] = Zp + (rz_new / rz[active]) * Pd[:, active]
-            rz[active] = rz_new
-        else:
+        X, it, converged = block_pcg(self._apply, self._precondition, B, self.rtol, 1000, X)
+        if not converged:
             warnings.warn(f"ImplicitHeat: CG did not reach rtol={self.rtol:g} in 1000 iterations",
                           RuntimeWarning, stacklevel=3)
         self.iterations.append(it)

@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from . import _lobpcg
+from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._shiftinvert import factor as _factor
 from .errors import MeshError, MeshWarning, user_stacklevel
@@ -118,33 +119,6 @@ def boundary_measure(geometry: Any) -> np.ndarray:
         return np.zeros(n)
     k = geo.dim
     return np.where(geo.boundary, np.asarray(geo.mass) ** ((k - 1) / k), 0.0)
-
-
-def _block_pcg(apply, precond, B: np.ndarray, rtol: float, maxiter: int) -> tuple[np.ndarray, int]:
-    """Solve A X = B column by column in one block (A SPD or semidefinite with B in its range)."""
-    X = np.zeros_like(B)
-    R = B.copy()
-    bnorm = np.maximum(np.linalg.norm(B, axis=0), 1e-300)
-    Z = precond(R)
-    D = Z.copy()
-    rz = np.sum(R * Z, axis=0)
-    it = 0
-    while it < maxiter:
-        act = np.linalg.norm(R, axis=0) > rtol * bnorm
-        if not act.any():
-            return X, it
-        it += 1
-        AD = apply(D[:, act])
-        alpha = rz[act] / np.sum(D[:, act] * AD, axis=0)
-        X[:, act] += alpha * D[:, act]
-        R[:, act] -= alpha * AD
-        Z = precond(R[:, act])
-        rz_new = np.sum(R[:, act] * Z, axis=0)
-        D[:, act] = Z + (rz_new / rz[act]) * D[:, act]
-        rz[act] = rz_new
-    warnings.warn(f"conjugate gradient did not reach rtol={rtol:g} in {maxiter} iterations",
-                  RuntimeWarning, stacklevel=user_stacklevel())
-    return X, it
 
 
 class PoissonSolver:
@@ -269,7 +243,10 @@ class PoissonSolver:
             x[self._keep] = self._lu.solve(np.asfortranarray(rhs[self._keep]))
         else:
             with _one_blas_thread():
-                x, it = _block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000)
+                x, it, converged = block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000)
+                if not converged:
+                    warnings.warn(f"conjugate gradient did not reach rtol={self.rtol:g} in 2000 iterations",
+                                  RuntimeWarning, stacklevel=user_stacklevel())
             self.iterations.append(it)
         m = self.mass[self.free]
         for sel in self._parts:  # zero mean on each part without Dirichlet data

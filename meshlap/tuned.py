@@ -90,8 +90,9 @@ CLOUD_NOISY = 0.02
 NOISE_UNEXPLAINED = 0.9
 #: Their quartile ratio over χ²'s, within this of 1 for noise: noisy scans 0.96-1.13, a clean knight 1.45
 NOISE_SPREAD = 1.25
-#: c of the denoising step τ = (cσ̂)² (bi-Laplacian): five noisy real meshes at 0.3ē 17-21% → 1.9-11%
-#: (c = 1: 12-16%, c = 3: 3.6-32%), at 0.1ē 2.8-4.6% → 1.5-2.6% (bench_real.py's rows)
+#: c of the denoising step τ = (cσ̂)² (bi-Laplacian): five noisy real meshes at 0.3ē 1.9-11% (c = 1:
+#: 12-16%, c = 3: 3.6-32%; COT 16-19%), at 0.1ē 1.5-2.6% (c = 3: 1.3-6.8%; COT 2.6-4.1%), denoise=True
+#: (bench_real.py --only spot,cow,bunny-igl,fertility,homer --no-write --noise-step c)
 NOISE_STEP = 2.0
 #: Area normal noise σ adds, in (σ/ē)² of a part's: 1.17-1.22 at 0.3ē on spot, cow, bunny, fertility, homer
 NOISE_AREA = 2.2

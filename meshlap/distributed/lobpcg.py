@@ -380,10 +380,11 @@ def eigs(
         X[P] = Xp
         return -m[:, None] * _product(op, X)[P]
 
-    diag = -m * op.diagonal()[P]
+    L_ii = op.diagonal()[P]  # collective: every rank calls it, an empty one too
+    diag = -m * L_ii
     sigma = 4.0 * math.pi / float(allsum(np.array([m.sum()]))[0])
     # the check's yardstick near λ = 0: what roundoff leaves of A x on the stiffest row of any rank
-    stiff = comm.allreduce(float(np.abs(diag / m).max()) if len(P) else 0.0, op=MPI.MAX)
+    stiff = comm.allreduce(float(np.abs(L_ii).max()) if len(P) else 0.0, op=MPI.MAX)
     glob = None
     if mesh is None:
         K, Kg = _cloud_block(op, P, m, allsum), None
