@@ -337,15 +337,17 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
                         f"{max(x['sigma'] for x in noisy if x['noise'] == s):.3f}" for s in NOISE)
             + f"; {int((clean >= min(x['sigma'] for x in noisy)).sum())} clean surfaces read at least the "
             "least of the noisy rows' readings, so σ̂ alone does not tell noise. The default denoises where "
-            "the vertices' fits read noise of every order, spread as independent noise's "
-            "(`geometry.pointcloud.noise_reading`), or where at least half of what the denoising step "
-            "takes out alternates across edges as white noise does (`denoise.noise_share`): "
+            "the noise adds area above `NOISE_FLOOR` and dominates what smoothing takes out across at "
+            "least half of the edges (`denoise.noise_extent`: the signs of the positions' bi-Laplacian "
+            "against white noise's), and divides out of the masses the area the noise its step left still "
+            "adds (`denoise.area_left`): "
             + ", ".join(f"{sum('denoise' in x['decision'] for x in noisy if x['noise'] == s)} of the "
                         f"{sum(x['noise'] == s for x in noisy)} rows at {s} ē" for s in NOISE)
             + f", {sum('denoise' in x['decision'] for x in surf)} of the {len(surf)} clean surfaces.", ""] \
         if surf and noisy else [""]
     out += ["`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a "
-            "bi-Laplacian step of time (2σ̂)² (meshlap.denoise).", "",
+            "bi-Laplacian step of time (2σ̂)², masses less the area the noise it left adds "
+            "(meshlap.denoise).", "",
             "| mesh | noise (mean edges) | σ̂ / ē | default | decision | denoise=True | paper's | COT | "
             "LaPy | robust | ratio | CPU ratio | warnings |", "|" + "---|" * 13]
     for x in noisy:

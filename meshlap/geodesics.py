@@ -40,8 +40,8 @@ each source's largest error has median 7.9% → 6.2% and maximum 17.2% → 12.7%
 9.0% and 17.6%).
 
 Denoised meshes. An operator whose pencil was built after a denoising step of the positions
-(:mod:`meshlap.denoise`; ``op.decision.denoise``: where the vertices read independent noise, or
-``denoise=True``) carries the positions it was built on (``op.pencil_points``);
+(:mod:`meshlap.denoise`; ``op.decision.denoise``: where noise dominates what smoothing takes out,
+or ``denoise=True``) carries the positions it was built on (``op.pencil_points``);
 the gradient, the source neighbourhoods and the shift read those, and the gradient measures each
 triangle in the mean tangent plane of its corners (:func:`~meshlap.gradients.gradient_operator`),
 as on a point cloud: the step damps the noise enough for the spectrum but leaves the

@@ -260,6 +260,9 @@ class MeshLaplacian(LumpedLaplacian):
         moved = self._built.assemble().points if self.options.denoise else None
         return self.geometry.points if moved is None else moved
 
+    area_scale = property(lambda self: self._built.assemble().area_scale if self.options.denoise else None,
+                          doc="denoise=True's mass factors: 1/(1 + :func:`meshlap.denoise.area_left`).")
+
     n_vertices = property(lambda self: self.geometry.n_points, doc="Rows of the operator (builds nothing).")
     decision = property(lambda self: self._decision or policy.decide(self.geometry, _named(self.options)),
                         doc="Which operator was built and why (:mod:`meshlap.policy`).")
@@ -566,8 +569,7 @@ class MeshLaplacian(LumpedLaplacian):
         return " + point-wise moments"
 
     def __repr__(self) -> str:
-        inner = ", ".join(f"{k}={v}" for k, v in self._summary())
-        return f"MeshLaplacian({inner})"
+        return "MeshLaplacian(" + ", ".join(f"{k}={v}" for k, v in self._summary()) + ")"
 
     def _repr_html_(self) -> str:
         body = "".join(f"<tr><th style='text-align:left'>{k}</th><td>{v}</td></tr>"

@@ -21,11 +21,11 @@ The policy for ``operator="auto"`` has no tuned threshold:
   (one zero eigenvalue per connected part); a surface whose vertices carry normal noise adding
   more than ``NOISE_FLOOR`` to the area gets FEM on the positions after a bi-Laplacian step
   that takes it out (:mod:`meshlap.denoise`; ``denoise=True`` or ``False`` decides instead)
-  where either of two tests of independent noise says so (recorded): the height fits'
-  residuals (:func:`meshlap.geometry.pointcloud.noise_reading`: quadratic and cubic fits leave
-  the same, spread as σ²χ² is), or what the step takes out (:func:`meshlap.denoise.noise_share`:
-  at least half of it alternates across edges as white noise does, a bound that needs no
-  constant); the kernel keeps what FEM cannot give: ``op @ f``, point-wise convergent rows;
+  where the noise, not the shape, dominates what smoothing takes out across at least half of
+  the surface's edges (:func:`meshlap.denoise.noise_extent`: a lower bound from the signs of the
+  positions' bi-Laplacian against white noise's, no constant; recorded), and the masses carry
+  the area the noise the step left still adds (:func:`meshlap.denoise.area_left`); the kernel
+  keeps what FEM cannot give: ``op @ f``, point-wise convergent rows;
 - a curve's segments get the "galerkin" pencil: the heat kernel integrated over the segments.
   Its failure on surfaces is a triangle too thin for the kernel's quadrature, and a segment has
   no shape; on the 24 synthetic curves of ``benchmarks/bench_curves.py`` it is 0.02-0.49× linear
@@ -65,9 +65,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .denoise import noise_step, surface_noise
+from .denoise import noise_extent, noise_step, surface_noise
 from .errors import MeshError
-from .fem import part_labels, welded
+from .fem import lumped_pencil, part_labels, welded
 from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
 from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
@@ -83,9 +83,9 @@ _REASONS = {
              "fitted by the kernel",
     "segments": "a curve's segments: the corrected heat kernel integrated over them (consistent mass); a "
                 "segment has no shape to resolve, unlike a thin triangle",
-    "noisy surface": "the input has cells and normal noise (fits of every order leave it, spread as noise "
-                     "is, or most of what a smoothing step takes out is), adding area: linear FEM on the "
-                     "positions after a bi-Laplacian step that takes it out",
+    "noisy surface": "the input has cells and normal noise that adds area and dominates what smoothing "
+                     "takes out across most edges: linear FEM on the positions after a bi-Laplacian step "
+                     "that takes it out, masses less the area the noise it left adds",
     "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
              "each), point-wise rows fitted by the kernel",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
@@ -179,17 +179,20 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     denoise = opts.get("denoise")
     read = denoise is None and operator == "auto" and h is None and not set(opts) - _FEM_OWN and \
         has_cells and geo.faces is not None and geo.dim == 2 and geo.ambient_dim == 3
-    if read:  # a surface's vertices read as a cloud's are: independent noise whose area matters
+    if read:  # how much area the noise adds (the height fits, as a cloud's) and where it dominates
         reading = geo._cached("noise_reading", lambda: noise_reading(geo.points, 2))
-        denoise = NOISE_AREA * reading.ratio >= NOISE_FLOOR and (
-            reading.independent or noise_step(geo).share >= 0.5)
+
+        def extent() -> float:
+            return noise_extent(geo.points, geo.normals(), *lumped_pencil(geo), geo.edges())
+
+        denoise = NOISE_AREA * reading.ratio >= NOISE_FLOOR and geo._cached("noise_extent", extent) >= 0.5
     if "noise_reading" in geo._cache:
         reading = geo._cache["noise_reading"]
         measured["normal noise / spacing²"] = round(reading.ratio, 4)
         measured["share cubic fits leave"] = round(reading.unexplained, 3)
         measured["spread over noise's"] = round(reading.spread, 3)
-    if "noise_step" in geo._cache:
-        measured["noise share of the step's removal ≥"] = round(geo._cache["noise_step"].share, 3)
+    if "noise_extent" in geo._cache:
+        measured["edges where noise dominates ≥"] = round(geo._cache["noise_extent"], 3)
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
         noise = surface_noise(geo) if denoise else 0.0
@@ -218,6 +221,10 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     if operator == "fem" and not (has_cells or stars) or operator == "galerkin" and not has_cells:
         raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
                         "(use operator='kernel' or 'auto')")
+    if denoise and operator == "fem" and geo.faces is not None:  # the pencil takes the step (cached)
+        step = noise_step(geo)
+        measured["noise share of the step's removal ≥"] = round(step.share, 3)
+        measured["area the noise left adds"] = round(step.area_left, 5)
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
     # a mass named for the pencil asks for the pencil's own spectra

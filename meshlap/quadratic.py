@@ -106,7 +106,8 @@ def unknowns(geo: Any) -> int:
     return int(geo.n_points + 2.5 * int((geo.faces.sizes - 2).sum()))
 
 
-def quadratic_pencil(geo: Any, points: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
+def quadratic_pencil(geo: Any, points: np.ndarray | None = None,
+                     area_scale: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The seven-node elements' pencil ``(S, m)`` on a triangle mesh's intrinsic Delaunay
     triangulation: the vertices' degrees of freedom first (in order), then one per edge and one
     per triangle. Copies of a vertex (``meshlap.fem.welded``) are welded onto their
@@ -118,6 +119,9 @@ def quadratic_pencil(geo: Any, points: np.ndarray | None = None) -> tuple[sp.csr
         A surface mesh (faces of any size, fan-triangulated).
     points : (n, d) ndarray, optional
         Positions to use instead of the geometry's (the denoised ones of ``op.pencil_points``).
+    area_scale : (n,) ndarray, optional
+        A factor on each vertex's mass, taken by the elements of its triangles
+        (``op.area_scale``: the denoised positions' metric).
 
     Returns
     -------
@@ -144,6 +148,8 @@ def quadratic_pencil(geo: Any, points: np.ndarray | None = None) -> tuple[sp.csr
         cells = fem.welded_cells(cells, weld)
     tri, lengths = fem.intrinsic_delaunay(geo.points if points is None else points, cells)
     K, w = element_matrices(lengths)
+    if area_scale is not None:
+        w = w * np.asarray(area_scale)[tri[:, :1]]
     sides = np.sort(np.concatenate([tri[:, list(p)] for p in _SIDES]), axis=1)
     edges, which = np.unique(sides, axis=0, return_inverse=True)
     dof = np.hstack([tri, n + which.reshape(3, len(tri)).T, (n + len(edges) + np.arange(len(tri)))[:, None]])
@@ -172,7 +178,7 @@ def fine_pencil(op: Any) -> SparseLaplacian:
                         "(meshlap.laplacian(V, F))")
     cached = getattr(op, "_quadratic", None)
     if cached is None:
-        S, m = quadratic_pencil(geo, op.pencil_points)
+        S, m = quadratic_pencil(geo, op.pencil_points, getattr(op, "area_scale", None))
         inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
         cached = op._quadratic = SparseLaplacian(sp.diags(inv) @ S, m, name="quadratic elements", S=S)
     return cached

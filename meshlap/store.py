@@ -62,7 +62,7 @@ class SavedLaplacian(LumpedLaplacian):
     Behaves like the operator it was saved from: ``op @ f``, ``L``, ``L_sym``, ``M``, ``S``,
     ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction`` (None
     for operators without them, such as the cotangent Laplacian), and when the geometry was
-    saved ``V``, ``faces``, ``geometry``, ``dim``, ``pencil_points`` and ``elements`` (what
+    saved ``V``, ``faces``, ``geometry``, ``dim``, ``pencil_points``, ``area_scale`` and ``elements`` (what
     :func:`meshlap.spectral.eigs` solves; "linear" without the geometry).
 
     Examples
@@ -79,7 +79,8 @@ class SavedLaplacian(LumpedLaplacian):
 
     def __init__(self, applied: sp.csr_matrix, symmetric: sp.csr_matrix, mass: np.ndarray,
                  params: dict[str, Any], S: sp.csr_matrix | None = None,
-                 geometry: Geometry | None = None, pencil_points: np.ndarray | None = None) -> None:
+                 geometry: Geometry | None = None, pencil_points: np.ndarray | None = None,
+                 area_scale: np.ndarray | None = None) -> None:
         self._applied, self._sym, self.mass, self._S = applied, symmetric, mass, S
         self._exact_S = S is not None  # S stored as such (the cotangent Laplacian's), not M @ L_sym
         self.name = str(params.get("name", "BSW"))
@@ -98,6 +99,7 @@ class SavedLaplacian(LumpedLaplacian):
             P = geometry.points
             self.V = P if P.shape[1] >= 3 else np.ascontiguousarray(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))))
             self.pencil_points = P if pencil_points is None else pencil_points
+            self.area_scale = area_scale
 
     @property
     def L(self) -> sp.csr_matrix:
@@ -176,6 +178,8 @@ def _geometry_arrays(op: Any) -> dict[str, Any]:
     moved = getattr(op, "pencil_points", None)
     if moved is not None and moved is not geo.points:  # denoise=True: gradients and distances read them
         out["pencil_points"] = moved
+    if getattr(op, "area_scale", None) is not None:  # what the quadratic elements' masses carry
+        out["area_scale"] = op.area_scale
     return out
 
 
@@ -376,4 +380,6 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
             sym = _csr(data["sym_data"], applied.indices, applied.indptr, n)
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None
         moved = data["pencil_points"] if "pencil_points" in data else None
-    return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo, pencil_points=moved)
+        scale = data["area_scale"] if "area_scale" in data else None
+    return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo, pencil_points=moved,
+                          area_scale=scale)

@@ -82,6 +82,9 @@ def test_a_denoised_operator_s_uses_read_its_positions(tmp_path):
     assert abs(gradient_operator(op).w.sum() / (4 * np.pi) - 1) < 0.003
     back = meshlap.io.load_operator(meshlap.io.save_operator(tmp_path / "op", op))
     assert np.allclose(HeatDistance(back).compute(0), HeatDistance(op).compute(0), atol=1e-9)
+    # and its masses' factor for the noise the step left (the quadratic elements read it)
+    assert np.array_equal(back.area_scale, op.area_scale) and back.elements == op.elements == "quadratic"
+    assert np.allclose(meshlap.spectral.eigs(back, 6)[0], meshlap.spectral.eigs(op, 6)[0], rtol=1e-8)
     # Neumann data on a disc with 0.3 mean edges of noise across it: ∂x/∂n = x on the unit circle,
     # weighted by the boundary measure of the positions the pencil was built on
     V, F = meshlap.shapes.disc(2000)
