@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.sparse.linalg import eigsh
 from scipy.spatial import cKDTree
 
@@ -167,6 +167,31 @@ def mean_edge(V: np.ndarray, C: np.ndarray) -> float:
     e = np.concatenate([C[:, [a, b]] for a in range(C.shape[1]) for b in range(a + 1, C.shape[1])])
     e = np.unique(np.sort(e, axis=1), axis=0)
     return float(np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1).mean())
+
+
+def touching(V: np.ndarray, C: np.ndarray, neighbours: int = 16, detour: float = 4.0) -> int:
+    """Vertices one of whose ``neighbours`` nearest vertices is at least ``detour`` times farther
+    along the mesh's edges than through space: there the vertices alone, as a point cloud, do
+    not tell the surface (two parts or sheets closer than its sampling: a tail against a leg,
+    boxes in contact).
+
+    >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]])
+    >>> touching(V, np.array([[0, 1, 2], [3, 4, 5]]), neighbours=3)   # two sheets 0.1 apart
+    6
+    """
+    e = np.concatenate([C[:, [a, b]] for a in range(C.shape[1]) for b in range(a + 1, C.shape[1])])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    length = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    graph = sp.coo_matrix((length, (e[:, 0], e[:, 1])), shape=(len(V),) * 2).tocsr()
+    dist, idx = cKDTree(V).query(V, k=min(neighbours + 1, len(V)))
+    count = 0
+    for start in range(0, len(V), 500):  # graph distances a chunk of sources at a time, cut off
+        rows = np.arange(start, min(start + 500, len(V)))
+        near = dist[rows, -1].max() * detour
+        D = dijkstra(graph, directed=False, indices=rows, limit=near)
+        along = D[np.arange(len(rows))[:, None], idx[rows]]
+        count += int((along > detour * dist[rows]).any(axis=1).sum())
+    return count
 
 
 def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:

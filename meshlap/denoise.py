@@ -19,7 +19,7 @@ Whether noise is there is measured too: where it dominates what smoothing takes 
 bi-Laplacian alternates across edges as white noise's does, where shape dominates it is smooth
 (:func:`noise_extent`, which counts edges, so a coarse model's few unresolved ones do not
 outweigh the rest). The step leaves part of the noise, whose area still inflates the metric by
-the same mechanism (eigenvalues 1.5-1.9% low after it at 0.1 mean edges): that area is read
+the same mechanism (eigenvalues 1.2-1.9% low after it at 0.1 mean edges): that area is read
 from what the step took out (:func:`noise_share`, :func:`area_left`) and divided out of the
 pencil's masses.
 """
