@@ -172,7 +172,7 @@ def mean_edge(V: np.ndarray, C: np.ndarray) -> float:
 def touching(V: np.ndarray, C: np.ndarray, neighbours: int = 16, detour: float = 4.0) -> int:
     """Vertices one of whose ``neighbours`` nearest vertices is at least ``detour`` times farther
     along the mesh's edges than through space: there the vertices alone, as a point cloud, do
-    not tell the surface (two parts or sheets closer than its sampling: a tail against a leg,
+    not tell the surface (two parts or sheets closer than its sampling: a limb against the body,
     boxes in contact).
 
     >>> V = np.array([[0., 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0.1], [1, 0, 0.1], [0, 1, 0.1]])
