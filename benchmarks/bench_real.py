@@ -191,7 +191,11 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
     lam, cpu, warn, dec = meshlap_default(mesh.V, faces, k, **SURFACE_OPTIONS)
     row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.V), "parts": n_parts,
            "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
-           "sigma": noise_reading(V, F)}
+           "sigma": noise_reading(V, F), "extent": extent_reading(V, F)}
+    # what the step would do to a clean surface: why the default reads the noise first
+    row["err_denoise"] = err(lam if "denoise" in dec else
+                             meshlap_default(mesh.V, faces, k, **{**SURFACE_OPTIONS, "denoise": True})[0],
+                             R, n_parts)
     for name, (plam, pcpu, pwarn) in peers(V, F, k).items():
         row[f"err_{name}"] = err(plam, R, n_parts)
         row[f"cpu_{name}"] = pcpu
@@ -214,6 +218,13 @@ def noise_reading(V: np.ndarray, F: np.ndarray) -> float:
     """σ̂ / ē: the normal noise that cubic height fits read (meshlap.denoise.normal_noise), in mean
     edges; the clean meshes' readings beside the noisy rows' show what a threshold would face."""
     return meshlap.denoise.normal_noise(V) / rc.mean_edge(V, F)
+
+
+def extent_reading(V: np.ndarray, F: np.ndarray) -> float:
+    """The share of edges across which noise dominates what smoothing takes out
+    (meshlap.denoise.noise_extent), read on every surface whether or not it passes the floor."""
+    g = meshlap.geometry.from_mesh(V, F)
+    return meshlap.denoise.noise_extent(g.points, g.normals(), *meshlap.fem.lumped_pencil(g), g.edges())
 
 
 def tet_row(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> dict:
@@ -240,6 +251,7 @@ def noisy_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> l
         dlam = meshlap_default(Vn, F, k, denoise=True)[0]
         paper = timed(lambda X=Vn: spectral.eigs(meshlap.laplacian(X, F, operator="paper"), k)[0])[0]
         row = {"name": entry["name"], "noise": sigma, "n": len(V), "sigma": noise_reading(Vn, F),
+               "extent": extent_reading(Vn, F),
                "err_default": err(lam, R, n_parts), "err_denoise": err(dlam, R, n_parts),
                "err_paper": err(paper, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn}
         for name, (plam, pcpu, _) in peers(Vn, F, k).items():
@@ -258,6 +270,18 @@ def finish(row: dict, peer_errs: list[float], cpu_base: float) -> None:
 # -- tables -------------------------------------------------------------------------------------
 def pct(x: float) -> str:
     return "fail" if not np.isfinite(x) else f"{100 * x:.3g}%"
+
+
+def forced(surf: list[dict]) -> str:
+    # denoise=True on the clean surfaces (the surfaces table's column), against the best peer
+    r = [(x["err_denoise"] / x["best_peer"], x["name"]) for x in surf
+         if np.isfinite(x.get("err_denoise", np.nan))]
+    worse = sorted(x for x in r if x[0] > 1.5)
+    if not worse:
+        return f"`denoise=True` on every clean surface stays within 1.5× of the best peer ({len(r)} rows)."
+    return (f"`denoise=True` on every clean surface would be beyond 1.5× of the best peer on {len(worse)} "
+            f"of {len(r)} (" + ", ".join(f"{n} {q:.3g}×" for q, n in worse)
+            + "); the default's reading keeps them as given.")
 
 
 def summary(rows: list[dict], peer: str) -> str:
@@ -296,13 +320,14 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
            + summary(settled, "the best peer") + ".", "",
            *by_kind(surf, "the best peer"), "",
            "| mesh | kind | n | parts | ref | ref Δ | default | COT | LaPy | robust | ratio | "
-           "CPU default s | CPU COT s | CPU ratio | σ̂ / ē | decision | warnings |",
-           "|" + "---|" * 17]
+           "CPU default s | CPU COT s | CPU ratio | σ̂ / ē | extent | denoise=True | decision | warnings |",
+           "|" + "---|" * 19]
     for x in surf:
         out.append(f"| {x['name']} | {x['kind']} | {x['n']} | {x['parts']} | {lv(x['name'])} | "
                    f"{pct(refs[x['name']]['spread'])} | {pct(x['err_default'])} | {pct(x['err_COT'])} | "
                    f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
                    f"{x['cpu_default']:.2f} | {x['cpu_COT']:.3f} | {x['cpu_ratio']:.3g} | {x['sigma']:.3f} | "
+                   f"{x['extent']:.2f} | {pct(x.get('err_denoise', float('nan')))} | "
                    f"{x['decision']} | {x['warnings']} |")
     resolved = [x for x in cloud if x["touching"] == 0]
     out += ["", "### The vertices alone as a point cloud: meshlap.point_cloud_laplacian against "
@@ -346,18 +371,25 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
             "the noise adds area above `NOISE_FLOOR` and dominates what smoothing takes out across at "
             "least half of the edges (`denoise.noise_extent`: the signs of the positions' bi-Laplacian "
             "against white noise's), and divides out of the masses the area the noise its step left still "
-            "adds (`denoise.area_left`): "
+            "adds (`denoise.area_left`). That share of edges (`extent`, read on every row): clean "
+            f"surfaces median {np.median([x['extent'] for x in surf]):.2f}, "
+            f"{sum(x['extent'] >= 0.5 for x in surf)} of {len(surf)} at least ½; noisy rows "
+            + ", ".join(f"{s} ē: {min(x['extent'] for x in noisy if x['noise'] == s):.2f}-"
+                        f"{max(x['extent'] for x in noisy if x['noise'] == s):.2f}" for s in NOISE)
+            + ". Denoised: "
             + ", ".join(f"{sum('denoise' in x['decision'] for x in noisy if x['noise'] == s)} of the "
                         f"{sum(x['noise'] == s for x in noisy)} rows at {s} ē" for s in NOISE)
-            + f", {sum('denoise' in x['decision'] for x in surf)} of the {len(surf)} clean surfaces.", ""] \
+            + f", {sum('denoise' in x['decision'] for x in surf)} of the {len(surf)} clean surfaces. "
+            + forced(surf), ""] \
         if surf and noisy else [""]
     out += ["`denoise=True`: `meshlap.laplacian(V, F, denoise=True)`, FEM on the positions after a "
             "bi-Laplacian step of time (2σ̂)², masses less the area the noise it left adds "
             "(meshlap.denoise).", "",
-            "| mesh | noise (mean edges) | σ̂ / ē | default | decision | denoise=True | paper's | COT | "
-            "LaPy | robust | ratio | CPU ratio | warnings |", "|" + "---|" * 13]
+            "| mesh | noise (mean edges) | σ̂ / ē | extent | default | decision | denoise=True | paper's | "
+            "COT | LaPy | robust | ratio | CPU ratio | warnings |", "|" + "---|" * 14]
     for x in noisy:
-        out.append(f"| {x['name']} | {x['noise']} | {x['sigma']:.3f} | {pct(x['err_default'])} | "
+        out.append(f"| {x['name']} | {x['noise']} | {x['sigma']:.3f} | {x['extent']:.2f} | "
+                   f"{pct(x['err_default'])} | "
                    f"{x['decision']} | {pct(x.get('err_denoise', float('nan')))} | "
                    f"{pct(x.get('err_paper', float('nan')))} | {pct(x['err_COT'])} | "
                    f"{pct(x['err_LaPy'])} | {pct(x['err_robust'])} | {x['ratio']:.3g} | "
@@ -486,7 +518,8 @@ def render(folder: Path) -> None:
             for key, v in r.items():
                 if key in ("n", "parts", "touching"):
                     row[key] = int(v) if v else 0
-                elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise", "sigma"):
+                elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise", "sigma",
+                                                                 "extent"):
                     row[key] = float(v) if v else float("nan")
                 else:
                     row[key] = v

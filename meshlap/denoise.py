@@ -174,8 +174,18 @@ def white_noise(solve: Callable[[np.ndarray], np.ndarray], n: int) -> tuple[np.n
     >>> bool(np.allclose(left, 0.5 * w))
     True
     """
-    w = np.random.default_rng(0).standard_normal(n)
+    w = _seeded_white(n)
     return w, solve(w[:, None])[:, 0]
+
+
+def _seeded_white(n: int) -> np.ndarray:
+    # the same unit white noise for every reading of the same mesh
+    return np.random.default_rng(0).standard_normal(n)
+
+
+def _share_bound(rho: float, rho_white: float) -> float:
+    # ρ = qρ_w + (1 − q)ρ_s with ρ_s ≥ 0 and ρ_w < 0 gives q ≥ ρ/ρ_w
+    return float(np.clip(rho / rho_white, 0.0, 1.0)) if rho_white < 0 else 0.0
 
 
 def _edge_correlation(f: np.ndarray, edges: np.ndarray) -> float:
@@ -238,8 +248,7 @@ def noise_extent(P: np.ndarray, normals: np.ndarray, S: sp.spmatrix, m: np.ndarr
         return float(np.mean(np.sign(f[edges[:, 0]]) * np.sign(f[edges[:, 1]]))) if len(edges) else 0.0
 
     d = np.einsum("ij,ij->i", bilaplacian(np.asarray(P, dtype=np.float64)), normals)
-    rho_w = sign_product(bilaplacian(np.random.default_rng(0).standard_normal((len(m), 1)))[:, 0])
-    return float(np.clip(sign_product(d) / rho_w, 0.0, 1.0)) if rho_w < 0 else 0.0
+    return _share_bound(sign_product(d), sign_product(bilaplacian(_seeded_white(len(m))[:, None])[:, 0]))
 
 
 def noise_share(removed: np.ndarray, white_removed: np.ndarray, edges: np.ndarray) -> float:
@@ -282,8 +291,7 @@ def noise_share(removed: np.ndarray, white_removed: np.ndarray, edges: np.ndarra
     >>> bool(share(noisy) > 0.5), bool(share(V) < 0.1)
     (True, True)
     """
-    rho_w = _edge_correlation(white_removed, edges)
-    return float(np.clip(_edge_correlation(removed, edges) / rho_w, 0.0, 1.0)) if rho_w < 0 else 0.0
+    return _share_bound(_edge_correlation(removed, edges), _edge_correlation(white_removed, edges))
 
 
 def area_left(removed: np.ndarray, white: np.ndarray, white_left: np.ndarray, S: sp.spmatrix,
@@ -391,9 +399,9 @@ def noise_step(geo: Any) -> NoiseStep:
 
 
 def kept_shapes(P: np.ndarray, X: np.ndarray, area: np.ndarray, area_after: np.ndarray, label: np.ndarray,
-                noise: float) -> np.ndarray:
+                noise: float) -> tuple[np.ndarray, np.ndarray]:
     """``X`` with every part that the step shrank by more than noise could have inflated it
-    back at ``P``: its shape, not its noise, was moved.
+    back at ``P`` (its shape, not its noise, was moved), and which vertices those are.
 
     Normal noise σ inflates a surface's area by about 1 + NOISE_AREA·(σ/ē)², which the step
     takes back (it leaves 0.84-0.90 of the area at 0.3ē on five scans; the clean meshes have
@@ -412,17 +420,25 @@ def kept_shapes(P: np.ndarray, X: np.ndarray, area: np.ndarray, area_after: np.n
     noise : float
         σ̂ / ē.
 
+    Returns
+    -------
+    points : (n, d) ndarray
+        ``X`` itself where no part was kept, else a copy with the kept parts at ``P``.
+    kept : (n,) bool ndarray
+        The vertices of the kept parts.
+
     Examples
     --------
-    >>> P = np.zeros((4, 3)); X = np.ones((4, 3))
-    >>> kept_shapes(P, X, np.ones(4), np.array([0.9, 0.9, 0.1, 0.1]), np.array([0, 0, 1, 1]), 0.2)[:, 0]
-    array([1., 1., 0., 0.])
+    >>> P, X, part = np.zeros((4, 3)), np.ones((4, 3)), np.array([0, 0, 1, 1])
+    >>> points, kept = kept_shapes(P, X, np.ones(4), np.array([0.9, 0.9, 0.1, 0.1]), part, 0.2)
+    >>> points[:, 0], kept
+    (array([1., 1., 0., 0.]), array([False, False,  True,  True]))
     """
     before = np.bincount(label, area)
     after = np.bincount(label, area_after, minlength=len(before))
-    shrunk = after < before / (1.0 + NOISE_AREA * (2.0 * noise) ** 2)
-    if not shrunk.any():
-        return X
+    kept = (after < before / (1.0 + NOISE_AREA * (2.0 * noise) ** 2))[label]
+    if not kept.any():
+        return X, kept
     out = np.array(X, copy=True)
-    out[shrunk[label]] = P[shrunk[label]]
-    return out
+    out[kept] = P[kept]
+    return out, kept

@@ -160,16 +160,14 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
             report(0.7, "denoised positions")
         points = step.points
         S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
-        labels = fem.part_labels(geo)[1]
-        kept = denoise.kept_shapes(geo.points, points, m, m1, labels, step.sigma / geo.spacing)
-        if kept is not points:  # parts the step shrank beyond the noise's share keep their positions
-            points = kept
+        points, kept = denoise.kept_shapes(geo.points, points, m, m1, fem.part_labels(geo)[1],
+                                           step.sigma / geo.spacing)
+        if kept.any():  # parts the step shrank beyond the noise's share keep their positions
             S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
         # the noise the step left still inflates the metric (denoise.area_left), and with it the
         # masses: eigenvalues 1.2-1.9% low at 0.1 mean edges on four scans, all nine low; a part
         # that kept its positions keeps its masses
-        moved = np.bincount(labels, (points != geo.points).any(axis=1)) > 0
-        scale = np.where(moved[labels], 1.0 / (1.0 + step.area_left), 1.0)
+        scale = np.where(kept, 1.0, 1.0 / (1.0 + step.area_left))
         S, m = S1, m1 * scale
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)

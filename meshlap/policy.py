@@ -65,7 +65,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .denoise import noise_extent, noise_step, surface_noise
+from .denoise import noise_extent, surface_noise
 from .errors import MeshError
 from .fem import lumped_pencil, part_labels, welded
 from .geometry.pointcloud import noise_reading
@@ -221,10 +221,6 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     if operator == "fem" and not (has_cells or stars) or operator == "galerkin" and not has_cells:
         raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
                         "(use operator='kernel' or 'auto')")
-    if denoise and operator == "fem" and geo.faces is not None:  # the pencil takes the step (cached)
-        step = noise_step(geo)
-        measured["noise share of the step's removal ≥"] = round(step.share, 3)
-        measured["area the noise left adds"] = round(step.area_left, 5)
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
     # a mass named for the pencil asks for the pencil's own spectra

@@ -352,7 +352,6 @@ def test_denoise_masses_carry_the_area_the_noise_left():
     assert 0.75 * left < step.area_left <= 1.05 * left, (step.area_left, left)
     op = meshlap.laplacian(X, F)
     assert op.decision.denoise and np.allclose(op.area_scale, 1 / (1 + step.area_left))
-    assert op.decision.measured["area the noise left adds"] == round(step.area_left, 5)
     exact = np.repeat([2.0, 6.0, 12.0], [3, 5, 7])
     lam = np.sort(meshlap.spectral.eigs(op, 16)[0])[1:]
     assert np.abs(lam / exact - 1).max() < 0.01
