@@ -255,14 +255,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                         f"{_MAX_NEIGHBORS} neighbours")
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
-    # a recomputed star replaces the earlier one where the wider search secured it; one that
-    # stayed insecure keeps its first, local star (the wider one reaches other sheets: a petal's
-    # rim takes triangles across to the next petal), and so does one whose first was open: a point
-    # on the hull of its first neighbours borders what the sampling leaves empty, which the wider
-    # search closes (a flat figure's notch); its mass is still the wider search's
-    use = np.where((status == _INSECURE) | first_open, 0, last)
-    tris = [t[use[t[:, 0]] == it] for it, t in star_parts]
-    stars = uniq[np.concatenate(tris)] if tris else np.zeros((0, 3), np.int64)
+    stars = uniq[_soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)]
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])]  # each once
     full = mass[np.searchsorted(uniq, rep)] / share
     boundary = open_cell[np.searchsorted(uniq, rep)]
@@ -279,6 +272,45 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "stars": stars,
     }
     return full, info
+
+
+def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Which rows of ``a`` are rows of ``b``."""
+    if not len(a) or not len(b):
+        return np.zeros(len(a), dtype=bool)
+    _, inv = np.unique(np.vstack([b, a]), axis=0, return_inverse=True)
+    inv = inv.ravel()
+    return np.isin(inv[len(b):], inv[:len(b)])
+
+
+def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray) -> np.ndarray:
+    """Every point's star, its centre first, from the search round ``use`` gives it.
+
+    A star the wider search secured replaces the first; one that stayed insecure keeps the first,
+    local star (the wider one reaches other sheets: a petal's rim takes triangles across to the
+    next petal). A point on the hull of its first neighbours (``rim``) keeps its first star too,
+    and of its wider star only the triangles that a point with a closed first star also holds:
+    across what the sampling leaves empty (a flat figure's notch) only rim points see the wider
+    triangles, while a lopsided neighbourhood's wider triangles are its neighbours' own (keeping the
+    first star alone had doubled a random 16,000-point sphere's eigenvalue error, 0.20% to 0.38%).
+    """
+    if not parts:  # k != 2
+        return np.zeros((0, 3), np.int64)
+    stars = np.concatenate([t[use[t[:, 0]] == it] for it, t in parts])
+    widened = rim & (use > 0)
+    if not widened.any():
+        return stars
+    wide = widened[stars[:, 0]]
+    others = stars[~wide]
+    others = np.sort(others[widened[others].any(axis=1)], axis=1)  # only these can hold a rim triangle
+    extra = stars[wide]
+    extra = extra[_rows_in(np.sort(extra, axis=1), others)]
+    first = parts[0][1]
+    first = first[widened[first[:, 0]]]
+    # a triangle in both of a rim point's stars, once
+    extra = extra[~_rows_in(np.column_stack([extra[:, 0], np.sort(extra[:, 1:], axis=1)]),
+                            np.column_stack([first[:, 0], np.sort(first[:, 1:], axis=1)]))]
+    return np.concatenate([stars[~wide], first, extra])
 
 
 def _lattice_spacing(mass: float, k: int) -> float:
