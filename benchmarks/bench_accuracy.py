@@ -79,7 +79,7 @@ def real_row(name: str) -> str:
     for kw in BUILDERS:
         lam, _ = spectral.eigs(meshlap.laplacian(V, F, **kw), 12)
         cells.append(f"{np.max(np.abs(lam[1:] - ref[1:]) / ref[1:]):.1%}")
-    return f"| {name}: first 12 eigenvalues vs cotangent, max rel. error | " + " | ".join(cells) + " | – |"
+    return f"| {name}: first 12 eigenvalues, max rel. difference from cotangent on the same mesh | " + " | ".join(cells) + " | – |"
 
 
 def plane_row(n: int) -> str:
@@ -119,9 +119,12 @@ def main() -> None:
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     lines = [f"Command: `python benchmarks/bench_accuracy.py` (issue 12; {stamp}). "
              f"Load average at the start: {load[0]:.2f}, {load[1]:.2f}, {load[2]:.2f} (2 cores shared with "
-             "other jobs). default: `meshlap.laplacian(V, F)` (linear FEM on the intrinsic Delaunay "
-             "triangulation, Voronoi mass; `op @ f` the fitted point-wise rows); kernel: "
-             "`operator=\"kernel\"`, the corrected heat kernel.", "",
+             "other jobs). default: `meshlap.laplacian(V, F)` (FEM on the intrinsic Delaunay "
+             "triangulation; its `eigs` solve quadratic elements on the triangles, `op.elements`; "
+             "`op @ f` the fitted point-wise rows); kernel: `operator=\"kernel\"`, the corrected heat "
+             "kernel. On the real meshes the reference is the cotangent Laplacian of the same mesh, which "
+             "the quadratic elements are more accurate than (bench_spectra.py and bench_real.py compare "
+             "with refined meshes).", "",
              "| case | default | kernel | paper's operator (`correction=\"none\"`) | cotangent |",
              "|---|---|---|---|---|"]
     times = {}
