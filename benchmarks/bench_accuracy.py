@@ -79,7 +79,8 @@ def real_row(name: str) -> str:
     for kw in BUILDERS:
         lam, _ = spectral.eigs(meshlap.laplacian(V, F, **kw), 12)
         cells.append(f"{np.max(np.abs(lam[1:] - ref[1:]) / ref[1:]):.1%}")
-    return f"| {name}: first 12 eigenvalues, max rel. difference from cotangent on the same mesh | " + " | ".join(cells) + " | – |"
+    return (f"| {name}: first 12 eigenvalues, max rel. difference from cotangent on the same mesh | "
+            + " | ".join(cells) + " | – |")
 
 
 def plane_row(n: int) -> str:
