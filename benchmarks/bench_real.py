@@ -91,6 +91,8 @@ def decision_text(op: object) -> str:
 # -- the operators ------------------------------------------------------------------------------
 #: options of meshlap.laplacian for the surface rows (``--mass``); empty: the default
 SURFACE_OPTIONS: dict[str, object] = {}
+#: options of spectral.eigs for the surface rows (``--elements``); empty: the default
+EIGS_OPTIONS: dict[str, object] = {}
 
 
 def meshlap_default(V: np.ndarray, faces: object, n_eigs: int,
@@ -102,7 +104,7 @@ def meshlap_default(V: np.ndarray, faces: object, n_eigs: int,
     def run() -> np.ndarray:
         op = meshlap.laplacian(V, faces, **kw)
         box["op"] = op
-        return spectral.eigs(op, n_eigs)[0]
+        return spectral.eigs(op, n_eigs, **EIGS_OPTIONS)[0]
 
     with event.install_recorder("numba:compile") as compiled:
         lam, cpu, warn = timed(run)
@@ -436,6 +438,9 @@ def main() -> None:
     ap.add_argument("--mass", choices=["lumped", "blend"], default="lumped",
                     help="the surface rows' mass (meshlap.laplacian's mass=); other than the default "
                     "only with --no-write")
+    ap.add_argument("--elements", choices=["quadratic", "linear"], default=None,
+                    help="the surface rows' spectral.eigs(elements=...); other than the default only "
+                    "with --no-write")
     ap.add_argument("--render", action="store_true", help="rewrite RESULTS.md's section from the CSV and "
                     "the cached references, running nothing")
     ap.add_argument("--noise-step", type=float, default=None, help="c of the denoising step τ = (cσ̂)² "
@@ -445,6 +450,10 @@ def main() -> None:
         if not args.no_write:
             ap.error("--mass blend measures an option, not the default: add --no-write")
         SURFACE_OPTIONS["mass"] = args.mass
+    if args.elements is not None:
+        if not args.no_write:
+            ap.error("--elements measures an option, not the default: add --no-write")
+        EIGS_OPTIONS["elements"] = args.elements
     if args.noise_step is not None:
         if not args.no_write:
             ap.error("--noise-step measures another constant, not the default: add --no-write")
