@@ -85,7 +85,8 @@ def decision_text(op: object) -> str:
     if d is None:
         return ""
     return str(getattr(d, "operator", d)) + (" + denoise" if getattr(d, "denoise", False) else "") + \
-        (" (quadratic eigs)" if getattr(d, "elements", "linear") == "quadratic" else "")
+        (" (quadratic eigs)" if EIGS_OPTIONS.get("elements", getattr(d, "elements", "linear")) == "quadratic"
+         else "")
 
 
 # -- the operators ------------------------------------------------------------------------------
@@ -446,17 +447,16 @@ def main() -> None:
     ap.add_argument("--noise-step", type=float, default=None, help="c of the denoising step τ = (cσ̂)² "
                     "(tuned.NOISE_STEP); other than the default only with --no-write")
     args = ap.parse_args()
+    # an option other than the default measures that option: printed, never written as the default's
+    for flag, given in (("--mass", args.mass != "lumped"), ("--elements", args.elements is not None),
+                        ("--noise-step", args.noise_step is not None)):
+        if given and not args.no_write:
+            ap.error(f"{flag} measures an option, not the default: add --no-write")
     if args.mass != "lumped":
-        if not args.no_write:
-            ap.error("--mass blend measures an option, not the default: add --no-write")
         SURFACE_OPTIONS["mass"] = args.mass
     if args.elements is not None:
-        if not args.no_write:
-            ap.error("--elements measures an option, not the default: add --no-write")
         EIGS_OPTIONS["elements"] = args.elements
     if args.noise_step is not None:
-        if not args.no_write:
-            ap.error("--noise-step measures another constant, not the default: add --no-write")
         meshlap.denoise.NOISE_STEP = args.noise_step
     folder = rc.corpus_dir(args.corpus)
     if args.render:

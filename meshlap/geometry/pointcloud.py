@@ -284,15 +284,14 @@ def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray) -> np.ndarray:
-    """Every point's star, its centre first, from the search round ``use`` gives it.
+    """Every point's star, its centre first: the one of search round ``use``.
 
     A star the wider search secured replaces the first; one that stayed insecure keeps the first,
     local star (the wider one reaches other sheets: a petal's rim takes triangles across to the
-    next petal). A point on the hull of its first neighbours (``rim``) keeps its first star too,
-    and of its wider star only the triangles that a point with a closed first star also holds:
-    across what the sampling leaves empty (a flat figure's notch) only rim points see the wider
-    triangles, while a lopsided neighbourhood's wider triangles are its neighbours' own (keeping the
-    first star alone had doubled a random 16,000-point sphere's eigenvalue error, 0.20% to 0.38%).
+    next petal). A point on the hull of its first neighbours (``rim``) keeps its first star, and
+    of its wider star only the triangles that a point whose first star closed also holds: across
+    what the sampling leaves empty (a flat figure's notch) only rim points see them, while a
+    lopsided neighbourhood's wider triangles are its neighbours' own.
     """
     if not parts:  # k != 2
         return np.zeros((0, 3), np.int64)
@@ -301,16 +300,16 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     if not widened.any():
         return stars
     wide = widened[stars[:, 0]]
-    others = stars[~wide]
-    others = np.sort(others[widened[others].any(axis=1)], axis=1)  # only these can hold a rim triangle
+    held = stars[~wide]
+    held = np.sort(held[widened[held].any(axis=1)], axis=1)  # only these can hold a rim triangle
     extra = stars[wide]
-    extra = extra[_rows_in(np.sort(extra, axis=1), others)]
+    extra = extra[_rows_in(np.sort(extra, axis=1), held)]
     first = parts[0][1]
-    first = first[widened[first[:, 0]]]
+    rim_stars = np.concatenate([first[widened[first[:, 0]]], extra])
     # a triangle in both of a rim point's stars, once
-    extra = extra[~_rows_in(np.column_stack([extra[:, 0], np.sort(extra[:, 1:], axis=1)]),
-                            np.column_stack([first[:, 0], np.sort(first[:, 1:], axis=1)]))]
-    return np.concatenate([stars[~wide], first, extra])
+    _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
+                        return_index=True)
+    return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
 
 
 def _lattice_spacing(mass: float, k: int) -> float:
