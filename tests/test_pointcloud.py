@@ -104,6 +104,40 @@ def test_a_lopsided_neighbourhood_keeps_its_closed_star():
     lam = np.sort(spectral.eigs(op, 16, tol=1e-8)[0])
     assert np.abs(lam[1:] / SPHERE_EIGS[1:] - 1).max() < 0.003
 
+
+def _thick_tube(a=0.5, r1=1.5, r2=2.5, height=3.0):
+    # the surface of a thick-walled tube (a nut without its thread), sampled in rings a apart:
+    # its wall is two spacings thick, so a bore point's first 16 neighbours reach the outer wall
+    points, label = [], []
+    for r, wall in ((r1, 1), (r2, 2)):
+        nt, nz = round(2 * np.pi * r / a), round(height / a)
+        for i in range(nz + 1):
+            t = (np.arange(nt) + 0.5 * (i % 2)) * 2 * np.pi / nt
+            points.append(np.column_stack([r * np.cos(t), r * np.sin(t), np.full(nt, i * height / nz)]))
+            label += [wall] * nt
+    for z in (0.0, height):  # the annular ends
+        for r in np.arange(r1 + a, r2 - a / 2, a):
+            t = np.arange(round(2 * np.pi * r / a)) * 2 * np.pi / round(2 * np.pi * r / a) + 0.3
+            points.append(np.column_stack([r * np.cos(t), r * np.sin(t), np.full(len(t), z)]))
+            label += [0] * len(t)
+    return np.vstack(points), np.array(label)
+
+
+def test_the_far_wall_of_a_thin_solid_is_not_in_a_star():
+    # a steep chord to one of the first neighbours, far above the rest of them, crosses the solid:
+    # with it in the stars, 468 triangles joined the bore's middle to the outer wall, the masses
+    # summed to 77% of the area and λ1 was 28% low
+    P, wall = _thick_tube()
+    m, info = pointcloud.point_masses(P)
+    stars = info["stars"]
+    bore = (wall == 1) & (P[:, 2] > 0.9) & (P[:, 2] < 2.1)
+    assert not (bore[stars].any(axis=1) & (wall[stars] == 2).any(axis=1)).any()
+    area = 2 * np.pi * 3.0 * (1.5 + 2.5) + 2 * np.pi * (2.5**2 - 1.5**2)
+    assert m.sum() == pytest.approx(area, rel=0.1)  # measured 0.914
+    # linear FEM on the revolved profile, 64,000 vertices (16,000: the same to 4 digits)
+    lam = np.sort(spectral.eigs(meshlap.point_cloud_laplacian(P), 4)[0])
+    assert lam[1:3] == pytest.approx([0.24357, 0.24357], rel=0.1)  # measured 0.2263, 0.2294
+
 # -- the operator's surface ----------------------------------------------------------------------
 def test_operator_surface_on_a_cloud():
     P = samples.sphere_points(1500, "random", seed=0)

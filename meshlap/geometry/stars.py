@@ -24,6 +24,9 @@ _FLAT = 1e-10
 #: tan of the steepest chord from a point to a neighbour on its own sheet (60°; a 90° crease
 #: tilts its chords 45° from the fitted plane)
 _STEEP = 3.0**0.5
+#: how far above the median height of the first neighbours a steep one among them must be to
+#: be on another sheet (Gaussian noise puts 4% of heights beyond 3 medians, 2 standard deviations)
+_SCATTER = 3.0
 # Triangles kept per star (a star in a Delaunay triangulation has 6 on average).
 _STAR_SLOTS = 24
 # status codes of one point's star
@@ -68,18 +71,32 @@ def _project(P, p, nbr, T, U):
 
 
 @jit()
-def _drop_steep(P, p, nbr, U, kt):
-    # a neighbour beyond the first kt (those the tangent plane comes from, kept as they are: a
-    # coarse crease's) whose chord leaves the tangent plane more steeply than _STEEP is on
-    # another sheet (a part or layer across the air) that the widened search reached: it takes
-    # no part in the star (U = 0 is skipped); a chord of length ρ on a surface of curvature κ
-    # leaves it at about ρκ/2, so this sheet's own points stay well below that
-    for j in range(kt, len(nbr)):
+def _drop_steep(P, p, nbr, U, kt, z):
+    # a neighbour whose chord leaves the tangent plane more steeply than _STEEP is on another
+    # sheet (a part or layer across the air, the far wall of a thin solid): it takes no part in
+    # the star (U = 0 is skipped). A chord of length ρ on a surface of curvature κ leaves it at
+    # about ρκ/2, so this sheet's own points stay well below that. Among the first kt (those the
+    # plane comes from) noise also makes short chords steep, so there the height must also stand
+    # out from the neighbourhood's: beyond _SCATTER times its median. z: room for len(nbr) squared
+    # heights
+    steep_first = False
+    for j in range(len(nbr)):
         r2 = 0.0
         for b in range(P.shape[1]):
             r2 += (P[nbr[j], b] - P[p, b]) ** 2
         t2 = U[j, 0] ** 2 + U[j, 1] ** 2
-        if r2 - t2 > _STEEP * _STEEP * t2:
+        z[j] = r2 - t2
+        if z[j] > _STEEP * _STEEP * t2:
+            if j >= kt:
+                U[j, 0] = 0.0
+                U[j, 1] = 0.0
+            else:
+                steep_first = True
+    if not steep_first:
+        return
+    scatter = _SCATTER * _SCATTER * np.median(z[:kt])
+    for j in range(kt):
+        if z[j] > scatter and z[j] > _STEEP * _STEEP * (U[j, 0] ** 2 + U[j, 1] ** 2):
             U[j, 0] = 0.0
             U[j, 1] = 0.0
 
@@ -173,6 +190,7 @@ def _star2(U, K, tri):
 @jit()
 def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
     d = P.shape[1]
+    z = np.empty(nbr.shape[1])
     for r in range(start, stop):
         p = rows[r]
         K = counts[r]
@@ -183,7 +201,7 @@ def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, f
             status[r] = _DEGENERATE
             continue
         _project(P, p, nbr[r, :K], T, U)
-        _drop_steep(P, p, nbr[r, :K], U, kt)
+        _drop_steep(P, p, nbr[r, :K], U, kt, z)
         out_star[r], out_vor[r], status[r] = _star2(U, K, tri[r])
 
 
