@@ -16,6 +16,7 @@ must not run at different times on different ranks).
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Callable
 from typing import Any, NamedTuple
@@ -26,6 +27,7 @@ import scipy.sparse as sp
 from . import assembly, corrections, pencil
 from .assembly import Kernel
 from .geometry import Geometry
+from .geometry.topology import duplicate_vertices
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
 from .pencil import Pencil
 from .widths import Widths
@@ -144,10 +146,27 @@ def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], Non
     # must average out (the projected points would hide it)
     P = geo._cache.get("input_points", geo.points)
     tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
-    L, choice = corrections.rowchoice.choose_rows(P, k=geo.dim, progress=tick)
+    # coincident copies (an unwelded seam, a pole repeated per segment) are one point to the
+    # rows: as many copies as a row's neighbours put its last one at distance 0, and no width
+    rep = duplicate_vertices(P) if P.shape[1] <= 3 else np.arange(len(P))
+    distinct = np.flatnonzero(rep == np.arange(len(P)))
+    L, choice = corrections.rowchoice.choose_rows(P[distinct], k=geo.dim, progress=tick)
+    if len(distinct) < len(P):
+        L, choice = _on_copies(L, choice, np.searchsorted(distinct, rep))
     if L.dtype != opts.dtype:
         L.data = L.data.astype(opts.dtype)
     return Rows(L, None, choice)
+
+
+def _on_copies(L: sp.csr_matrix, choice: Any, index: np.ndarray) -> tuple[sp.csr_matrix, Any]:
+    # rows on distinct points to every copy: a copy takes its point's row, and a column is shared
+    # by its point's copies (f averaged over them), so that constants still map to 0
+    n = len(index)
+    share = 1.0 / np.bincount(index)[index]
+    spread = sp.csr_matrix((share, (index, np.arange(n))), shape=(L.shape[1], n))
+    per_point = {f.name: getattr(choice, f.name)[index] for f in dataclasses.fields(choice)
+                 if isinstance(getattr(choice, f.name), np.ndarray)}
+    return sp.csr_matrix(L[index] @ spread), dataclasses.replace(choice, **per_point)
 
 
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None

@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 
 import meshlap
-from meshlap import shapes, topology
+from meshlap import shapes, spectral, topology
 from meshlap.geometry import Polygons
 from meshlap.geometry.validation import MeshWarning, check_faces, check_k, check_positive
 
@@ -284,6 +284,38 @@ def test_duplicate_vertices_leave_L_unchanged(ball):
     assert topology.boundary_vertices(W, G, weld=False).any()
     assert topology.boundary_loops(W, G) == 0 and topology.boundary_loops(W, G, weld=False) >= 1
     assert topology.connected_components(W, G)[0] == 1
+
+
+def _uv_sphere(rings=24, segments=48):
+    # a latitude-longitude unit sphere whose poles are repeated once per segment, as exporters
+    # write them (capsule.obj of the real corpus): 48 copies of each pole
+    V, F = [], []
+    for i in range(rings + 1):
+        phi = np.pi * i / rings
+        for j in range(segments):
+            t = 2 * np.pi * (j + 0.5 * (i in (0, rings))) / segments
+            V.append([np.sin(phi) * np.cos(t), np.sin(phi) * np.sin(t), np.cos(phi)])
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            c, d = a + segments, b + segments
+            F += ([[a, c, b]] if i > 0 else []) + ([[b, c, d]] if i < rings - 1 else [])
+    return np.array(V), np.array(F)
+
+
+def test_a_point_repeated_more_often_than_a_row_has_neighbours():
+    # the fitted rows see the copies as one point (before: every row's last neighbour at distance
+    # 0 and a MeshError "h must be finite and positive" from op @ f); constants still map to 0
+    V, F = _uv_sphere()
+    with pytest.warns(MeshWarning, match="94 duplicate vertices"):
+        op = meshlap.laplacian(V, F)
+    x = V[:, 0]
+    exact = 2 - 6 * x**2
+    y = op @ x**2
+    assert np.linalg.norm(y - exact) / np.linalg.norm(exact) < 1e-3  # measured 1.1e-4
+    assert np.ptp(y[:48]) == 0 and np.abs(op @ np.ones(len(V))).max() < 1e-8
+    assert op.pointwise_choice.degree.shape == (len(V),)
+    assert spectral.eigs(op, 4)[0][1:] == pytest.approx([2, 2, 2], rel=0.01)  # measured 2.006-2.008
 
 
 def test_duplicates_in_clusters():
