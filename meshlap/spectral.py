@@ -399,7 +399,8 @@ def eigs(
     ladder = {"dense": [exact], "shift-invert": [shift],
               "lobpcg": [_eigcheck.Attempt("lobpcg", lobpcg(False)), wider]}[method]
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
-        ladder.append(shift)
+        # where a factorization fits, it comes before twice the iterations that did not converge
+        ladder.insert(1 if method == "lobpcg" else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
         ladder.append(exact)
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:

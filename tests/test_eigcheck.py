@@ -101,7 +101,9 @@ def test_a_stalled_lobpcg_is_recomputed_or_raises(monkeypatch):
     ref = dense_spectrum(heat)[:12]
     info = {}
     lam, phi = spectral.eigs(op, 12, method="lobpcg", maxiter=1, info=info)
-    assert info["tried"][0] == "lobpcg" and info["method"] != "lobpcg"
+    # a factorization that fits comes before twice the iterations (blend pencils of real meshes:
+    # 200 + 400 iterations that failed had cost up to 8.9 s against shift-invert's 0.36 s)
+    assert info["tried"] == ["lobpcg", "shift-invert"] and info["method"] == "shift-invert"
     assert (np.abs(lam[1:] - ref[1:]) / ref[1:]).max() < 1e-8 and abs(lam[0]) < 1e-8 * ref[-1]
     assert (info["bounds"] <= 1).all()
     # the first try's pairs, as they were, fail the check
