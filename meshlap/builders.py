@@ -66,7 +66,9 @@ def laplacian(
         on the vertices; "galerkin" the kernel integrated over the cells; "paper" the paper's
         operator, eq. (1), bit for bit (its ``op.L`` is eq. (1) too). "auto": :mod:`meshlap.policy`.
     k : {1, 2, 3}, optional
-        Intrinsic dimension (inferred from ``F``; 3 for tetrahedra given as (m, 4)).
+        Intrinsic dimension (inferred from ``F``: 1 for edges, 2 for faces). Pass 3 for
+        tetrahedra given as (m, 4): without it they are read as quads, with a MeshWarning when
+        the cells enclose volume.
     tol : float, optional
         The kernel's tolerance: weights below it are dropped (default 1e-6, 1e-8 for "paper").
     matrix_free : bool, default False

@@ -15,6 +15,8 @@ import igl
 import numpy as np
 
 from .errors import MeshError
+from .fem import welded_cells
+from .geometry.topology import duplicate_vertices
 from .geometry.validation import check_faces, check_vertices
 
 __all__ = ["mean_curvature_normal", "mean_curvature"]
@@ -83,7 +85,8 @@ def mean_curvature(op: Any, V: Any = None, F: Any = None) -> np.ndarray:
     Returns
     -------
     (n,) ndarray
-        Mean curvature; NaN at vertices that no face uses (no normal, no sign).
+        Mean curvature; NaN at vertices that no face uses (no normal, no sign). Coincident
+        copies share the normal of the faces around their point.
 
     Examples
     --------
@@ -95,9 +98,14 @@ def mean_curvature(op: Any, V: Any = None, F: Any = None) -> np.ndarray:
     """
     V, T = _geometry(op, V, F)
     LX = np.asarray(op @ V)
-    N = igl.per_vertex_normals(V, T)
+    # copies of a point (an unwelded seam, a pole repeated per segment, whose own faces collapse)
+    # take the normal of the faces around the point
+    rep = duplicate_vertices(V)
+    T = welded_cells(T, rep)
+    N = igl.per_vertex_normals(V, T)[rep]
     used = np.zeros(len(V), dtype=bool)
     used[T.ravel()] = True
+    used = used[rep]
     with np.errstate(invalid="ignore"):
         N = N / np.linalg.norm(N, axis=1, keepdims=True)
     sign = np.sign(-np.einsum("ij,ij->i", LX, N))
