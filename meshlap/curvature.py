@@ -85,8 +85,9 @@ def mean_curvature(op: Any, V: Any = None, F: Any = None) -> np.ndarray:
     Returns
     -------
     (n,) ndarray
-        Mean curvature; NaN at vertices that no face uses (no normal, no sign). Coincident
-        copies share the normal of the faces around their point.
+        Mean curvature; NaN at vertices that no face uses. Coincident copies share the normal
+        of the faces around their point; where the faces' normals cancel (a triangle given
+        twice, once each way) there is no sign and H is +|LX|/2.
 
     Examples
     --------
@@ -106,10 +107,9 @@ def mean_curvature(op: Any, V: Any = None, F: Any = None) -> np.ndarray:
     used = np.zeros(len(V), dtype=bool)
     used[T.ravel()] = True
     used = used[rep]
-    with np.errstate(invalid="ignore"):
-        N = N / np.linalg.norm(N, axis=1, keepdims=True)
-    sign = np.sign(-np.einsum("ij,ij->i", LX, N))
+    # faces that cancel (a triangle given twice, once each way) leave no normal: the sign is +
+    sign = np.sign(-np.einsum("ij,ij->i", LX, np.nan_to_num(N, nan=0.0)))
     sign[sign == 0] = 1.0
     H = 0.5 * sign * np.linalg.norm(LX, axis=1)
-    H[~used | ~np.isfinite(N).all(axis=1)] = np.nan
+    H[~used] = np.nan
     return H

@@ -66,6 +66,13 @@ def test_sign_follows_orientation_and_normal_vector():
         op2 = meshlap.laplacian(V2, F + 1, h=op.h, correction="none")
     H2 = mean_curvature(op2)
     assert np.isnan(H2[0]) and np.allclose(H2[1:], H)
+    # a triangle given twice, once each way (bunny-trimesh has 21 such vertices), cancels its
+    # normal: no sign, so +|H| there rather than NaN
+    far = np.array([[3.0, 0, 0], [3.0, 0.1, 0], [3.0, 0, 0.1]])
+    op3 = meshlap.laplacian(np.vstack([V, far]), np.vstack([F, [[1500, 1501, 1502], [1500, 1502, 1501]]]))
+    H3 = mean_curvature(op3)
+    assert np.isfinite(H3).all() and (H3[-3:] >= 0).all() and np.allclose(H3[:1500], mean_curvature(
+        meshlap.laplacian(V, F)), atol=1e-9)
     with pytest.raises(meshlap.MeshError, match="pass V"):
         mean_curvature(cotangent(V, F))
 
