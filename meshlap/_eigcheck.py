@@ -219,6 +219,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     from .errors import EigenError
 
     want, tried, best, spent, seen, known = k, [], None, 0.0, 0, None
+    below: dict[str, int] = {}  # each solver's most values below the count's shift so far
     queue = list(attempts)
     while queue:
         attempt = queue.pop(0)
@@ -241,11 +242,14 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
             else:
                 count = counter(shift)
             known = (shift, count)
-            if count is not None and count > j and count + 1 > want:
+            if count is not None and count > j and (count + 1 > want or j > below.get(attempt.name, j)):
                 # more eigenvalues below σ than computed (skipped, or ties of λ_k past the
-                # block): the same solver again, asked for all of them
-                want = count + 1
+                # block): the same solver again, asked for all of them, for as long as each run
+                # finds more (a deflated run finds what the last skipped: a 50-part mesh's 50
+                # zeros came 19, then 40, then all)
+                want = max(count, len(lam) + count - j) + 1  # room for the count - j it missed
                 queue.insert(0, attempt)
+            below[attempt.name] = max(j, below.get(attempt.name, 0))
             if count == j:
                 upper = shift  # proven: λ_{j+1} ≥ σ
         verdict = verify(apply_A, m, lam[:j], X[:, :j], tol, floor, upper, allsum)

@@ -142,6 +142,27 @@ def test_a_skipped_eigenvalue_is_found_by_the_count():
     assert v.passed.all()
 
 
+def test_a_solver_that_finds_more_of_a_cluster_each_run_runs_again():
+    """Deflated shift-invert on a 50-part model (the real corpus's truck, k = 20): the first run
+    returns 19 of the 50 zeros, the second 40 although asked for all 51 below σ, the third all.
+    A run that finds more runs again (the second had ended the solver: EigenError after 35 s)."""
+    d = np.r_[np.zeros(50), 0.9, 2.5, 2.8, 5.3, 6.0, 7.0]
+    A = np.diag(d)
+    found = [np.r_[np.arange(19), 50, 51], np.r_[np.arange(40), 50, 51, 52, 53], np.arange(len(d))]
+    asked = []
+
+    def deflating(want):
+        idx = found[min(len(asked), 2)]
+        asked.append(want)
+        return d[idx], np.eye(len(d))[:, idx], 1
+
+    info = {}
+    lam, _ = _eigcheck.first_verified([_eigcheck.Attempt("deflating", deflating)], 20, lambda Y: A @ Y,
+                                      np.ones(len(d)), 1e-8, 0.01, lambda s: int((d < s).sum()), info=info)
+    assert lam.tolist() == [0.0] * 20 and info["complete"] and info["count"] == 50
+    assert info["tried"] == ["deflating"] * 3 and asked[2] > asked[1]
+
+
 def test_a_cluster_split_by_the_tie_window_is_counted_above_its_last_tie():
     """λ_k opens a cluster that spreads past the tie window (0, then 12, 12.006, 12.009, 12.013
     and 12.015: a random cloud's l = 3 modes): the count's σ lies above the last computed tie,
