@@ -35,8 +35,11 @@ from .spectral import eigs, heat_kernel_signature
 
 __all__ = ["heat_kernel_signature", "project", "reconstruct", "shape_dna", "wave_kernel_signature"]
 
-# pyFM's threshold below which an eigenvalue counts as zero, and its filter width in grid steps
+# pyFM's threshold below which an eigenvalue counts as zero, on a shape of unit measure (so here
+# λ|Ω|^(2/d) < 1e-5: a globe in metres has λ₁ = 5e-20); given eigenpairs alone, λ below 1e-8 of
+# the largest (eigs' zeros lie near 1e-12 of it); and pyFM's filter width in grid steps
 _ZERO = 1e-5
+_ZERO_ALONE = 1e-8
 _WKS_WIDTH = 7.0
 
 
@@ -144,9 +147,14 @@ def wave_kernel_signature(op: Any = None, n_energies: int = 100, k: int = 100, *
     if isinstance(n_energies, bool) or not isinstance(n_energies, (int, np.integer)) or n_energies < 1:
         raise MeshError(f"n_energies must be a positive integer; got {n_energies!r}")
     lam, phi = _eig(op, k, eig)
-    keep = lam > _ZERO
+    if op is not None or measure is not None:
+        d = getattr(op, "dim", 2)
+        keep = lam * _measure(op, measure) ** (2.0 / d) > _ZERO
+    else:
+        keep = lam > _ZERO_ALONE * max(float(lam.max()), 0.0)
     if keep.sum() < 2:
-        raise MeshError("the WKS needs at least two non-zero eigenvalues")
+        raise MeshError(f"the WKS needs at least two non-zero eigenvalues; {len(lam) - int(keep.sum())} of "
+                        f"the {len(lam)} are zero (one per part): ask for more (k)")
     log_lam = np.log(np.abs(lam[keep]))
     phi = phi[:, keep]
     e_min, e_max = float(log_lam[0]), float(log_lam[-1])

@@ -289,6 +289,13 @@ def test_wks_matches_the_published_formula():
     e = np.linspace(loglam[0] + 2 * sigma, loglam[-1] - 2 * sigma, 8)
     c = np.exp(-((e[:, None] - loglam) ** 2) / (2 * sigma**2))
     assert np.allclose(w, (phi[:, 1:] ** 2 @ c.T) / c.sum(axis=1))
+    # zero is relative to the spectrum: the same shape in units a billion times larger (a globe
+    # in metres: λ₁ = 5e-20) gives the same area-normalised WKS; all zeros name the parts
+    scaled = (lam * 1e-18, phi / 1e9)
+    assert np.allclose(wave_kernel_signature(eig=scaled, n_energies=8, area_normalize=True, measure=1e18),
+                       wave_kernel_signature(eig=(lam, phi), n_energies=8, area_normalize=True, measure=1.0))
+    with pytest.raises(meshlap.MeshError, match="3 of the 3 are zero"):
+        wave_kernel_signature(eig=(np.zeros(3), phi[:, :3]))
 
 
 def test_projection_round_trip_and_low_pass(sphere_mesh_op):
