@@ -74,6 +74,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
+from .fem import welded
 from .gradients import Gradient, gradient_operator
 from .heat import ImplicitHeat
 from .lumped import SparseLaplacian
@@ -239,6 +240,16 @@ class HeatDistance:
             raise MeshError("the geometry has no element with a positive measure to carry heat")
         self._lonely = np.flatnonzero(lonely)
         self._fill = _tangent_interpolation(self._points, np.flatnonzero(~lonely), self._lonely, geo.dim)
+        # a source in no element starts from a copy of it that is in one (a pole repeated per
+        # segment, whose own faces collapse)
+        self._stand_in = np.arange(self.n)
+        rep = welded(geo) if len(self._lonely) else None
+        if rep is not None:
+            covered = np.flatnonzero(~lonely)
+            first = np.full(self.n, -1)
+            first[rep[covered[::-1]]] = covered[::-1]  # each point's first copy in an element
+            sub = first[rep[self._lonely]]
+            self._stand_in[self._lonely[sub >= 0]] = sub[sub >= 0]
         self._tree = cKDTree(self._points)
         cells = self.grad.cells  # the elements' centres, and for each vertex the elements at it
         self._centres = self._points if cells is None else self._points[cells].mean(axis=1)
@@ -250,6 +261,7 @@ class HeatDistance:
         idx = _indices(np.atleast_1d(np.asarray(sources)), self.n, "source")
         if not len(idx):
             raise MeshError("no source vertex given")
+        idx = self._stand_in[idx]
         if np.isin(idx, self._lonely).any():
             raise MeshError(f"source vertex {int(idx[np.isin(idx, self._lonely)][0])} lies in no element "
                             "of the geometry: heat cannot start there")

@@ -318,6 +318,9 @@ def test_a_point_repeated_more_often_than_a_row_has_neighbours():
     # the pole's copies take the normal of the faces around it (their own fans collapse: NaN before)
     H = meshlap.curvature.mean_curvature(op)
     assert np.abs(H - 1).max() < 0.01  # measured 0.0043
+    # the heat method starts from a copy in an element (the pole's first copy is in none)
+    d = meshlap.geodesic_distance(op, [0])
+    assert np.abs(d - np.arccos(np.clip(V @ V[0], -1, 1))).max() < 0.01  # measured 0.0056
 
 
 def test_duplicates_in_clusters():
