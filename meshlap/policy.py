@@ -41,7 +41,7 @@ The policy for ``operator="auto"`` has no tuned threshold:
   spacing that cubic fits do not explain, where a coarse sampling's missed shape would be
   explained) gets the "kernel" pencil: the
   projected points keep a tangential jitter that makes the local triangles' shapes random,
-  while the kernel's width averages over many points (1% radial noise, 16,000 points: 0.26%
+  while the kernel's width averages over many points (1% radial noise, 16,000 points: 0.29%
   against FEM's 0.75%), as does a cloud along a curve or filling a volume, which has no local
   triangles;
 - a kernel width ``h`` or an option of the kernel (``correction``, ``quadrature``, ...) asks for

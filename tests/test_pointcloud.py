@@ -321,8 +321,8 @@ def test_three_sphere_cloud():
 @pytest.mark.slow
 def test_noisy_cloud_default_is_denoised_and_beats_the_papers_operator():
     # 1% radial noise on 16,000 points: noise ratio 0.078 > NOISY, so the default projects the
-    # points first; measured 9 eigenvalues 0.26% off (without the projection 5.6%, the
-    # paper's operator 3.1%)
+    # points first; measured 9 eigenvalues 0.29% off (the kernel without the projection 5.6%,
+    # the paper's operator 2.0%)
     P = samples.sphere_points(16000, "noisy", seed=0, noise=0.01)
     op = meshlap.point_cloud_laplacian(P)
     assert "denoised" in op.geometry.notes and np.abs(np.linalg.norm(op.V, axis=1) - 1).std() < 0.005
