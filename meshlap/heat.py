@@ -124,14 +124,17 @@ def heat_flow(
         out = np.stack([phi @ (np.exp(-np.maximum(lam, 0.0) * s)[:, None] * coef) for s in tt])
     elif method in ("auto", "chebyshev", "rational"):
         if getattr(op, "matrix_free", False):
-            raise MeshError(f"method={method!r} needs a stored L (its spectral bound comes from the "
-                            "rows); use method='spectral' for a matrix-free operator")
-        L = sp.csr_matrix(symmetric_L(op), dtype=np.float64)
-        rho = float(abs(L).sum(axis=1).max())  # Gershgorin: the spectrum of L lies in [-rho, 0]
+            raise MeshError(f"method={method!r} needs a stored pencil (the series' bound comes from the "
+                            "rows of L, the contour solves with S); use method='spectral' for a "
+                            "matrix-free operator")
+        F = f.reshape(len(f), -1)
+        rho = 0.0
+        if method != "rational":
+            L = sp.csr_matrix(symmetric_L(op), dtype=np.float64)
+            rho = float(abs(L).sum(axis=1).max())  # Gershgorin: the spectrum of L lies in [-rho, 0]
         if method == "auto":
             every_mass = bool((np.asarray(op.mass) > 0).all())
             method = "rational" if every_mass and _chebyshev_terms(rho, tt) > _CHEBYSHEV_MAX else "chebyshev"
-        F = f.reshape(len(f), -1)
         out = _chebyshev_heat(op, F, tt, rho) if method == "chebyshev" else _rational_heat(op, F, tt)
     elif method == "krylov":
         if getattr(op, "matrix_free", False):

@@ -26,8 +26,8 @@ import scipy.sparse as sp
 
 from . import assembly, corrections, pencil
 from .assembly import Kernel
+from .fem import welded
 from .geometry import Geometry
-from .geometry.topology import duplicate_vertices
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
 from .pencil import Pencil
 from .widths import Widths
@@ -147,11 +147,12 @@ def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], Non
     P = geo._cache.get("input_points", geo.points)
     tick = None if report is None else (lambda stage: report(0.9, f"point-wise rows: {stage}"))
     # coincident copies (an unwelded seam, a pole repeated per segment) are one point to the
-    # rows: as many copies as a row's neighbours put its last one at distance 0, and no width
-    rep = duplicate_vertices(P) if P.shape[1] <= 3 else np.arange(len(P))
-    distinct = np.flatnonzero(rep == np.arange(len(P)))
+    # rows: as many copies as a row's neighbours put its last one at distance 0, and no width.
+    # The FEM pencil's welding finds them (copies in the input points stay copies when denoised)
+    rep = welded(geo)
+    distinct = slice(None) if rep is None else np.flatnonzero(rep == np.arange(len(P)))
     L, choice = corrections.rowchoice.choose_rows(P[distinct], k=geo.dim, progress=tick)
-    if len(distinct) < len(P):
+    if rep is not None:
         L, choice = _on_copies(L, choice, np.searchsorted(distinct, rep))
     if L.dtype != opts.dtype:
         L.data = L.data.astype(opts.dtype)
