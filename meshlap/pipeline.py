@@ -16,7 +16,6 @@ must not run at different times on different ranks).
 
 from __future__ import annotations
 
-import dataclasses
 import threading
 from collections.abc import Callable
 from typing import Any, NamedTuple
@@ -153,21 +152,10 @@ def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], Non
     distinct = slice(None) if rep is None else np.flatnonzero(rep == np.arange(len(P)))
     L, choice = corrections.rowchoice.choose_rows(P[distinct], k=geo.dim, progress=tick)
     if rep is not None:
-        L, choice = _on_copies(L, choice, np.searchsorted(distinct, rep))
+        L, choice = corrections.copies.on_copies(L, choice, np.searchsorted(distinct, rep))
     if L.dtype != opts.dtype:
         L.data = L.data.astype(opts.dtype)
     return Rows(L, None, choice)
-
-
-def _on_copies(L: sp.csr_matrix, choice: Any, index: np.ndarray) -> tuple[sp.csr_matrix, Any]:
-    # rows on distinct points to every copy: a copy takes its point's row, and a column is shared
-    # by its point's copies (f averaged over them), so that constants still map to 0
-    n = len(index)
-    share = 1.0 / np.bincount(index)[index]
-    spread = sp.csr_matrix((share, (index, np.arange(n))), shape=(L.shape[1], n))
-    per_point = {f.name: getattr(choice, f.name)[index] for f in dataclasses.fields(choice)
-                 if isinstance(getattr(choice, f.name), np.ndarray)}
-    return sp.csr_matrix(L[index] @ spread), dataclasses.replace(choice, **per_point)
 
 
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None

@@ -342,6 +342,33 @@ class Checks:
             assert "denoised" in geo.notes, geo.notes
             self.report("fitted_noisy", "; ".join(details))
 
+    def copies(self):
+        """A latitude-longitude sphere as exporters write one (a seam, each pole once per column,
+        the copies of no mass on other ranks): the fitted rows on distinct points as the single
+        machine's, entry for entry; L_sym to 1e-12; eigenvalues to 1e-10."""
+        from test_messy import _uv_sphere  # (this script's folder is on the path)
+
+        import meshlap
+        from meshlap import distributed, spectral
+
+        V, F = _uv_sphere()
+        rep = meshlap.geometry.topology.duplicate_vertices(V)
+        V = V[rep] + 0.01 * np.random.default_rng(1).standard_normal(V.shape)[rep]  # no ties
+        V /= np.linalg.norm(V, axis=1, keepdims=True)
+        op = distributed.laplacian(V, F, comm=self.comm)
+        A, B = op.to_scipy(), op.to_scipy(symmetric=True)
+        lam, _ = distributed.eigs(op, 10, tol=1e-12)
+        if self.rank == 0:
+            serial = meshlap.laplacian(V, F, operator="kernel")
+            e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
+            assert e_S <= 1e-12, e_S
+            lam0, _ = spectral.eigs(serial, 10, tol=1e-10)
+            err = float((np.abs(lam - lam0) / np.maximum(lam0, lam0[1])).max())
+            assert err <= 1e-10, (lam, lam0)
+            copies = int((rep != np.arange(len(V))).sum())
+            self.report("copies", f"{copies} copies; L {same_entries(A, serial.L)}, L_sym {e_S:.1e}, "
+                        f"10 eigenvalues {err:.1e}")
+
     def fixed_degree(self):
         """pointwise_degree=4 (rows of that degree on the kernel's stencil) on the ranks, on a
         mesh with boundary and a curved one: gathered L the single machine's, entry for entry

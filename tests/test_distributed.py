@@ -73,6 +73,15 @@ def test_fitted_rows_on_noisy_input_equal_serial():
 
 
 @needs_mpi
+@pytest.mark.parametrize("n", [2, 3])
+def test_fitted_rows_on_coincident_copies_equal_serial(n):
+    """An exporter's latitude-longitude sphere (poles repeated per column, copies without mass
+    owned by other ranks): the fitted rows on distinct points, entry for entry as the single
+    machine's; before, every rank raised "h must be finite and positive"."""
+    mpirun(n, "copies")
+
+
+@needs_mpi
 def test_fixed_degree_rows_equal_serial():
     """pointwise_degree=4 on 2 ranks: the single machine's rows of degree 4 on the kernel's
     stencil (a plane with boundary, a sphere), entry for entry."""

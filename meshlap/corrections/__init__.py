@@ -12,15 +12,16 @@
   the plain kernel as its fallback;
 * :mod:`~meshlap.corrections.highorder` and :mod:`~meshlap.corrections.rowchoice`: point-wise
   rows exact for polynomials up to degree 6 in local coordinates of the fitted manifold, and
-  their width and degree chosen per point from the data (``pointwise="fit"``).
+  their width and degree chosen per point from the data (``pointwise="fit"``), fitted on
+  distinct points and given to coincident copies (:mod:`~meshlap.corrections.copies`).
 
 The Richardson (difference of Gaussians) kernel itself is a kernel choice, made in
 :mod:`meshlap.assembly`.
 """
 
-from . import features, galerkin, highorder, images, moments, psd, rowchoice, shortcuts
+from . import copies, features, galerkin, highorder, images, moments, psd, rowchoice, shortcuts
 from .images import neumann_images
 from .moments import moment_correction, second_moment_scale
 
-__all__ = ["features", "galerkin", "highorder", "images", "moment_correction", "moments", "neumann_images",
-           "psd", "rowchoice", "second_moment_scale", "shortcuts"]
+__all__ = ["copies", "features", "galerkin", "highorder", "images", "moment_correction", "moments",
+           "neumann_images", "psd", "rowchoice", "second_moment_scale", "shortcuts"]

@@ -289,7 +289,8 @@ def _compact(P, near, K, q, k, normals, done, level, scale, sampled, todo, own, 
 def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
                 max_neighbors: int | None = None, noise: float | None = None,
                 sample: int = ROW_SAMPLE, rows: Any = None, ids: Any = None, comm: Any = None,
-                progress: Callable[[str], None] | None = None) -> tuple[sp.csr_matrix, RowChoice]:
+                counted: Any = None, progress: Callable[[str], None] | None = None
+                ) -> tuple[sp.csr_matrix, RowChoice]:
     """Point-wise Laplacian rows whose width and degree follow the data at every point.
 
     Parameters
@@ -311,13 +312,15 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     sample : int
         Most points a row holds: a wider stencil takes them from a random subset of the
         points (see :class:`_Spread`), so that noisy inputs cost little more than clean ones.
-    rows, ids, comm : optional
+    rows, ids, comm, counted : optional
         For one MPI rank's share (:mod:`meshlap.distributed`): ``rows`` the local points
         whose rows are built (default all; the others are neighbours only, a halo wide
         enough for the widest stencil), ``ids`` the global ids of all local points and
         ``comm`` the communicator over which the global figures (spacing, noise median,
-        extent, number of points) are reduced, each point counted by the rank that owns it.
-        The rows are then those of the single machine.
+        extent, number of points) are reduced, each point counted by the rank that owns it:
+        ``counted``, the rows of ``rows`` this rank owns (default all; a row two ranks build,
+        as coincident copies on both need it, is counted by one). The rows are then those of
+        the single machine.
     progress : callable, optional
         ``progress(stage)`` as each stage starts ("queries", "sample", "compact 6", "noise fit",
         "rung 1000", ...).
@@ -353,8 +356,12 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     own = np.ones(n, dtype=bool) if rows is None else np.zeros(n, dtype=bool)
     if rows is not None:
         own[np.asarray(rows, dtype=np.int64)] = True
+    owned = own
+    if counted is not None:
+        owned = np.zeros(n, dtype=bool)
+        owned[np.asarray(counted, dtype=np.int64)] = True
     ids = None if ids is None else np.asarray(ids, dtype=np.int64)
-    total = n if comm is None else comm.allreduce(int(own.sum()))
+    total = n if comm is None else comm.allreduce(int(owned.sum()))
     least = int(count[2]) + 2
     if total < least:
         raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {total}")
@@ -378,7 +385,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     idx_all, dist_all = _nearest(spread.near, P, max(Ks + [Kn, min(16, n)]), everyone, spread.place,
                                  np.asarray(ranks))
     table = _table(idx_all, dist_all, ranks)
-    spacing = _sum(comm, float(dist_all[own, :min(7, n) - 1].mean(axis=1).sum())) / total
+    spacing = _sum(comm, float(dist_all[owned, :min(7, n) - 1].mean(axis=1).sum())) / total
     nb = np.ascontiguousarray(idx_all[:, :min(16, n)])
     lo, hi = _bounds(comm, P[own])
     diameter = float(np.linalg.norm(hi - lo))
@@ -435,7 +442,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         todo = ~sample & ~fast if mine else ~sample
         if _sum(comm, float(todo.any())):  # (on every rank alike: _compact's reductions are collective)
             tick(f"compact {q}")
-            level = _local_noise(resid, nb, comm, own, noise)[0]
+            level = _local_noise(resid, nb, comm, owned, noise)[0]
             done = wide + mine + [c for fits in compact.values() for c in fits]
             built = _compact(P, table, K, q, k, normals, done, level, first_scale, sampled[q], todo, own,
                              comm, place)
@@ -447,7 +454,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
             resid[c.centers] = np.minimum(resid[c.centers], c.residual)
         compact[q] = built[:1] + mine + built[1:]  # (the sample's first, as before)
     cands = [c for q in degrees for c in compact[q]] + wide
-    sig, typical = _local_noise(resid, nb, comm, own, noise)
+    sig, typical = _local_noise(resid, nb, comm, owned, noise)
     # the scale comes from the curvature of a degree-2 fit: on 64 neighbours where the data
     # are clean (where clean points fitted none, of their rows of the top degree); where noise
     # would inflate the curvature of a small fit, on the ladder's first rung (256), whose

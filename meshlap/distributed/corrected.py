@@ -169,9 +169,8 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         tell(0.9, "point-wise rows")
     if attrs.pointwise == "fit":
         d0 = attrs.points_dim or P.shape[1]  # the ranks pad lower dimensions with zeros
-        Lp, info["pointwise_choice"] = corrections.rowchoice.choose_rows(
-            np.ascontiguousarray(attrs.fit_points(table, P)[:, :d0]), k=attrs.dim, rows=np.arange(n_own),
-            ids=ids, comm=comm)
+        Lp, info["pointwise_choice"] = _fitted_rows(
+            comm, np.ascontiguousarray(attrs.fit_points(table, P)[:, :d0]), n_own, ids, attrs.dim)
     elif attrs.degree is not None:  # the single machine's rows of that degree on the kernel's stencil
         ptr, idx = free.indptr[:n_own + 1], free.indices[:free.indptr[n_own]]
         if ids is not None:  # each row's neighbours in global order: the single machine's sums
@@ -183,3 +182,38 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         Lp, _ = corrections.moment_correction(free, P, attrs.dim)
     return L, Lp, info
 
+
+
+def _fitted_rows(comm, Q: np.ndarray, n_own: int, ids: np.ndarray | None, k: int
+                 ) -> tuple[sp.csr_matrix, object]:
+    # the single machine's fitted rows (meshlap.pipeline.fitted_rows): on the distinct points,
+    # given to coincident copies (meshlap.corrections.copies). Every copy of a local point is
+    # local (the halo holds all within the cut-off, copies at distance 0); a distinct point is
+    # its copy of least global id, counted by that copy's owner and numbered among the distinct
+    # points as on the single machine, so that the wide rows draw the same subsets
+    from ..corrections._ranks import _bounds
+    from ..geometry.topology import DUPLICATE_RTOL, _duplicate_rep
+
+    n = len(Q)
+    uid = np.arange(n, dtype=np.int64) if ids is None else np.asarray(ids, dtype=np.int64)
+    lo, hi = _bounds(comm, Q[:n_own])
+    span = float(np.linalg.norm(Q.max(axis=0) - Q.min(axis=0))) if n else 0.0
+    rtol = min(DUPLICATE_RTOL * float(np.linalg.norm(hi - lo)) / span, 0.5) if span > 0 else 0.0
+    group = _duplicate_rep(Q, rtol)
+    first = np.empty(n, dtype=np.int64)  # each group's copy of least global id
+    order = np.lexsort((uid, group))
+    starts = np.flatnonzero(np.r_[True, group[order][1:] != group[order][:-1]])
+    first[group[order]] = np.repeat(order[starts], np.diff(np.r_[starts, n]))
+    rep = first[group]
+    copies = comm.allgather(uid[:n_own][rep[:n_own] != np.arange(n_own)])
+    if not sum(len(c) for c in copies):
+        return corrections.rowchoice.choose_rows(Q, k=k, rows=np.arange(n_own), ids=ids, comm=comm)
+    later = np.sort(np.concatenate(copies))  # global ids of the copies that are not the first
+    distinct = np.flatnonzero(rep == np.arange(n))
+    index = np.searchsorted(distinct, rep)
+    need = np.unique(index[:n_own])
+    L, choice = corrections.rowchoice.choose_rows(
+        Q[distinct], k=k, rows=need, counted=need[distinct[need] < n_own],
+        ids=uid[distinct] - np.searchsorted(later, uid[distinct]), comm=comm)
+    L, choice = corrections.copies.on_copies(L, choice, index)
+    return sp.vstack([L[:n_own], sp.csr_matrix((n - n_own, n))], format="csr"), choice  # halo rows empty

@@ -153,12 +153,12 @@ class DistributedLaplacian:
         off = comm.exscan(n_own, op=MPI.SUM)  # collective; None on rank 0
         self.offset = int(off) if comm.Get_rank() > 0 else 0
         petsc_id = self.offset + np.arange(n_own, dtype=np.int64)
-        # halo: the points with mass of every other rank within r of this rank's box
+        # halo: the points with mass of every other rank within r of this rank's box (all
+        # points for the fitted rows: their neighbours, as on the single machine, copies too)
         boxes = np.array(comm.allgather(_box(V)))
         margin = self.radius * (1.0 + _MARGIN)
-        src = np.flatnonzero(mass > 0)
-        dest, rows = [], []
-        P = V[src]
+        src = np.arange(len(V)) if self.attrs and self.attrs.pointwise == "fit" else np.flatnonzero(mass > 0)
+        dest, rows, P = [], [], V[src]
         for q in range(comm.Get_size()):
             if q == comm.Get_rank() or not (boxes[q, :3] <= boxes[q, 3:]).all():
                 continue
