@@ -293,7 +293,7 @@ class ImplicitHeat:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             self._jacobi = 1.0 / (self.m + tau * diag)
             geo = _mesh_of(op, mesh)
-            K = None if geo is None else _cot_stiffness(geo[0], geo[1], self.P)
+            K = None if geo is None else _cot_stiffness(geo[0], geo[1], self.P, geo[2])
             self._lu = None
             if K is not None:
                 h = float(np.median(self.m / np.where(diag > 0, diag, np.inf)))

@@ -40,6 +40,7 @@ from scipy.special import eval_legendre
 from . import _eigcheck, _lobpcg, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
 from .errors import MeshError
+from .fem import expand_copies, welded
 from .geometry import spatial_order
 from .geometry.validation import check_faces, check_k, check_vertices
 from .progress import ProgressLike, make_progress
@@ -196,25 +197,28 @@ def _normalize_signs(Phi: np.ndarray) -> np.ndarray:
 
 
 # -- preconditioner from the cotangent Laplacian -----------------------------------------------
-def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray] | None:
+def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
+    # (positions, triangles, each vertex's representative where the pencil welds copies)
     if mesh is not None:
         V, F = mesh
         V = check_vertices(V, "mesh[0]")
         if len(V) != op.n_vertices:
             raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
-        return V, check_faces(F, len(V), "mesh[1]").triangles()
+        return V, check_faces(F, len(V), "mesh[1]").triangles(), None
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
-        rep = op.geometry._cache.get("weld") if hasattr(op, "geometry") else None  # copies the pencil welds
-        return op.V, op.faces.triangles() if rep is None else rep[op.faces.triangles()]
+        rep = welded(op.geometry) if hasattr(op, "geometry") else None  # coincident copies
+        return op.V, op.faces.triangles() if rep is None else rep[op.faces.triangles()], rep
     # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud) serve as well
     cells = getattr(getattr(op, "geometry", None), "cells", None)
     if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:
-        return op.V, cells
+        return op.V, cells, None
     return None
 
 
-def _cot_stiffness(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> sp.csc_matrix | None:
-    """K = -C on the vertices with mass, from the non-degenerate triangles."""
+def _cot_stiffness(V: np.ndarray, T: np.ndarray, P: np.ndarray, rep: Any = None) -> sp.csc_matrix | None:
+    """K = -C on the vertices with mass, from the non-degenerate triangles; with ``rep`` (the
+    triangles welded), each copy tied to its representative as the FEM pencil ties it (an
+    untied copy's zero row stalled LOBPCG for 200 iterations on exported meshes)."""
     import igl
 
     area = 0.5 * igl.doublearea(V, T)
@@ -223,6 +227,7 @@ def _cot_stiffness(V: np.ndarray, T: np.ndarray, P: np.ndarray) -> sp.csc_matrix
         return None
     with np.errstate(all="ignore"):
         C = igl.cotmatrix(V, np.ascontiguousarray(T[good], dtype=np.int64))
+    C = C if rep is None else expand_copies(sp.csr_matrix(C), np.ones(len(V)), rep)[0]
     K = sp.csc_matrix(-C)[P][:, P]
     if not np.isfinite(K.data).all():
         return None
@@ -476,7 +481,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
         diag = -m * np.asarray(symmetric_L(op).diagonal())[P][order]
     sigma = _scale_shift(m)
     geo = _mesh_of(op, mesh)
-    K = None if geo is None else _cot_stiffness(geo[0], geo[1], P)
+    K = None if geo is None else _cot_stiffness(geo[0], geo[1], P, geo[2])
     if K is not None and ordered is not None:
         K = sp.csc_matrix(K[order][:, order])
     T = _lobpcg.CotPreconditioner(K, m, diag, sigma)

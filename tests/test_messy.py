@@ -323,6 +323,21 @@ def test_a_point_repeated_more_often_than_a_row_has_neighbours():
     assert np.abs(d - np.arccos(np.clip(V @ V[0], -1, 1))).max() < 0.01  # measured 0.0056
 
 
+@pytest.mark.parametrize("kw, most", [(dict(mass="blend"), 11), (dict(operator="kernel"), 8),
+                                      (dict(correction="none"), 4)])
+def test_lobpcg_preconditioner_ties_copies_to_their_point(kw, most):
+    # the cotangent preconditioner on the welded triangles, each copy tied to its point as the
+    # FEM pencil ties it: a copy's row was zero, and LOBPCG made no progress (blend: 200
+    # iterations then shift-invert; kernel: 200; the paper's operator: 76)
+    V, F = _uv_sphere()
+    with pytest.warns(MeshWarning, match="duplicate vertices"):
+        op = meshlap.laplacian(V, F, **kw)
+    info = {}
+    lam, _ = spectral.eigs(op, 10, method="lobpcg", info=info)
+    assert info["tried"] == ["lobpcg"] and info["iterations"] <= 2 * most, info["iterations"]
+    assert lam[1:4] == pytest.approx([2.0, 2.0, 2.0], rel=0.15)
+
+
 def test_duplicates_in_clusters():
     # eleven copies of one point, three of another, one near-copy within the tolerance
     P = np.array([[0.0, 0, 0]] * 11 + [[1.0, 2, 3]] * 3 + [[1.0, 2, 3 + 1e-12], [5.0, 5, 5]])
