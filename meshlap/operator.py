@@ -487,11 +487,8 @@ class MeshLaplacian(LumpedLaplacian):
         f = check_function(f, self.n_vertices)
         choice = self.pointwise_choice
         if choice is not None:  # the fitted rows: against the same rows twice as wide
-            from .corrections import rowchoice
-
             if self._half is None:
-                P = self.geometry._cache.get("input_points", self.geometry.points)
-                self._half = rowchoice.wider_rows(P, choice, k=self.dim)
+                self._half = pipeline.wider_rows(self.geometry, choice)
             r = np.where(choice.degree >= 2, 2.0 ** ((np.maximum(choice.degree, 2) - 1) / 2.0) - 1.0, np.inf)
             diff = np.abs(self @ f - np.asarray(self._half @ f))
             return diff / (r if diff.ndim == 1 else r[:, None])

@@ -148,14 +148,30 @@ def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], Non
     # coincident copies (an unwelded seam, a pole repeated per segment) are one point to the
     # rows: as many copies as a row's neighbours put its last one at distance 0, and no width.
     # The FEM pencil's welding finds them (copies in the input points stay copies when denoised)
-    rep = welded(geo)
-    distinct = slice(None) if rep is None else np.flatnonzero(rep == np.arange(len(P)))
-    L, choice = corrections.rowchoice.choose_rows(P[distinct], k=geo.dim, progress=tick)
-    if rep is not None:
-        L, choice = corrections.copies.on_copies(L, choice, np.searchsorted(distinct, rep))
+    L, choice = corrections.copies.distinct_rows(
+        lambda d: corrections.rowchoice.choose_rows(P[d], k=geo.dim, progress=tick), welded(geo))
     if L.dtype != opts.dtype:
         L.data = L.data.astype(opts.dtype)
     return Rows(L, None, choice)
+
+
+def wider_rows(geo: Geometry, choice: Any) -> sp.csr_matrix:
+    """The fitted rows ``choice`` (:func:`fitted_rows`) again, twice as wide
+    (:func:`meshlap.corrections.rowchoice.wider_rows`), on the same distinct points: the second
+    operator of :meth:`meshlap.MeshLaplacian.error_estimate`.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(800, seed=0))
+    >>> rows = fitted_rows(g, Options.resolve(g, None))
+    >>> bool(np.allclose(wider_rows(g, rows.choice) @ np.ones(800), 0))
+    True
+    """
+    P = geo._cache.get("input_points", geo.points)
+    copies = corrections.copies
+    return copies.distinct_rows(lambda d: (corrections.rowchoice.wider_rows(
+        P[d], copies.take(choice, d), k=geo.dim), None), welded(geo))[0]
 
 
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None
