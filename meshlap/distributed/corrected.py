@@ -183,7 +183,6 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
     return L, Lp, info
 
 
-
 def _fitted_rows(comm, Q: np.ndarray, n_own: int, ids: np.ndarray | None, k: int
                  ) -> tuple[sp.csr_matrix, object]:
     # the single machine's fitted rows (meshlap.pipeline.fitted_rows): on the distinct points,
@@ -199,11 +198,12 @@ def _fitted_rows(comm, Q: np.ndarray, n_own: int, ids: np.ndarray | None, k: int
     lo, hi = _bounds(comm, Q[:n_own])
     span = float(np.linalg.norm(Q.max(axis=0) - Q.min(axis=0))) if n else 0.0
     rtol = min(DUPLICATE_RTOL * float(np.linalg.norm(hi - lo)) / span, 0.5) if span > 0 else 0.0
-    group = _duplicate_rep(Q, rtol)
+    group = _duplicate_rep(np.pad(Q, ((0, 0), (0, max(3 - Q.shape[1], 0)))), rtol)  # (in 3-D)
+    order = np.lexsort((uid, group))  # by group, then global id
+    g = group[order]
+    head = np.r_[True, g[1:] != g[:-1]] if n else np.zeros(0, dtype=bool)
     first = np.empty(n, dtype=np.int64)  # each group's copy of least global id
-    order = np.lexsort((uid, group))
-    starts = np.flatnonzero(np.r_[True, group[order][1:] != group[order][:-1]])
-    first[group[order]] = np.repeat(order[starts], np.diff(np.r_[starts, n]))
+    first[g] = order[np.flatnonzero(head)][np.cumsum(head) - 1]
     rep = first[group]
     copies = comm.allgather(uid[:n_own][rep[:n_own] != np.arange(n_own)])
     if not sum(len(c) for c in copies):
