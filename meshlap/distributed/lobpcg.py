@@ -54,6 +54,7 @@ import scipy.sparse as sp
 from .. import _eigcheck, _lobpcg, baselines, spectral
 from .._jit import one_blas_thread
 from ..errors import EigenError, MeshError
+from ..geometry.topology import duplicate_vertices
 from ..geometry.validation import check_faces, check_k, check_vertices
 from ..progress import ProgressLike, make_progress
 from .comm import _has_mumps
@@ -106,9 +107,16 @@ def _mesh_blocks(op: Any, P: np.ndarray, mesh: Any, shift: np.ndarray):
         gid[part] = start + np.arange(len(part))
         start += len(part)
     first = int(gid[own[0]]) if len(own) else 0
-    T = T[((gid[T] >= first) & (gid[T] < first + len(own))).any(axis=1)]
-    used = np.union1d(np.unique(T), own)
-    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used))) if len(T) else None
+    # on the welded triangles, each copy tied to its point, as on one machine (spectral._mesh_of):
+    # the triangles of the own rows' points, and every copy of their corners
+    rep = duplicate_vertices(V)
+    mine = np.zeros(len(V), dtype=bool)
+    mine[rep[own]] = True
+    T = rep[T]
+    T = T[mine[T].any(axis=1)]
+    used = np.flatnonzero(np.isin(rep, np.union1d(np.unique(T), rep[own])))
+    K = spectral._cot_stiffness(V[used], np.searchsorted(used, T), np.arange(len(used)),
+                                np.searchsorted(used, rep[used])) if len(T) else None
     # no usable face here (an empty rank, degenerate faces): empty rows, K_r the diagonal term alone
     K = sp.coo_matrix(sp.csr_matrix((len(own), len(used))) if K is None else sp.csr_matrix(K)[
         np.searchsorted(used, own)])
