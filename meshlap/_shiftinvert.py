@@ -11,7 +11,8 @@ __all__ = ["factor", "shift_invert", "shift_operator"]
 
 
 def factor(A: sp.spmatrix):
-    """Sparse LU of a symmetric positive definite matrix (symmetric ordering, no pivoting)."""
+    """Sparse LU without pivoting, in a symmetric ordering: for a symmetric positive definite
+    matrix, or zM − tS with Im z > 0 (heat flow's contour), whose principal minors never vanish."""
     return sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                           options={"SymmetricMode": True})
 

@@ -471,11 +471,11 @@ def expand_copies(S: sp.csr_matrix, m: np.ndarray, rep: np.ndarray) -> tuple[sp.
     ([1.0, 0.5, 0.5], True)
     """
     n = len(m)
-    count = np.bincount(rep, minlength=n).astype(float)
-    d = np.abs(S.diagonal())
     lone = m[rep] <= 0
     if not (rep != np.arange(n)).any() and not lone.any():
         return S, m
+    count = np.bincount(rep, minlength=n).astype(float)
+    d = np.abs(S.diagonal())
     tiny = 1e-6 * (m[m > 0].mean() if (m > 0).any() else 1.0)
     share = np.where(lone, tiny, m[rep] / count[rep])
     ratio = float(np.max(d[m > 0] / m[m > 0])) if (m > 0).any() else 1.0

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import expm_multiply, splu
+from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
 from ._cg import block_pcg
@@ -221,10 +221,8 @@ def _rational_heat(op: Any, f: np.ndarray, times: np.ndarray) -> np.ndarray:
         acc = np.zeros(f.shape, dtype=np.complex128)
         for zj, cj in zip(z, c, strict=True):
             # Im z_j > 0 and M is positive: every principal minor of z_j M − tS is nonsingular,
-            # so the symmetric ordering needs no pivoting (3.4x faster at 16,000 vertices)
-            lu = splu(zj * M - t * S, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
-            acc += cj * lu.solve(Mf)
+            # so shift-invert's LU without pivoting serves (3.4x faster at 16,000 vertices)
+            acc += cj * _factor(zj * M - t * S).solve(Mf)
         out[i] = acc.real
     return out
 

@@ -42,6 +42,7 @@ from ._jit import in_blocks, jit, one_blas_thread
 from .errors import MeshError
 from .fem import expand_copies, welded
 from .geometry import spatial_order
+from .geometry.topology import duplicate_vertices
 from .geometry.validation import check_faces, check_k, check_vertices
 from .progress import ProgressLike, make_progress
 
@@ -159,9 +160,7 @@ def _check_mass(op: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _restricted_S(op: Any, P: np.ndarray) -> sp.csr_matrix:
-    S = op.S
-    if len(P) < op.n_vertices:
-        S = S[P][:, P]
+    S = op.S if len(P) == op.n_vertices else op.S[P][:, P]
     return sp.csr_matrix(S, dtype=np.float64)
 
 
@@ -198,40 +197,40 @@ def _normalize_signs(Phi: np.ndarray) -> np.ndarray:
 
 # -- preconditioner from the cotangent Laplacian -----------------------------------------------
 def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
-    # (positions, triangles, each vertex's representative where the pencil welds copies)
+    # (positions, triangles, each vertex's representative among coincident copies, None: unknown)
     if mesh is not None:
         V, F = mesh
         V = check_vertices(V, "mesh[0]")
         if len(V) != op.n_vertices:
             raise MeshError(f"mesh has {len(V)} vertices but the operator has {op.n_vertices}")
         return V, check_faces(F, len(V), "mesh[1]").triangles(), None
+    geo = getattr(op, "geometry", None)
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
-        rep = welded(op.geometry) if hasattr(op, "geometry") else None  # coincident copies
-        return op.V, op.faces.triangles() if rep is None else rep[op.faces.triangles()], rep
-    # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud) serve as well
-    cells = getattr(getattr(op, "geometry", None), "cells", None)
+        rep = None if geo is None else welded(geo)  # (cached)
+        return op.V, op.faces.triangles(), np.arange(len(op.V)) if geo is not None and rep is None else rep
+    # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud; its copies are merged)
+    cells = getattr(geo, "cells", None)
     if cells is not None and cells.shape[1] == 3 and len(cells) and op.V.shape[1] == 3:
-        return op.V, cells, None
+        return op.V, cells, np.arange(len(op.V))
     return None
 
 
 def _cot_stiffness(V: np.ndarray, T: np.ndarray, P: np.ndarray, rep: Any = None) -> sp.csc_matrix | None:
-    """K = -C on the vertices with mass, from the non-degenerate triangles; with ``rep`` (the
-    triangles welded), each copy tied to its representative as the FEM pencil ties it (an
-    untied copy's zero row stalled LOBPCG for 200 iterations on exported meshes)."""
+    """K = -C on the vertices with mass, from the non-degenerate triangles welded (``rep``, each
+    vertex's representative: default found here), each copy tied to its point as the FEM pencil
+    ties it (an untied copy's zero row stalled LOBPCG for 200 iterations on exported meshes)."""
     import igl
 
+    rep = duplicate_vertices(V) if rep is None else rep
+    T = rep[T]
     area = 0.5 * igl.doublearea(V, T)
     good = area > 1e-12 * max(float(area.mean()), 1e-300)
     if not good.any():
         return None
     with np.errstate(all="ignore"):
         C = igl.cotmatrix(V, np.ascontiguousarray(T[good], dtype=np.int64))
-    C = C if rep is None else expand_copies(sp.csr_matrix(C), np.ones(len(V)), rep)[0]
-    K = sp.csc_matrix(-C)[P][:, P]
-    if not np.isfinite(K.data).all():
-        return None
-    return K
+    K = sp.csc_matrix(-expand_copies(sp.csr_matrix(C), np.ones(len(V)), rep)[0])[P][:, P]
+    return K if np.isfinite(K.data).all() else None
 
 
 # -- the public solver ------------------------------------------------------------------------

@@ -15,7 +15,7 @@ The data flow, in order:
 2. A recursive coordinate bisection (k-d split) assigns points to ranks, balanced by the
    rows' entry counts: a first split balances points, a second one (when the entries differ
    by more than 10%) the counted entries of the first.
-3. Each rank receives the points with mass within r of its own (the halo) and builds its rows.
+3. Each rank receives the points within r of its own (the halo) and builds its rows.
    The off-diagonal entries are the serial kernel's to the bit; the diagonal, a sum, is then
    recomputed in the order the single-machine build sums it, so the matrix equals the
    single-machine one exactly (see :func:`laplacian`).
@@ -79,7 +79,7 @@ class DistributedLaplacian:
     mass, ids : (n_local,) ndarray
         Masses and the caller's indices of the own rows.
     n_vertices, n_local, n_halo : int
-        Global rows, own rows, and halo points (with mass) this rank reads from others.
+        Global rows, own rows, and halo points this rank reads from others.
     rebalanced : bool
         Whether the points were split again by their entries (a rank had 10% over the mean).
     h, tol, radius : float
@@ -153,17 +153,15 @@ class DistributedLaplacian:
         off = comm.exscan(n_own, op=MPI.SUM)  # collective; None on rank 0
         self.offset = int(off) if comm.Get_rank() > 0 else 0
         petsc_id = self.offset + np.arange(n_own, dtype=np.int64)
-        # halo: the points with mass of every other rank within r of this rank's box (all
-        # points for the fitted rows: their neighbours, as on the single machine, copies too)
+        # halo: the points of every other rank within r of this rank's box (those without mass
+        # too: the fitted rows' neighbours, as on the single machine, a copy's column)
         boxes = np.array(comm.allgather(_box(V)))
         margin = self.radius * (1.0 + _MARGIN)
-        src = np.arange(len(V)) if self.attrs and self.attrs.pointwise == "fit" else np.flatnonzero(mass > 0)
-        dest, rows, P = [], [], V[src]
+        dest, rows = [], []
         for q in range(comm.Get_size()):
             if q == comm.Get_rank() or not (boxes[q, :3] <= boxes[q, 3:]).all():
                 continue
-            inside = np.all((P >= boxes[q, :3] - margin) & (P <= boxes[q, 3:] + margin), axis=1)
-            sel = src[inside]
+            sel = np.flatnonzero(np.all((V >= boxes[q, :3] - margin) & (V <= boxes[q, 3:] + margin), axis=1))
             rows.append(sel)
             dest.append(np.full(len(sel), q, dtype=np.int64))
         rows_ = np.concatenate(rows) if rows else np.zeros(0, np.int64)
