@@ -1,0 +1,118 @@
+"""A touching cloud given the mesh's knowledge: can the default's stars be kept on their sheets?
+
+    MESHLAP_CORPUS=/path/to/corpus python benchmarks/touching_oracle.py            # the cow
+    MESHLAP_CORPUS=/path/to/corpus python benchmarks/touching_oracle.py homer --detour 4
+
+Where two sheets of a mesh come closer than its sampling (``real_corpus.touching`` > 0), the
+vertices alone do not say which nearby points share a sheet. This script tells the default's
+cloud pencil (linear FEM on every point's local Delaunay star) what only the mesh knows, in three
+ways, and prints the spectrum error of each (bench_real.py's measure and cached reference):
+
+- ``same-sheet neighbours``: every star is built from the nearest points that are less than
+  ``--detour`` times farther along the mesh's edges than through space (the first 16 such among
+  the 48 nearest; where fewer are, the nearest others fill the list);
+- ``cross triangles cut``: the default's stars without the triangles two of whose corners are
+  that far apart along the mesh; a point left in no triangle keeps its star (else it would be a
+  part of its own), and those points are counted (a group of points the cut leaves loose
+  together still adds a zero eigenvalue: the cow at ``--detour 4``);
+- ``agreed triangles``: only the triangles that at least two of their corners' stars hold, each
+  once (no mesh knowledge; the consistency test of tangential Delaunay complexes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import dijkstra
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import real_corpus as rc  # noqa: E402
+import robust_laplacian  # noqa: E402
+from bench_real import REF_VERSION  # noqa: E402
+
+import meshlap  # noqa: E402
+import meshlap.geometry.pointcloud as pointcloud  # noqa: E402
+from meshlap import fem  # noqa: E402
+
+
+def mesh_distances(V: np.ndarray, C: np.ndarray, reach: float) -> np.ndarray:
+    """Shortest paths along the mesh's edges up to ``reach`` (inf beyond), all pairs."""
+    e = np.concatenate([C[:, [a, b]] for a in range(C.shape[1]) for b in range(a + 1, C.shape[1])])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    length = np.linalg.norm(V[e[:, 0]] - V[e[:, 1]], axis=1)
+    graph = sp.coo_matrix((length, (e[:, 0], e[:, 1])), shape=(len(V),) * 2).tocsr()
+    return dijkstra(graph, directed=False, limit=reach)
+
+
+def pencil_error(geo, k: int, ref: np.ndarray, n_parts: int) -> tuple[float, np.ndarray]:
+    S, m = fem.fem_pencil(geo)
+    lam = rc.pencil_eigs(-S, sp.diags(m), k)
+    rel = (lam[n_parts:n_parts + 9] - ref[n_parts:n_parts + 9]) / ref[n_parts:n_parts + 9]
+    return float(np.abs(rel).max()), rel
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("name", nargs="?", default="cow", help="a mesh of benchmarks/corpus.toml")
+    ap.add_argument("--corpus", default=None)
+    ap.add_argument("--detour", type=float, default=4.0)
+    args = ap.parse_args()
+    folder = rc.corpus_dir(args.corpus)
+    entry = next(e for e in rc.manifest() if e["name"] == args.name)
+    mesh = rc.load(folder / entry["file"], entry["format"])
+    V, C = np.asarray(mesh.Vw, dtype=np.float64), mesh.Cw
+    n_parts = rc.parts(C, len(V))
+    k = 10 + n_parts
+    cache = json.loads((folder / "reference-cache.json").read_text())
+    ref = np.array(cache[f"{entry['sha256']}:k{k}:v{REF_VERSION}"]["ref"])
+    D = mesh_distances(V, C, 60 * rc.mean_edge(V, C))
+    show = lambda label, r: print(f"{label:30s} {100 * r[0]:6.1f}%   λ1..λ9: "  # noqa: E731
+                                  + " ".join(f"{100 * x:+.1f}" for x in r[1]))
+    warnings.simplefilter("ignore")
+    L, M = robust_laplacian.point_cloud_laplacian(V)
+    lam = rc.pencil_eigs(L, M, k)
+    rel = (lam[n_parts:n_parts + 9] - ref[n_parts:n_parts + 9]) / ref[n_parts:n_parts + 9]
+    show("robust-laplacian", (float(np.abs(rel).max()), rel))
+    geo = meshlap.geometry.point_cloud_geometry(V)
+    show("default", pencil_error(geo, k, ref, n_parts))
+    stars, weight = geo._cache["fem_cells"]  # the default's star triangles, each a third
+
+    # 1. stars from same-sheet neighbours
+    plain = pointcloud._neighbours
+
+    def same_sheet(tree, Q, K):
+        dist, idx = plain(tree, Q, 3 * K)
+        other = D[idx[:, :1], idx] >= args.detour * np.maximum(dist, 1e-300)
+        other[:, 0] = False
+        order = np.argsort(other, axis=1, kind="stable")[:, :K + 1]
+        return np.take_along_axis(dist, order, 1), np.take_along_axis(idx, order, 1)
+
+    pointcloud._neighbours = same_sheet
+    try:
+        show("same-sheet neighbours", pencil_error(meshlap.geometry.point_cloud_geometry(V), k, ref, n_parts))
+    finally:
+        pointcloud._neighbours = plain
+
+    # 2. the triangles that cross between sheets cut
+    cross = np.zeros(len(stars), dtype=bool)
+    for i, j in ((0, 1), (1, 2), (0, 2)):
+        a, b = stars[:, i], stars[:, j]
+        cross |= D[a, b] >= args.detour * np.linalg.norm(V[a] - V[b], axis=1)
+    alone = np.bincount(stars[~cross].ravel(), minlength=len(V)) == 0
+    geo._cache["fem_cells"] = (stars[~cross | alone[stars[:, 0]]], weight)
+    show(f"cross triangles cut ({int(alone.sum())} kept)", pencil_error(geo, k, ref, n_parts))
+
+    # 3. the triangles two or three stars agree on, each once
+    tri, count = np.unique(np.sort(stars, axis=1), axis=0, return_counts=True)
+    geo._cache["fem_cells"] = (tri[count >= 2], 1.0)
+    show("agreed triangles", pencil_error(geo, k, ref, n_parts))
+
+
+if __name__ == "__main__":
+    main()
