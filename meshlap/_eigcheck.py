@@ -20,11 +20,11 @@ k eigenvalues are all zero (k connected parts) has a scale at all.
 σ equals the number of negative pivots of an LDLᵀ factorization of ``-S - σM``
 (:func:`count_below`). With σ between the returned k-th value's cluster and the next computed
 value, a count equal to the number of returned values below σ proves (with the bounds above,
-which place those values at distinct eigenvalues) that none is missing below σ. The sparse LU
-runs in SuperLU's symmetric mode without pivoting (``diag_pivot_thresh=0``): the rows are then
-permuted as the columns (``perm_r == perm_c``) and ``U = D Lᵀ``, so U's diagonal holds D.
-Where SuperLU did pivot (a zero on the diagonal), the count falls back to dense eigenvalues
-for small n or is not given.
+which place those values at distinct eigenvalues) that none is missing below σ. The
+factorization is QDLDL's LDLᵀ without pivoting (:mod:`meshlap._ldl`), whose D is read directly;
+where it meets an exact zero pivot, SuperLU's LU in a symmetric ordering without pivoting, whose
+U's diagonal holds D where it did not pivot (``perm_r == perm_c``); where it did, the count
+falls back to dense eigenvalues for small n or is not given.
 The factorization costs about what a shift-invert solve's does: affordable for sparse pencils
 (cotangent, linear FEM), not for the heat-kernel operator's hundreds of entries per row.
 """
@@ -39,13 +39,13 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from . import _lobpcg
+from . import _ldl, _lobpcg
 
 __all__ = ["Attempt", "Verdict", "count_below", "count_shift", "first_verified", "verify"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
 _ORTHO = 1e-7
-# pencils up to this many rows are counted densely where the sparse LU pivoted
+# pencils up to this many rows are counted densely where no factorization gives the pivots
 _DENSE_COUNT = 3000
 # relative distance within which a computed value is a tie of λ_k (the count's shift goes above)
 _TIE = 1e-3
@@ -154,10 +154,11 @@ def count_shift(lam: np.ndarray, k: int, floor: float) -> tuple[float, int]:
     return top + tie, len(lam)
 
 
-def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float) -> int | None:
+def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = False) -> int | None:
     """Eigenvalues of ``A x = λ diag(m) x`` below ``sigma`` (A symmetric, m > 0), from the signs
     of the pivots of a symmetric sparse factorization of ``A - σM`` (module notes); densely up to
-    3,000 rows where SuperLU pivoted; None beyond, or where a pivot is exactly zero.
+    3,000 rows where neither factorization gives them; None beyond, or where A - σM is singular.
+    ``supernodal``: :func:`meshlap._ldl.factor`'s.
 
     Examples
     --------
@@ -168,13 +169,11 @@ def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float) -> int | None:
     """
     B = sp.csc_matrix(A - sp.diags(sigma * np.asarray(m, dtype=np.float64)))
     try:
-        lu = sp.linalg.splu(B, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True})
+        negative = _ldl.factor(B, supernodal).negative
     except RuntimeError:  # exactly singular: σ is an eigenvalue
         return None
-    d = lu.U.diagonal()
-    if np.array_equal(lu.perm_r, lu.perm_c) and np.isfinite(d).all() and d.all():
-        return int((d < 0).sum())
+    if negative is not None:
+        return negative
     if B.shape[0] <= _DENSE_COUNT:
         w = sla.eigh(sp.csr_matrix(A).toarray(), np.diag(m), eigvals_only=True)
         return int((w < sigma).sum())

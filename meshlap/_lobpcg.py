@@ -41,9 +41,9 @@ measured when the products ran on numba's threads), where a share of the rows pe
 does not. ``A.T @ B`` adds the products of fixed blocks of
 rows in a fixed order, so that the results do not depend on the number of threads.
 
-The preconditioner factor is a sparse LU in symmetric mode, applied to wide blocks with
+The preconditioner factor is a sparse LDLᵀ (:mod:`meshlap._ldl`), applied to wide blocks with
 blocked triangular solves compiled here: one pass over each factor serves every column of the
-block, where SuperLU's own solve treats the columns one after the other; in single precision,
+block, where the factorization's own solve treats the columns one after the other; in single precision,
 as a preconditioner needs no more (:class:`BlockFactor`).
 """
 
@@ -59,6 +59,7 @@ import scipy.sparse as sp
 from numba import prange
 from scipy.linalg import blas
 
+from . import _ldl
 from ._jit import _threads, jit
 
 __all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "combine", "csr_times", "eig_error", "inner",
@@ -71,7 +72,7 @@ _ROWS = 4096
 # every this many iterations the basis' M-orthonormality is audited; beyond _DRIFT, a restart
 _AUDIT = 10
 _DRIFT = 1e-8
-# blocks up to this many columns go to SuperLU's own solve (no compiled kernel needed: the
+# blocks up to this many columns go to the factorization's own solve (no compiled kernel needed: the
 # semidefiniteness check of a build uses 6)
 _NARROW = 8
 
@@ -262,7 +263,7 @@ def _gemm_add(out: np.ndarray, A: np.ndarray, C: np.ndarray) -> None:
 
 
 class BlockFactor:
-    """Sparse LU of a symmetric positive definite matrix (symmetric ordering, no pivoting),
+    """The factorization of a symmetric positive definite matrix (:func:`meshlap._ldl.factor`),
     solved for a block of right-hand sides at once.
 
     Blocks wider than 8 columns are solved in single precision (factors and block): that is
@@ -277,29 +278,30 @@ class BlockFactor:
     >>> B = np.random.default_rng(0).standard_normal((50, 3))
     >>> bool(np.allclose(A @ BlockFactor(A).solve(B), B))
     True
+    >>> B = np.random.default_rng(0).standard_normal((50, 12))      # the single-precision path
+    >>> bool(np.allclose(A @ BlockFactor(A).solve(B), B, atol=1e-5))
+    True
     """
 
     def __init__(self, A: sp.spmatrix) -> None:
-        self.lu = sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                 options={"SymmetricMode": True})
+        self.factor = _ldl.factor(A)
         self._tri = None
 
     def solve(self, B: np.ndarray) -> np.ndarray:
         """A⁻¹ B for B of shape (n,) or (n, c)."""
         B = np.asarray(B, dtype=np.float64)
         if B.ndim == 1 or B.shape[1] <= _NARROW:
-            return self.lu.solve(np.asfortranarray(B))
+            return self.factor.solve(B)
         if self._tri is None:  # the factors as CSR in single precision, made on the first wide block
-            U = sp.csr_matrix(self.lu.U, dtype=np.float32)
-            lower = sp.csr_matrix(sp.tril(self.lu.L, k=-1), dtype=np.float32)
-            self._tri = (lower, sp.csr_matrix(sp.triu(U, k=1)), U.diagonal())
-        lower, upper, diag = self._tri
-        # Pr A Pc = L U with (Pr b)[perm_r[j]] = b[j] and (Pc y)[i] = y[perm_c[i]]
+            into, lower, upper, diag, out = self.factor.triangles()
+            self._tri = (into, sp.csr_matrix(lower, dtype=np.float32), sp.csr_matrix(upper, dtype=np.float32),
+                         diag.astype(np.float32), out)
+        into, lower, upper, diag, out = self._tri
         X = np.empty(B.shape, dtype=np.float32)
-        X[self.lu.perm_r] = B
+        X[into] = B
         _forward(lower.indptr, lower.indices, lower.data, X)
         _backward(upper.indptr, upper.indices, upper.data, diag, X)
-        return X[self.lu.perm_c].astype(np.float64)
+        return X[out].astype(np.float64)
 
 
 class CotPreconditioner:

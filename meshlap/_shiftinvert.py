@@ -7,20 +7,16 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 
-__all__ = ["factor", "shift_invert", "shift_operator"]
+from ._ldl import factor
+
+__all__ = ["shift_invert", "shift_operator"]
 
 
-def factor(A: sp.spmatrix):
-    """Sparse LU without pivoting, in a symmetric ordering: for a symmetric positive definite
-    matrix, or zM − tS with Im z > 0 (heat flow's contour), whose principal minors never vanish."""
-    return sp.linalg.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                          options={"SymmetricMode": True})
-
-
-def shift_operator(S: sp.csr_matrix, m: np.ndarray, sigma: float):
-    """-S, σ and the solve with -S + σM: the shift -σ lies below the zero eigenvalues."""
+def shift_operator(S: sp.csr_matrix, m: np.ndarray, sigma: float, supernodal: bool = False):
+    """-S, σ and the solve with -S + σM: the shift -σ lies below the zero eigenvalues
+    (``supernodal``: :func:`meshlap._ldl.factor`'s)."""
     A = sp.csc_matrix(-0.5 * (S + S.T))
-    return A, sigma, factor(A + sp.diags(sigma * m)).solve
+    return A, sigma, factor(A + sp.diags(sigma * m), supernodal).solve
 
 
 def shift_invert(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, tol: float, seed: int,

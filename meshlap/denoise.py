@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from . import fem
 from ._cg import block_pcg
+from ._ldl import factor
 from .geometry import frames
 from .tuned import NOISE_AREA, NOISE_QUANTILE, NOISE_STEP
 
@@ -147,9 +147,7 @@ def step_solver(S: sp.spmatrix, m: np.ndarray, tau: float) -> Callable[[np.ndarr
 
     jacobi = 1.0 / (weight + tau * tau * (S.multiply(S) @ inv))
     # complex symmetric with a positive definite real part: no pivoting is needed
-    exact = functools.cache(lambda: sla.splu(sp.csc_matrix(sp.diags(weight) - 1j * tau * S),
-                                             permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                             options={"SymmetricMode": True}))
+    exact = functools.cache(lambda: factor(sp.diags(weight) - 1j * tau * S))
 
     def solve(X: np.ndarray) -> np.ndarray:
         X = np.asarray(X, dtype=np.float64)

@@ -16,7 +16,7 @@ Three steps with the operator's symmetric pencil (S ≈ MΔ, negative semidefini
 
 Where the pencil is sparse, both solves use ``op.S``; where it has the heat-kernel operator's
 dense rows, the geometry's own sparse matrices (:func:`_sparse_pencils`). Both are factorised
-once (sparse LU, scipy's SuperLU) and reused for every source.
+once (sparse LDLᵀ, :mod:`meshlap._ldl`) and reused for every source.
 
 Why log u. ∇ log u = ∇u / u has the direction of ∇u, but the discrete gradients are exact
 only for functions linear on an element. One backward-Euler step from a point is the resolvent

@@ -50,9 +50,9 @@ The policy for ``operator="auto"`` has no tuned threshold:
 
 On a triangle or polygon mesh the FEM pencil's spectra come from the seven-node quadratic
 elements on the same triangles (``Decision.elements``, :mod:`meshlap.quadratic`): the same
-surface, at fourth order instead of second. The one limit is their cost: a sparse LU of about
-six unknowns per vertex, which grows as N^1.5; beyond ``QUADRATIC_MAX_UNKNOWNS`` (about 16,500
-vertices, 13.5 s for 10 pairs on 2 cores) eigs solves the linear pencil, whose error is then
+surface, at fourth order instead of second. The one limit is their cost: a sparse LDLᵀ of about
+six unknowns per vertex, which grows faster than N; beyond ``QUADRATIC_MAX_UNKNOWNS`` (about
+16,500 vertices, 8.3 s of CPU for 10 pairs) eigs solves the linear pencil, whose error is then
 smallest, unless asked for ``elements="quadratic"``.
 
 The decision, with what it read, is kept on the operator as ``op.decision``.

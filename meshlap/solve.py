@@ -38,7 +38,8 @@ from scipy.sparse.csgraph import connected_components
 from . import _lobpcg
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
-from ._shiftinvert import factor as _factor
+from ._ldl import factor as _factor
+from ._ldl import supernodal
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
@@ -147,7 +148,7 @@ class PoissonSolver:
     --------
     >>> import meshlap, numpy as np
     >>> V, F = meshlap.shapes.sphere(800, seed=0)
-    >>> op = meshlap.laplacian(V, F)                   # the FEM pencil: a sparse LU
+    >>> op = meshlap.laplacian(V, F)                   # the FEM pencil: a sparse LDLᵀ
     >>> solver = PoissonSolver(op)
     >>> phi = solver.solve(-op.S @ V[:, 2])            # recovers z up to its mean (0)
     >>> bool(np.allclose(phi, V[:, 2] - V[:, 2] @ op.mass / op.mass.sum(), atol=1e-8))
@@ -191,7 +192,7 @@ class PoissonSolver:
                 # one vertex of each floating part pinned at 0: A restricted to the others is SPD
                 first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
                 self._keep = np.setdiff1d(np.arange(len(self.free)), first)
-                self._lu = _factor(A[self._keep][:, self._keep])
+                self._lu = _factor(A[self._keep][:, self._keep], supernodal(op))
             else:
                 self._A = A
                 self._precond = self._preconditioner(op, A)

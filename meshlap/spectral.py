@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
-from . import _eigcheck, _lobpcg, _shiftinvert, quadratic
+from . import _eigcheck, _ldl, _lobpcg, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
 from .errors import MeshError
 from .fem import expand_copies, welded
@@ -387,9 +387,9 @@ def eigs(
                                 adapt and not wide, spatial(), report)
         return run
 
-    exact = _eigcheck.Attempt("dense", dense, exact=True)
+    exact, volume = _eigcheck.Attempt("dense", dense, exact=True), _ldl.supernodal(op)
     # one factorization for every run: a retry asked for more pairs reuses it (3-D: most of the time)
-    inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m)))
+    inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m), volume))
     runs: list = []
 
     def shift_invert(want: int):
@@ -410,7 +410,7 @@ def eigs(
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:
         ladder.append(wider)
     counted = (sparse if count is None else count) and not matrix_free
-    counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma)) if counted else None
+    counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume)) if counted else None
 
     def apply_A(X: np.ndarray) -> np.ndarray:
         if spatial() is not None:  # the block's rows read from cache, as in LOBPCG

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla_sparse
 
 import meshlap
-from meshlap import _eigcheck, _shiftinvert, shapes, spectral
+from meshlap import _eigcheck, _ldl, _shiftinvert, shapes, spectral
 from meshlap.baselines import cotangent
 
 
@@ -29,8 +29,9 @@ def dense_spectrum(op):
 
 @pytest.mark.parametrize("which", ["cotangent", "heat kernel"])
 def test_inertia_count_equals_the_dense_count(monkeypatch, which):
-    """The sparse symmetric LU runs without pivoting (perm_r == perm_c; else count_below would
-    answer densely, turned off here) and its negative pivots count the eigenvalues below σ."""
+    """The sparse LDLᵀ runs without pivoting and its negative pivots count the eigenvalues below
+    σ; so do the pivots of the LU it falls back to (perm_r == perm_c: SuperLU did not pivot; else
+    count_below would answer densely, turned off here)."""
     monkeypatch.setattr(_eigcheck, "_DENSE_COUNT", 0)
     V, F = shapes.sphere(1500, kind="random", seed=1)
     op = cotangent(V, F) if which == "cotangent" else meshlap.laplacian(V, F, h=0.01, correction="none")
@@ -38,9 +39,8 @@ def test_inertia_count_equals_the_dense_count(monkeypatch, which):
     for sigma in (0.5, 3.0, 13.0, 50.0, 0.5 * (w[100] + w[101]), 0.5 * (w[-2] + w[-1])):
         got = _eigcheck.count_below(-op.S, op.mass, sigma)
         assert got == int((w < sigma).sum())
-    B = sp.csc_matrix(-op.S - 3.0 * op.M)
-    lu = sp.linalg.splu(B, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    assert np.array_equal(lu.perm_r, lu.perm_c)
+        lu = _ldl._LU(sp.csc_matrix(-op.S - sigma * op.M))
+        assert lu.negative == got
 
 
 def test_k_parts_and_k_zero_eigenvalues_converge_at_once():
@@ -252,3 +252,41 @@ def test_shift_invert_reruns_on_the_complement_of_the_pairs_it_has():
     assert np.allclose(lam2[:7], [0, 1, 4, 4, 4, 9, d[6]])
     assert np.allclose(X2.T @ (m[:, None] * X2), np.eye(len(lam2)), atol=1e-8)
     assert np.array_equal(X2[:, :2], X[:, :2])  # the pairs it had are kept, not recomputed
+
+
+def test_factorization_falls_back_to_lu_where_ldl_meets_a_zero_pivot():
+    """[[0, 1], [1, 0]] has no LDLᵀ without pivoting; SuperLU's LU (which pivots there, so gives
+    no inertia) still solves it. A complex symmetric matrix goes to the LU directly."""
+    A = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))
+    f = _ldl.factor(A)
+    assert isinstance(f, _ldl._LU) and f.negative is None
+    assert np.allclose(A @ f.solve(np.array([1.0, 2.0])), [1.0, 2.0])
+    V, F = shapes.sphere(300, seed=2)
+    S = sp.csc_matrix(cotangent(V, F).S)
+    m = np.asarray(cotangent(V, F).mass)
+    Z = sp.diags(m) - 0.1j * S
+    z = _ldl.factor(Z)
+    b = np.random.default_rng(0).standard_normal(300)
+    assert isinstance(z, _ldl._LU) and np.abs(Z @ z.solve(b.astype(complex)) - b).max() < 1e-10
+    # the real positive definite one: LDLᵀ, as SuperLU solves it, and no negative pivot
+    P = sp.csc_matrix(sp.diags(m) - 0.1 * S)
+    ldl = _ldl.factor(P)
+    assert isinstance(ldl, _ldl._LDL) and ldl.negative == 0
+    assert np.abs(ldl.solve(b) - _ldl._LU(P).solve(b)).max() < 1e-12 * np.abs(ldl.solve(b)).max()
+
+
+def test_volumes_factor_by_supernodes_and_agree(monkeypatch):
+    """A tetrahedral pencil goes to SuperLU's supernodes (its fronts are dense), a surface's to
+    LDLᵀ; the eigenpairs do not depend on which factored them."""
+    from scipy.spatial import Delaunay
+
+    g = np.linspace(0.0, 1.0, 7)
+    V = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    V = V + 0.02 * np.random.default_rng(4).uniform(-1, 1, V.shape)
+    op = meshlap.laplacian(V, Delaunay(V).simplices, k=3)
+    assert _ldl.supernodal(op) and not _ldl.supernodal(meshlap.laplacian(*shapes.sphere(200, seed=0)))
+    lam, _ = spectral.eigs(op, 8)
+    monkeypatch.setattr(_ldl, "supernodal", lambda op: False)
+    lam2, _ = spectral.eigs(op, 8)
+    assert np.abs(lam - lam2).max() < 1e-10 * lam.max()
+    assert abs(lam[1] / np.pi ** 2 - 1) < 0.05  # the Neumann cube's first nonzero value, π²
