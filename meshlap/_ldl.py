@@ -17,6 +17,7 @@ operator: :func:`supernodal`, true on volumes) takes SuperLU there.
 from __future__ import annotations
 
 import functools
+from typing import Protocol
 
 import numpy as np
 import qdldl
@@ -26,8 +27,9 @@ import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 __all__ = ["Factor", "factor", "supernodal"]
 
 
-class Factor:
-    """A factorization of a square sparse matrix A: :meth:`solve`, the inertia, the factors.
+class Factor(Protocol):
+    """What :func:`factor` returns for a square sparse matrix A: :meth:`solve`, the inertia, the
+    factors.
 
     Examples
     --------
@@ -45,16 +47,16 @@ class Factor:
 
     def solve(self, B: np.ndarray) -> np.ndarray:
         """A⁻¹ B for B of shape (n,) or (n, c)."""
-        raise NotImplementedError
+        ...
 
     def triangles(self) -> tuple[np.ndarray, sp.csr_matrix, sp.csr_matrix, np.ndarray, np.ndarray]:
         """``(into, lower, upper, diag, out)``: A⁻¹ B is ``X[out]`` after ``X[into] = B``, then a
         forward solve with the unit lower triangle ``I + lower`` and a backward one with
         ``diag(diag) + upper`` (lower and upper strict, CSR)."""
-        raise NotImplementedError
+        ...
 
 
-class _LDL(Factor):
+class _LDL:
     def __init__(self, A: sp.csc_matrix) -> None:
         self._solver = qdldl.Solver(A)
 
@@ -63,7 +65,7 @@ class _LDL(Factor):
         return self._solver.factors()  # a copy of L: made only when asked for
 
     @property
-    def negative(self) -> int:  # type: ignore[override]
+    def negative(self) -> int:
         return int((self._factors[1] < 0).sum())
 
     def solve(self, B: np.ndarray) -> np.ndarray:
@@ -79,7 +81,7 @@ class _LDL(Factor):
         return back, lower, sp.csr_matrix(sp.diags(D) @ lower.T), D, back
 
 
-class _LU(Factor):
+class _LU:
     def __init__(self, A: sp.csc_matrix) -> None:
         self._lu = sp.linalg.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                                   options={"SymmetricMode": True})
