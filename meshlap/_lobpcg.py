@@ -72,36 +72,6 @@ _ROWS = 4096
 # every this many iterations the basis' M-orthonormality is audited; beyond _DRIFT, a restart
 _AUDIT = 10
 _DRIFT = 1e-8
-# blocks up to this many columns go to the factorization's own solve (no compiled kernel needed: the
-# semidefiniteness check of a build uses 6)
-_NARROW = 8
-
-
-@jit()
-def _forward(indptr, indices, data, X):  # pragma: no cover - compiled
-    # X ← L⁻¹ X for a strictly lower CSR part with unit diagonal; the column loop is innermost
-    n, c = X.shape
-    for i in range(n):
-        for p in range(indptr[i], indptr[i + 1]):
-            j = indices[p]
-            a = data[p]
-            for q in range(c):
-                X[i, q] -= a * X[j, q]
-
-
-@jit()
-def _backward(indptr, indices, data, diag, X):  # pragma: no cover - compiled
-    # X ← U⁻¹ X for a strictly upper CSR part and its diagonal
-    n, c = X.shape
-    for i in range(n - 1, -1, -1):
-        for p in range(indptr[i], indptr[i + 1]):
-            j = indices[p]
-            a = data[p]
-            for q in range(c):
-                X[i, q] -= a * X[j, q]
-        d = 1.0 / diag[i]
-        for q in range(c):
-            X[i, q] *= d
 
 
 # entries summed per pass over a row's accumulator (module notes): 37% less time for 40 columns
@@ -290,7 +260,7 @@ class BlockFactor:
     def solve(self, B: np.ndarray) -> np.ndarray:
         """A⁻¹ B for B of shape (n,) or (n, c)."""
         B = np.asarray(B, dtype=np.float64)
-        if B.ndim == 1 or B.shape[1] <= _NARROW:
+        if B.ndim == 1 or B.shape[1] <= _ldl.NARROW:
             return self.factor.solve(B)
         if self._tri is None:  # the factors as CSR in single precision, made on the first wide block
             into, lower, upper, diag, out = self.factor.triangles()
@@ -299,8 +269,7 @@ class BlockFactor:
         into, lower, upper, diag, out = self._tri
         X = np.empty(B.shape, dtype=np.float32)
         X[into] = B
-        _forward(lower.indptr, lower.indices, lower.data, X)
-        _backward(upper.indptr, upper.indices, upper.data, diag, X)
+        _ldl.triangular_solves(lower, upper, diag, X)
         return X[out].astype(np.float64)
 
 

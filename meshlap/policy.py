@@ -52,7 +52,7 @@ On a triangle or polygon mesh the FEM pencil's spectra come from the seven-node 
 elements on the same triangles (``Decision.elements``, :mod:`meshlap.quadratic`): the same
 surface, at fourth order instead of second. The one limit is their cost: a sparse LDLᵀ of about
 six unknowns per vertex, which grows faster than N; beyond ``QUADRATIC_MAX_UNKNOWNS`` (about
-16,500 vertices, 8.3 s of CPU for 10 pairs) eigs solves the linear pencil, whose error is then
+16,500 vertices, 6.6 s of CPU for 10 pairs) eigs solves the linear pencil, whose error is then
 smallest, unless asked for ``elements="quadratic"``.
 
 The decision, with what it read, is kept on the operator as ``op.decision``.

@@ -1,0 +1,157 @@
+"""The sparse factorizations behind shift-invert, the inertia count and the implicit solves:
+QDLDL's LDLᵀ (meshlap's choice on surfaces and curves) against scipy's SuperLU (its choice on
+volumes, and the one used before), with libigl's cotangent Laplacian + scipy's eigsh beside them,
+all in one process.
+
+    python benchmarks/bench_factor.py                 # RESULTS.md; the corpus's camelhead if present
+    python benchmarks/bench_factor.py --quick --no-write
+
+Table 1, the factorizations themselves (meshlap._ldl): factor time, stored entries of the
+factors (SuperLU: L + U; LDLᵀ: L twice plus D, the LU it stands for), one solve and a 64-column
+block. Table 2, ``spectral.eigs(meshlap.laplacian(V, F), 10)`` end to end (build + 10 verified
+pairs) with the default's factorizations and with the other kind (``meshlap._ldl.supernodal``
+answering the other way: SuperLU on a surface, LDLᵀ on a volume), against COT + eigsh. Times
+are process CPU seconds of one run (solves: the best of three).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import igl
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import real_corpus as rc  # noqa: E402
+from results_file import write_section  # noqa: E402
+
+import meshlap  # noqa: E402
+from meshlap import _ldl, quadratic, samples, shapes, spectral  # noqa: E402
+
+
+def cpu(fn, repeat: int = 1):
+    best = None
+    for _ in range(repeat):
+        t = time.process_time()
+        out = fn()
+        c = time.process_time() - t
+        if best is None or c < best[0]:
+            best = (c, out)
+    return best
+
+
+def inputs(quick: bool, corpus: Path | None) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
+    out = [(f"random sphere {n:,}", *shapes.sphere(n, kind="random", seed=0), 2) for n in
+           ((4000,) if quick else (16000, 32000))]
+    out.append(("tetrahedral cube 20³", *samples.cube_tetrahedra(20), 3))
+    if corpus is not None:
+        for e in rc.manifest():
+            if e["name"] == "camelhead" and (corpus / e["file"]).exists():
+                m = rc.load(corpus / e["file"], e["format"])
+                out.append(("camelhead (corpus)", m.Vw, m.Cw, 2))
+    return out
+
+
+def factor_rows(name: str, op) -> list[dict]:
+    rows = []
+    pencils = [("linear", op.S, op.mass)]
+    if op.dim == 2:
+        fine = quadratic.fine_pencil(op)
+        pencils.append(("quadratic", fine.S, np.asarray(fine.M.diagonal())))
+    for kind, S, m in pencils:
+        A = sp.csc_matrix(-0.5 * (S + S.T) + sp.diags(1e-3 * m + (m == 0)))
+        b = np.random.default_rng(0).standard_normal((A.shape[0], 64))
+        row = {"input": name, "pencil": kind, "n": A.shape[0]}
+        for label, make in (("SuperLU", _ldl._LU), ("LDLᵀ", _ldl._LDL)):
+            t, f = cpu(lambda make=make, A=A: make(A))
+            if label == "SuperLU":
+                fill = f._lu.L.nnz + f._lu.U.nnz
+            else:
+                fill = 2 * f._factors[0].nnz + A.shape[0]
+            one, _ = cpu(lambda f=f, b=b: f.solve(b[:, 0]), 3)
+            block, x = cpu(lambda f=f, b=b: f.solve(b), 3)
+            row[label] = (t, fill, one, block, float(np.abs(A @ x - b).max() / np.abs(b).max()))
+        rows.append(row)
+    return rows
+
+
+def eigs_row(name: str, V: np.ndarray, F: np.ndarray, k: int, elements: str | None = None) -> dict:
+    def ours():
+        op = meshlap.laplacian(V, F, k=k) if k == 3 else meshlap.laplacian(V, F)
+        return spectral.eigs(op, 10, **({} if elements is None else {"elements": elements}))[0]
+
+    row = {"input": name if elements is None else f"{name}, elements={elements!r}", "n": len(V)}
+    plain = _ldl.supernodal
+    try:  # the other choice: SuperLU on a surface, LDLᵀ on a volume
+        _ldl.supernodal = lambda op: k == 2
+        row["other"], lam_other = cpu(ours)
+    finally:
+        _ldl.supernodal = plain
+    row["default"], lam = cpu(ours)
+    row["agree"] = float(np.abs(lam - lam_other).max() / lam.max())
+    if k == 2:
+        def cot():
+            L = -igl.cotmatrix(V, F)
+            M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+            return np.sort(eigsh(L, 10, M, sigma=-1e-8, return_eigenvectors=False))
+        row["COT"], _ = cpu(cot)
+    row["factored by"] = ("SuperLU", "LDLᵀ") if k == 3 else ("LDLᵀ", "SuperLU")
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="a 4,000-vertex sphere and the cube only")
+    ap.add_argument("--corpus", default=None,
+                    help="corpus folder (default: $MESHLAP_CORPUS, benchmarks/corpus)")
+    ap.add_argument("--no-write", action="store_true", help="print; leave RESULTS.md")
+    args = ap.parse_args()
+    folder = rc.corpus_dir(args.corpus)
+    warnings.simplefilter("ignore")
+    spectral.eigs(meshlap.laplacian(*shapes.sphere(300, seed=0)), 4)  # compile first
+    start = time.time()
+    frows, erows = [], []
+    for name, V, F, k in inputs(args.quick, folder if folder.exists() else None):
+        op = meshlap.laplacian(V, F, k=k) if k == 3 else meshlap.laplacian(V, F)
+        frows += factor_rows(name, op)
+        erows.append(eigs_row(name, V, F, k))
+        if k == 2 and len(V) > 16500:  # beyond QUADRATIC_MAX_UNKNOWNS the default is linear: both
+            erows.append(eigs_row(name, V, F, k, "quadratic"))
+        print(f"{name}: done ({time.time() - start:.0f} s)", file=sys.stderr, flush=True)
+    lines = ["Factorizations of −S + 10⁻³M: CPU seconds, stored entries, one "
+             "solve and a 64-column block (residual of the block, relative).", "",
+             "| input | pencil | n | SuperLU factor s | entries | 1 solve ms | 64 solves ms | "
+             "LDLᵀ factor s | entries | 1 solve ms | 64 solves ms | residual |", "|" + "---|" * 12]
+    for r in frows:
+        lu, ldl = r["SuperLU"], r["LDLᵀ"]
+        lines.append(f"| {r['input']} | {r['pencil']} | {r['n']:,} | {lu[0]:.3f} | {lu[1] / 1e6:.2f} M | "
+                     f"{1e3 * lu[2]:.1f} | {1e3 * lu[3]:.0f} | {ldl[0]:.3f} | {ldl[1] / 1e6:.2f} M | "
+                     f"{1e3 * ldl[2]:.1f} | {1e3 * ldl[3]:.0f} | {max(lu[4], ldl[4]):.0e} |")
+    lines += ["", "`spectral.eigs(meshlap.laplacian(V, F), 10)`, build + 10 verified pairs (the default's "
+              "elements: quadratic up to `QUADRATIC_MAX_UNKNOWNS`, about 16,500 vertices), CPU seconds: "
+              "the default's factorizations, every one forced to the other kind, and libigl's "
+              "cotangent + eigsh.",
+              "",
+              "| input | n | default: factored by | default s | other | other s | COT + eigsh s | "
+              "default / COT | eigenvalues agree to |", "|" + "---|" * 9]
+    for r in erows:
+        cot = r.get("COT")
+        versus = ("—", "—") if cot is None else (f"{cot:.2f}", f"{r['default'] / cot:.1f}×")
+        lines.append(f"| {r['input']} | {r['n']:,} | {r['factored by'][0]} | {r['default']:.2f} | "
+                     f"{r['factored by'][1]} | {r['other']:.2f} | {versus[0]} | {versus[1]} | "
+                     f"{r['agree']:.0e} |")
+    print("\n".join(lines))
+    if not args.no_write and not args.quick:
+        took = time.time() - start
+        write_section("bench_factor.py", [f"Command: `python benchmarks/bench_factor.py` ({took:.0f} s; "
+                                          "camelhead from $MESHLAP_CORPUS).", "", *lines])
+
+
+if __name__ == "__main__":
+    main()
