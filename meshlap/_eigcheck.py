@@ -49,6 +49,10 @@ _ORTHO = 1e-7
 _DENSE_COUNT = 3000
 # relative distance within which a computed value is a tie of λ_k (the count's shift goes above)
 _TIE = 1e-3
+# ... or within twice verify's absolute yardstick tol · floor: two copies of one eigenvalue that
+# both pass the check are that close
+_TIE_CHECKS = 2.0
+_EPS = float(np.finfo(np.float64).eps)
 
 
 class Verdict(NamedTuple):
@@ -90,8 +94,7 @@ def roundoff_floor(stiff: float, tol: float, scale: float) -> float:
     >>> roundoff_floor(4.0, 1e-8, 1.0), roundoff_floor(1e8, 1e-8, 1.0) > 0.01
     (0.01, True)
     """
-    eps = float(np.finfo(np.float64).eps)
-    return max(0.01 * scale, 4 * eps * stiff / max(tol, eps))
+    return max(0.01 * scale, 4 * _EPS * stiff / max(tol, _EPS))
 
 
 def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.ndarray, X: np.ndarray,
@@ -133,25 +136,33 @@ def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.n
     return Verdict(res, err / (tol * scales(lam, floor)), ortho)
 
 
-def count_shift(lam: np.ndarray, k: int, floor: float) -> tuple[float, int]:
+def count_shift(lam: np.ndarray, k: int, floor: float, tol: float) -> tuple[float, int]:
     """The shift σ for the count and how many of the computed values ``lam`` (ascending, at
-    least k) lie below it: halfway from λ_k's last tie (within ``_TIE`` of λ_k's scale) to the
-    first computed value that is not one, or ``_TIE`` above λ_k where every computed value ties.
+    least k) lie below it: halfway from λ_k's last tie to the first computed value that is not
+    one, or beyond the ties where every computed value is one. A tie lies within ``_TIE`` of λ_k,
+    or within twice what :func:`verify` lets a value be off (``tol · floor``), as two passing
+    copies of one eigenvalue do (a part's zeros among them). Not ``_TIE`` times the floor: a
+    mesh of slivers has a floor from roundoff far above its low eigenvalues, and every value in
+    that window would cost a deflated rerun.
 
     Examples
     --------
-    >>> count_shift(np.array([0.0, 2.0, 2.0, 2.0, 6.0]), 2, 0.01)   # λ_2's ties join the count
-    (4.0, 4)
-    >>> count_shift(np.array([0.0, 2.0, 2.0015, 2.003]), 2, 0.01)   # σ above the last tie
+    >>> s, j = count_shift(np.array([0.0, 0.0, 1e-12, 6.0]), 2, 0.01, 1e-8)   # λ_2's ties join
+    >>> round(s, 6), j
+    (3.0, 3)
+    >>> count_shift(np.array([0.0, 2.0, 2.0015, 2.003]), 2, 0.01, 1e-8)   # σ above the last tie
     (2.00225, 3)
+    >>> count_shift(np.array([0.0, 72.3, 89.7]), 2, 7e4, 1e-8)   # a floor from roundoff
+    (81.0, 2)
     """
     top = float(lam[k - 1])
-    tie = _TIE * max(abs(top), floor)
+    tie = max(_TIE * abs(top), _TIE_CHECKS * max(tol, _EPS) * floor)
     above = np.flatnonzero(lam[k:] > top + tie)
     if len(above):
         j = k + int(above[0])
         return 0.5 * (float(lam[j - 1]) + float(lam[j])), j
-    return top + tie, len(lam)
+    # every computed value ties: σ stands clear of λ_k by the old, wider margin
+    return top + max(tie, _TIE * floor), len(lam)
 
 
 def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = False) -> int | None:
@@ -229,7 +240,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
         j = k
         began = time.perf_counter()
         if counter is not None and not attempt.exact:
-            shift, j = count_shift(lam, k, floor)
+            shift, j = count_shift(lam, k, floor, tol)
             if j == len(lam) > max(seen, k):
                 # λ_k's cluster runs past every computed value: a count here would only ask for
                 # more (in 3-D it costs what the solve does), so the solver runs again first

@@ -75,6 +75,31 @@ def test_zero_modes_of_parts_a_thousand_times_apart_in_size_are_verified(monkeyp
         spectral.eigs(op, 6, elements="linear")
 
 
+def test_a_floor_from_roundoff_does_not_widen_the_tie_window(monkeypatch):
+    """Ten slivers on a 2,000-vertex sphere (a vertex 1e-5 of the way from a corner to the
+    opposite side): roundoff lifts the check's floor to 4.6 million times the scale, far above
+    λ = 2 and 6. Ties of λ_k are values within twice the check's absolute yardstick tol · floor,
+    not within 0.1% of the floor (that window took every computed value for a tie and asked for
+    more without end: over 15 minutes, measured): one run, counted and complete."""
+    V, F = shapes.sphere(2000, seed=0)
+    extra, faces = [], [F]
+    for f in range(0, 400, 40):
+        a, b, c = F[f]
+        extra.append(V[a] + 1e-5 * ((V[b] + V[c]) / 2 - V[a]))
+        q = len(V) + len(extra) - 1
+        faces[0] = np.where(np.arange(len(F))[:, None] == f, [a, b, q], faces[0])
+        faces.append([[b, c, q], [c, a, q]])
+    op = meshlap.laplacian(np.vstack([V, extra]), np.vstack(faces))
+    floors = []
+    floor = _eigcheck.roundoff_floor
+    monkeypatch.setattr(_eigcheck, "roundoff_floor", lambda *a: floors.append(floor(*a) / a[2]) or floor(*a))
+    info = {}
+    lam, _ = spectral.eigs(op, 9, info=info)
+    assert floors[-1] > 1e6
+    assert info["tried"] == ["shift-invert"] and info["complete"] and info["count"] == 9
+    assert np.abs(lam - [0, 2, 2, 2, 6, 6, 6, 6, 6]).max() < 0.02
+
+
 def test_sparse_pencil_is_counted_and_ties_past_k_are_computed():
     """The cotangent pencil of four parts, k = 8: four zeros and 4 of the 12 values ≈ 2. The
     solver runs again until a computed value lies above λ_8's cluster; the count at σ between
