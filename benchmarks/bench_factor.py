@@ -49,7 +49,8 @@ def cpu(fn, repeat: int = 1):
 def inputs(quick: bool, corpus: Path | None) -> list[tuple[str, np.ndarray, np.ndarray, int]]:
     out = [(f"random sphere {n:,}", *shapes.sphere(n, kind="random", seed=0), 2) for n in
            ((4000,) if quick else (16000, 32000))]
-    out.append(("tetrahedral cube 20³", *samples.cube_tetrahedra(20), 3))
+    out += [(f"tetrahedral cube {n}³", *samples.cube_tetrahedra(n), 3) for n in
+            ((20,) if quick else (20, 30))]
     if corpus is not None:
         for e in rc.manifest():
             if e["name"] == "camelhead" and (corpus / e["file"]).exists():
@@ -107,7 +108,7 @@ def eigs_row(name: str, V: np.ndarray, F: np.ndarray, k: int, elements: str | No
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="a 4,000-vertex sphere and the cube only")
+    ap.add_argument("--quick", action="store_true", help="a 4,000-vertex sphere and the 20³ cube only")
     ap.add_argument("--corpus", default=None,
                     help="corpus folder (default: $MESHLAP_CORPUS, benchmarks/corpus)")
     ap.add_argument("--no-write", action="store_true", help="print; leave RESULTS.md")

@@ -12,12 +12,15 @@ where U's diagonal carries the pivots.
 
 A volume's eigenpairs are another matter: its separators are surfaces, so its fronts are dense,
 SuperLU's supernodes (BLAS-3 on those fronts) factor it faster for the same fill, and
-shift-invert solves one vector at a time, where the two solve alike (a 9,261-vertex tetrahedral
-cube: factor 0.67 s against 0.86 s, one solve 6.0 ms against 7.7 ms; its 10 eigenpairs 2.45 s
-against 2.72 s). ``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
-SuperLU there; :func:`meshlap.spectral.eigs` asks for it. Blocks of right-hand sides (heat steps,
-Poisson solves) go faster by LDLᵀ everywhere: 64 columns of the cube in 71 ms against SuperLU's
-294 ms (``benchmarks/bench_factor.py``).
+shift-invert solves one vector at a time, where SuperLU is faster too (tetrahedral cubes: 9,261
+vertices, factor 0.74 s against 0.88 s, 10 eigenpairs 2.6 s either way; 29,791 vertices, factor
+5.6 s against 16.0 s, one solve 30 ms against 44 ms, 10 eigenpairs 16.2 s against 36.7 s).
+``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
+SuperLU there; :func:`meshlap.spectral.eigs`, implicit heat steps and Poisson solves ask for it
+(the larger cube's heat step 5.9 s against 13.9 s, a Poisson solve 5.3 s against 15.2 s). LDLᵀ's
+blocked solves are faster (64 columns of the smaller cube in 57 ms against SuperLU's 316 ms,
+``benchmarks/bench_factor.py``), but the factorization's cost comes first unless hundreds of
+columns are solved.
 """
 
 from __future__ import annotations
@@ -169,7 +172,7 @@ class _LU:
 
 
 def supernodal(op: object) -> bool:
-    """Whether ``op``'s eigenpairs come faster from supernodes: a volume's (module notes).
+    """Whether ``op``'s factorizations come faster from supernodes: a volume's (module notes).
 
     Examples
     --------
@@ -183,7 +186,7 @@ def supernodal(op: object) -> bool:
 def factor(A: sp.spmatrix, supernodal: bool = False) -> Factor:
     """The factorization of a symmetric (or complex symmetric) sparse matrix (module notes):
     QDLDL's LDLᵀ, or SuperLU's LU where A is complex, where LDLᵀ meets a zero pivot, or where
-    ``supernodal`` asks for it (a volume's shift-invert).
+    ``supernodal`` asks for it (a volume's).
 
     Raises ``RuntimeError`` where A is exactly singular in the symmetric ordering.
 

@@ -29,6 +29,7 @@ from scipy.special import ive
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
+from ._ldl import supernodal
 from .errors import MeshError
 from .geometry.validation import check_function
 from .spectral import (
@@ -287,7 +288,7 @@ class ImplicitHeat:
         self.solver = solver
         if solver == "direct":
             S = _restricted_S(op, self.P)
-            self._lu = _factor(sp.diags(self.m) - tau * 0.5 * (S + S.T))
+            self._lu = _factor(sp.diags(self.m) - tau * 0.5 * (S + S.T), supernodal(op))
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             self._jacobi = 1.0 / (self.m + tau * diag)

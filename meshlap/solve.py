@@ -39,6 +39,7 @@ from . import _lobpcg
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
+from ._ldl import supernodal
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
@@ -191,7 +192,7 @@ class PoissonSolver:
                 # one vertex of each floating part pinned at 0: A restricted to the others is SPD
                 first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
                 self._keep = np.setdiff1d(np.arange(len(self.free)), first)
-                self._lu = _factor(A[self._keep][:, self._keep])
+                self._lu = _factor(A[self._keep][:, self._keep], supernodal(op))
             else:
                 self._A = A
                 self._precond = self._preconditioner(op, A)

@@ -302,14 +302,20 @@ def test_factorization_falls_back_to_lu_where_ldl_meets_a_zero_pivot():
 
 def test_volumes_factor_by_supernodes_and_agree(monkeypatch):
     """A tetrahedral pencil goes to SuperLU's supernodes (its fronts are dense), a surface's to
-    LDLᵀ; the eigenpairs do not depend on which factored them."""
+    LDLᵀ, for eigs, heat steps and Poisson solves alike; the eigenpairs do not depend on which
+    factored them."""
     from scipy.spatial import Delaunay
 
     g = np.linspace(0.0, 1.0, 7)
     V = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
     V = V + 0.02 * np.random.default_rng(4).uniform(-1, 1, V.shape)
     op = meshlap.laplacian(V, Delaunay(V).simplices, k=3)
-    assert _ldl.supernodal(op) and not _ldl.supernodal(meshlap.laplacian(*shapes.sphere(200, seed=0)))
+    surface = meshlap.laplacian(*shapes.sphere(200, seed=0))
+    assert _ldl.supernodal(op) and not _ldl.supernodal(surface)
+    from meshlap import heat, solve
+
+    for o, kind in ((op, _ldl._LU), (surface, _ldl._LDL)):
+        assert type(heat.ImplicitHeat(o, 0.01)._lu) is kind and type(solve.PoissonSolver(o)._lu) is kind
     lam, _ = spectral.eigs(op, 8)
     monkeypatch.setattr(_ldl, "supernodal", lambda op: False)
     lam2, _ = spectral.eigs(op, 8)
