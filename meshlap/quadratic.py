@@ -80,16 +80,19 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     g1 = np.stack([1 / l01, -x / (l01 * y)], axis=1)
     g2 = np.stack([np.zeros_like(x), 1 / y], axis=1)
     g = np.stack([-g1 - g2, g1, g2], axis=1)  # (m, 3, 2) gradients of the barycentrics
-    K = np.zeros((len(L), 7, 7))
-    G = np.empty((len(L), 7, 2))
-    for lam, wq in zip(_POINTS, _WEIGHTS, strict=True):
+    # the gradients at every quadrature point, side by side and scaled by √w (the weights are
+    # positive): K = Σ_q w_q G_q G_qᵀ is then one batched product
+    G = np.empty((len(L), 7, 2 * len(_WEIGHTS)))
+    for q, (lam, wq) in enumerate(zip(_POINTS, _WEIGHTS, strict=True)):
+        Gq = G[:, :, 2 * q:2 * q + 2]
         grad_b = lam[1] * lam[2] * g[:, 0] + lam[0] * lam[2] * g[:, 1] + lam[0] * lam[1] * g[:, 2]
         for i in range(3):  # λ_i(2λ_i - 1) + 3 λ₀λ₁λ₂
-            G[:, i] = (4 * lam[i] - 1) * g[:, i] + 3 * grad_b
+            Gq[:, i] = (4 * lam[i] - 1) * g[:, i] + 3 * grad_b
         for s, (i, j) in enumerate(_SIDES):  # 4 λ_i λ_j - 12 λ₀λ₁λ₂
-            G[:, 3 + s] = 4 * (lam[j] * g[:, i] + lam[i] * g[:, j]) - 12 * grad_b
-        G[:, 6] = 27 * grad_b
-        K += wq * np.einsum("mad,mbd->mab", G, G)
+            Gq[:, 3 + s] = 4 * (lam[j] * g[:, i] + lam[i] * g[:, j]) - 12 * grad_b
+        Gq[:, 6] = 27 * grad_b
+        Gq *= np.sqrt(wq)
+    K = G @ G.transpose(0, 2, 1)
     return K * area[:, None, None], area[:, None] * NODE_WEIGHTS[None, :]
 
 
