@@ -32,6 +32,7 @@ The factorization costs about what a shift-invert solve's does: affordable for s
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -40,8 +41,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from . import _ldl, _lobpcg
+from .errors import MeshWarning, user_stacklevel
 
-__all__ = ["Attempt", "Verdict", "count_below", "count_shift", "first_verified", "verify"]
+__all__ = ["Attempt", "Verdict", "count_below", "count_shift", "first_verified", "verify", "warn_roundoff"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
 _ORTHO = 1e-7
@@ -53,6 +55,8 @@ _TIE = 1e-3
 # both pass the check are that close
 _TIE_CHECKS = 2.0
 _EPS = float(np.finfo(np.float64).eps)
+# relative accuracy of the smallest returned eigenvalue beyond which roundoff is warned of (0.1%)
+_UNCERTIFIED = 1e-3
 
 
 class Verdict(NamedTuple):
@@ -95,6 +99,32 @@ def roundoff_floor(stiff: float, tol: float, scale: float) -> float:
     (0.01, True)
     """
     return max(0.01 * scale, 4 * _EPS * stiff / max(tol, _EPS))
+
+
+def warn_roundoff(lam: np.ndarray, tol: float, floor: float, scale: float, stiff: float,
+                  info: dict | None = None) -> float:
+    """What the check certified of the returned eigenvalues where roundoff, not ``tol``, set it:
+    its absolute yardstick ``tol · floor`` over the smallest returned value above 1% of the
+    scale (a part's zeros are certified absolutely). Beyond ``_UNCERTIFIED`` a
+    :class:`meshlap.MeshWarning` names the cause; ``info["uncertified"]`` gets the ratio.
+
+    Examples
+    --------
+    >>> warn_roundoff(np.array([0.0, 2.0, 6.0]), 1e-8, 0.01, 1.0, 4.0)   # a plain sphere
+    5e-11
+    """
+    nonzero = lam[lam > 0.01 * scale]
+    yardstick = max(tol, _EPS) * floor
+    ratio = float(yardstick / nonzero.min()) if len(nonzero) else 0.0
+    if info is not None:
+        info["uncertified"] = ratio
+    if ratio > _UNCERTIFIED:
+        warnings.warn(f"eigs: roundoff limits the check to ±{yardstick:.2g} ({ratio:.1%} of the smallest "
+                      f"nonzero eigenvalue returned, not tol = {tol:g}): a row of this pencil has "
+                      f"S_ii/m_i = {stiff:.2g}, near-degenerate triangles or nearly coincident vertices; "
+                      "weld or remove them for certified eigenvalues", MeshWarning,
+                      stacklevel=user_stacklevel())
+    return ratio
 
 
 def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.ndarray, X: np.ndarray,

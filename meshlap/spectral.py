@@ -293,7 +293,7 @@ def eigs(
         (each eigenvalue's error bound over ``tol`` times its scale, all ≤ 1),
         ``orthogonality`` (largest entry of ``|ΦᵀMΦ - I|``), ``count``, ``shift`` and
         ``complete`` (whether the count, or a dense solve, showed the k values are the lowest),
-        ``elements``.
+        ``elements``, ``uncertified`` (what roundoff left the check, relative: MeshWarning > 1e-3).
     elements : {"auto", "linear", "quadratic"}, default "auto"
         "linear": the pairs of ``op``'s pencil (S, M); "quadratic": of the seven-node elements
         on the same triangles (:mod:`meshlap.quadratic`), read at the vertices, M-orthonormal;
@@ -425,10 +425,10 @@ def eigs(
         return -m[:, None] * np.asarray(LX)[P]
 
     stiff = 0.0 if matrix_free else float(np.abs(symmetric_L(op).diagonal()[P]).max())  # max S_ii / m_i
+    floor = _eigcheck.roundoff_floor(stiff, tol, _scale_shift(m))
     with one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
-        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol,
-                                          _eigcheck.roundoff_floor(stiff, tol, _scale_shift(m)), counter,
-                                          bool(count), info=info)
+        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count), info=info)
+    _eigcheck.warn_roundoff(lam, tol, floor, _scale_shift(m), stiff, info)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
