@@ -323,8 +323,8 @@ def eigs(
         Filled with the last LOBPCG run's ``iterations``, relative ``residuals``
         ``‖r‖ / max(λ, λ_k)``, eigenvalue ``error_bounds`` relative to tol's scale, ``block``
         width and cotangent start's ``start_iterations`` (0 without a mesh); and with the
-        check's ``method``, ``tried``, ``bounds``, ``orthogonality``, ``count``, ``shift`` and
-        ``complete``, as in :func:`meshlap.spectral.eigs`.
+        check's ``method``, ``tried``, ``bounds``, ``orthogonality``, ``count``, ``shift``,
+        ``complete`` and ``uncertified``, as in :func:`meshlap.spectral.eigs`.
     count : bool, optional
         Count the eigenvalues below a shift above λ_k (on the pencil gathered on rank 0) to show
         that none is missing. Default: for a sparse pencil (at most 40 entries per row) of at
@@ -459,6 +459,7 @@ def eigs(
         lam, X = _eigcheck.first_verified(attempts, k, apply_A, m, tol, floor,
                                           gathered.count if counted else None, bool(count), allsum,
                                           info=checked)
+    _eigcheck.warn_roundoff(lam, tol, floor, sigma, stiff, checked)  # lam and stiff: the same on every rank
     if info is not None:
         info.update(facts, **checked)
     if report is not None:
