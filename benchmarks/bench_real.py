@@ -97,21 +97,23 @@ EIGS_OPTIONS: dict[str, object] = {}
 
 
 def meshlap_default(V: np.ndarray, faces: object, n_eigs: int,
-                    **kw: object) -> tuple[np.ndarray | None, float, str, str]:
-    """Eigenvalues, CPU seconds, warnings and decision of the default; timed a second time
-    where the first call compiled kernels (a one-time cost that numba then caches on disk)."""
+                    **kw: object) -> tuple[np.ndarray | None, float, str, str, float]:
+    """Eigenvalues, CPU seconds, warnings, decision of the default and what roundoff left its
+    check (``eigs``' ``info["uncertified"]``); timed a second time where the first call compiled
+    kernels (a one-time cost that numba then caches on disk)."""
     box: dict[str, object] = {}
+    info: dict[str, object] = {}
 
     def run() -> np.ndarray:
         op = meshlap.laplacian(V, faces, **kw)
         box["op"] = op
-        return spectral.eigs(op, n_eigs, **EIGS_OPTIONS)[0]
+        return spectral.eigs(op, n_eigs, info=info, **EIGS_OPTIONS)[0]
 
     with event.install_recorder("numba:compile") as compiled:
         lam, cpu, warn = timed(run)
     if compiled.buffer:
         lam, cpu, warn = timed(run)
-    return lam, cpu, warn, decision_text(box.get("op"))
+    return lam, cpu, warn, decision_text(box.get("op")), float(info.get("uncertified", float("nan")))
 
 
 def cot(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
@@ -138,8 +140,8 @@ def robust_cloud(P: np.ndarray, k: int) -> np.ndarray:
     return rc.pencil_eigs(L, M, k)
 
 
-def meshlap_cloud(P: np.ndarray, k: int) -> np.ndarray:
-    return spectral.eigs(meshlap.point_cloud_laplacian(P), k)[0]
+def meshlap_cloud(P: np.ndarray, k: int, info: dict | None = None) -> np.ndarray:
+    return spectral.eigs(meshlap.point_cloud_laplacian(P), k, info=info)[0]
 
 
 def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | None, float, str]]:
@@ -191,10 +193,10 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
     faces = mesh.faces
     if len({len(f) for f in faces}) == 1:
         faces = np.array(faces)  # as a user passes a uniform mesh
-    lam, cpu, warn, dec = meshlap_default(mesh.V, faces, k, **SURFACE_OPTIONS)
+    lam, cpu, warn, dec, unc = meshlap_default(mesh.V, faces, k, **SURFACE_OPTIONS)
     row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.V), "parts": n_parts,
            "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
-           "sigma": noise_reading(V, F), "extent": extent_reading(V, F)}
+           "sigma": noise_reading(V, F), "extent": extent_reading(V, F), "uncertified": unc}
     # what the step would do to a clean surface: why the default reads the noise first
     row["err_denoise"] = err(lam if "denoise" in dec else
                              meshlap_default(mesh.V, faces, k, **{**SURFACE_OPTIONS, "denoise": True})[0],
@@ -205,14 +207,16 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
         if pwarn.startswith("error"):
             row["warnings"] += f" [{name} {pwarn}]"
     finish(row, [row[f"err_{p}"] for p in PEERS], row["cpu_COT"])
+    cinfo: dict = {}
     with event.install_recorder("numba:compile") as compiled:
-        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k))
+        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k, cinfo))
     if compiled.buffer:  # as for the mesh: time it again without the one-time compilation
-        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k))
+        clam, ccpu, cwarn = timed(lambda: meshlap_cloud(V, k, cinfo))
     rlam, rcpu, _ = timed(lambda: robust_cloud(V, k))
     cloud = {"name": entry["name"], "kind": entry["kind"], "n": len(V), "parts": n_parts,
              "err_default": err(clam, R, n_parts), "cpu_default": ccpu, "warnings": cwarn,
-             "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu, "touching": rc.touching(V, F)}
+             "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu, "touching": rc.touching(V, F),
+             "uncertified": float(cinfo.get("uncertified", float("nan")))}
     finish(cloud, [cloud["err_robust"]], rcpu)
     return row, cloud
 
@@ -232,11 +236,11 @@ def extent_reading(V: np.ndarray, F: np.ndarray) -> float:
 
 def tet_row(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> dict:
     R = np.array(ref["ref"])
-    lam, cpu, warn, dec = meshlap_default(mesh.Vw, mesh.Cw, k, k=3)
+    lam, cpu, warn, dec, unc = meshlap_default(mesh.Vw, mesh.Cw, k, k=3)
     plam, pcpu, _ = timed(lambda: lapy_tet(mesh.Vw, mesh.Cw, k))
     row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.Vw), "parts": n_parts,
            "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
-           "err_LaPy": err(plam, R, n_parts), "cpu_LaPy": pcpu}
+           "err_LaPy": err(plam, R, n_parts), "cpu_LaPy": pcpu, "uncertified": unc}
     finish(row, [row["err_LaPy"]], pcpu)
     return row
 
@@ -250,7 +254,7 @@ def noisy_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> l
     for sigma in NOISE:
         rng = np.random.default_rng(35)
         Vn = V + (sigma * e * rng.standard_normal(len(V)))[:, None] * N
-        lam, cpu, warn, dec = meshlap_default(Vn, F, k)
+        lam, cpu, warn, dec, _ = meshlap_default(Vn, F, k)
         dlam = meshlap_default(Vn, F, k, denoise=True)[0]
         paper = timed(lambda X=Vn: spectral.eigs(meshlap.laplacian(X, F, operator="paper"), k)[0])[0]
         row = {"name": entry["name"], "noise": sigma, "n": len(V), "sigma": noise_reading(Vn, F),
@@ -300,6 +304,18 @@ def summary(rows: list[dict], peer: str) -> str:
             f"CPU ratio median {np.median(c):.3g}×, worst {c.max():.3g}×")
 
 
+def roundoff(rows: list[dict]) -> str:
+    """The largest share of the smallest nonzero eigenvalue that roundoff left ``eigs``' check
+    (``info["uncertified"]``; a MeshWarning says so above 1e-3)."""
+    done = [x for x in rows if np.isfinite(x.get("uncertified", np.nan))]
+    if not done:
+        return "Roundoff: not recorded."
+    top = max(done, key=lambda x: x["uncertified"])
+    over = sum(x["uncertified"] > 1e-3 for x in done)
+    return ("Roundoff (`eigs`' `info[\"uncertified\"]`, warned above 1e-3): largest "
+            f"{top['uncertified']:.2g} ({top['name']}); {over} of {len(done)} above 1e-3.")
+
+
 def by_kind(rows: list[dict], peer: str) -> list[str]:
     kinds = sorted({t for x in rows for t in x["kind"].split()})
     out = ["| kind | rows | summary |", "|---|---|---|"]
@@ -320,7 +336,7 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
     out = ["### Surfaces: meshlap's default against COT, LaPy, robust-laplacian", "",
            "Summary: " + summary(surf, "the best peer") + " (CPU against COT + eigsh).", "",
            f"On the {len(settled)} rows whose reference is settled (ref Δ ≤ {SETTLED:.0%}): "
-           + summary(settled, "the best peer") + ".", "",
+           + summary(settled, "the best peer") + ".", "", roundoff(surf), "",
            *by_kind(surf, "the best peer"), "",
            "| mesh | kind | n | parts | ref | ref Δ | default | COT | LaPy | robust | ratio | "
            "CPU default s | CPU COT s | CPU ratio | σ̂ / ē | extent | denoise=True | decision | warnings |",
@@ -339,7 +355,7 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
             f"On the {len(resolved)} clouds where every point's 16 nearest are near along the surface too "
             "(`touching` = 0: points one of whose 16 nearest is at least 4× farther along the mesh's edges "
             "than through space, where the points alone do not tell the surface, `real_corpus.touching`): "
-            + summary(resolved, "robust-laplacian") + ".", "",
+            + summary(resolved, "robust-laplacian") + ".", "", roundoff(cloud), "",
             "| mesh | n | parts | touching | default | robust | ratio | CPU default s | CPU robust s | "
             "warnings |",
             "|" + "---|" * 10]
@@ -348,7 +364,7 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
                    f"{pct(x['err_robust'])} | {x['ratio']:.3g} | {x['cpu_default']:.2f} | "
                    f"{x['cpu_robust']:.3f} | {x['warnings']} |")
     out += ["", "### Tetrahedral meshes (Neumann): meshlap (k=3) against LaPy's TetMesh", "",
-            "Summary: " + summary(tets, "LaPy") + " (CPU against LaPy's).", "",
+            "Summary: " + summary(tets, "LaPy") + " (CPU against LaPy's).", "", roundoff(tets), "",
             "| mesh | n | ref | ref Δ | default | LaPy | ratio | CPU default s | CPU LaPy s | decision | "
             "warnings |", "|" + "---|" * 11]
     for x in tets:

@@ -191,7 +191,8 @@ def count_shift(lam: np.ndarray, k: int, floor: float, tol: float) -> tuple[floa
     if len(above):
         j = k + int(above[0])
         return 0.5 * (float(lam[j - 1]) + float(lam[j])), j
-    # every computed value ties: σ stands clear of λ_k by the old, wider margin
+    # every computed value ties (no value above to halve the gap to): σ stands _TIE of the floor
+    # clear too, where an LDLᵀ pivot's sign is safe from roundoff next to a cluster of zeros
     return top + max(tie, _TIE * floor), len(lam)
 
 

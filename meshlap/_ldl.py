@@ -13,12 +13,12 @@ where U's diagonal carries the pivots.
 A volume's eigenpairs are another matter: its separators are surfaces, so its fronts are dense,
 SuperLU's supernodes (BLAS-3 on those fronts) factor it faster for the same fill, and
 shift-invert solves one vector at a time, where SuperLU is faster too (tetrahedral cubes: 9,261
-vertices, factor 0.74 s against 0.88 s, 10 eigenpairs 2.6 s either way; 29,791 vertices, factor
-5.6 s against 16.0 s, one solve 30 ms against 44 ms, 10 eigenpairs 16.2 s against 36.7 s).
+vertices, factor 0.68 s against 0.78 s, 10 eigenpairs 2.5 s against 2.6 s; 29,791 vertices, factor
+5.8 s against 16.8 s, one solve 30 ms against 45 ms, 10 eigenpairs 16.8 s against 37.0 s).
 ``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
 SuperLU there; :func:`meshlap.spectral.eigs`, implicit heat steps and Poisson solves ask for it
-(the larger cube's heat step 5.9 s against 13.9 s, a Poisson solve 5.3 s against 15.2 s). LDLᵀ's
-blocked solves are faster (64 columns of the smaller cube in 57 ms against SuperLU's 316 ms,
+(the larger cube's heat step 5.2 s against 14.0 s, a Poisson solve 5.5 s against 14.4 s). LDLᵀ's
+blocked solves are faster (64 columns of the smaller cube in 57 ms against SuperLU's 303 ms,
 ``benchmarks/bench_factor.py``), but the factorization's cost comes first unless hundreds of
 columns are solved.
 """

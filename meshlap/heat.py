@@ -26,10 +26,10 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 from scipy.special import ive
 
+from . import _ldl
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
-from ._ldl import supernodal
 from .errors import MeshError
 from .geometry.validation import check_function
 from .spectral import (
@@ -288,7 +288,7 @@ class ImplicitHeat:
         self.solver = solver
         if solver == "direct":
             S = _restricted_S(op, self.P)
-            self._lu = _factor(sp.diags(self.m) - tau * 0.5 * (S + S.T), supernodal(op))
+            self._lu = _factor(sp.diags(self.m) - tau * 0.5 * (S + S.T), _ldl.supernodal(op))
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             self._jacobi = 1.0 / (self.m + tau * diag)
@@ -299,7 +299,7 @@ class ImplicitHeat:
                 h = float(np.median(self.m / np.where(diag > 0, diag, np.inf)))
                 c = h + 2.0 * tau
                 self._a, self._b = h / c, 4.0 * tau / c
-                self._lu = _factor(2.0 * sp.diags(self.m) + c * K)
+                self._lu = _factor(2.0 * sp.diags(self.m) + c * K, _ldl.supernodal(op))
         if len(self.Z):
             ind = np.zeros(n)
             ind[self.Z] = 1.0

@@ -35,11 +35,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from . import _lobpcg
+from . import _ldl, _lobpcg
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
-from ._ldl import supernodal
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
@@ -192,7 +191,7 @@ class PoissonSolver:
                 # one vertex of each floating part pinned at 0: A restricted to the others is SPD
                 first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
                 self._keep = np.setdiff1d(np.arange(len(self.free)), first)
-                self._lu = _factor(A[self._keep][:, self._keep], supernodal(op))
+                self._lu = _factor(A[self._keep][:, self._keep], _ldl.supernodal(op))
             else:
                 self._A = A
                 self._precond = self._preconditioner(op, A)

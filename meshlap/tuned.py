@@ -100,7 +100,7 @@ NOISE_AREA = 2.2
 NOISE_FLOOR = 1e-4
 #: Unknowns of the quadratic elements (vertices + edges + triangles, about 6 per vertex) up to which
 #: eigs solves them by default: their factorization grows faster than N; random 16,000-vertex
-#: sphere (96,000): 6.4 s of CPU for build + 10 pairs, 32,000 vertices 15.9 s (linear 1.8 s)
+#: sphere (96,000): 6.4 s of CPU for build + 10 pairs, 32,000 vertices 14.5 s (linear 1.8 s)
 QUADRATIC_MAX_UNKNOWNS = 100_000
 #: Quantile of the vertices' noise read: spot, fandisk lower quartile 0.014 and 0 clean, 0.27-0.29ē at 0.3ē
 NOISE_QUANTILE = 0.25
