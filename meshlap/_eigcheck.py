@@ -186,7 +186,7 @@ def count_shift(lam: np.ndarray, k: int, floor: float, tol: float) -> tuple[floa
     (81.0, 2)
     """
     top = float(lam[k - 1])
-    tie = max(_TIE * abs(top), _TIE_CHECKS * max(tol, _EPS) * floor)
+    tie = max(_TIE * abs(top), _yardstick(tol, floor))
     above = np.flatnonzero(lam[k:] > top + tie)
     if len(above):
         j = k + int(above[0])
@@ -194,6 +194,10 @@ def count_shift(lam: np.ndarray, k: int, floor: float, tol: float) -> tuple[floa
     # every computed value ties (no value above to halve the gap to): σ stands _TIE of the floor
     # clear too, where an LDLᵀ pivot's sign is safe from roundoff next to a cluster of zeros
     return top + max(tie, _TIE * floor), len(lam)
+
+
+def _yardstick(tol: float, floor: float) -> float:  # twice what verify lets a passing value be off
+    return _TIE_CHECKS * max(tol, _EPS) * floor
 
 
 def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = False) -> int | None:
@@ -270,7 +274,20 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
         upper = float(lam[k]) if len(lam) > k else None
         j = k
         began = time.perf_counter()
-        if counter is not None and not attempt.exact:
+        low = counter is not None and not attempt.exact and float(lam[k - 1]) <= _yardstick(tol, floor)
+        if low:
+            # λ_k lies within the check's yardstick of 0, where no shift separates values the check
+            # cannot tell apart (chasing their ties could run to n); every eigenvalue of the
+            # pencil is above a shift below 0 that counts none, and then the k values are the
+            # lowest to within that yardstick
+            shift = -_yardstick(tol, floor)
+            count, j = counter(shift), int((lam < shift).sum())
+            if count is not None and count > j and below.get(attempt.name + " < 0", -1) < j:
+                # values below 0 the solver did not return: once more, asked for them too
+                want = len(lam) + count - j + 1
+                queue.insert(0, attempt)
+            below[attempt.name + " < 0"] = j
+        elif counter is not None and not attempt.exact:
             shift, j = count_shift(lam, k, floor, tol)
             if j == len(lam) > max(seen, k):
                 # λ_k's cluster runs past every computed value: a count here would only ask for
@@ -293,9 +310,10 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
             below[attempt.name] = max(j, below.get(attempt.name, 0))
             if count == j:
                 upper = shift  # proven: λ_{j+1} ≥ σ
+        complete = attempt.exact or (count is not None and count == j)
+        j = max(j, k) if low else j
         verdict = verify(apply_A, m, lam[:j], X[:, :j], tol, floor, upper, allsum)
         spent += time.perf_counter() - began
-        complete = attempt.exact or (count is not None and count == j)
         ok = bool(verdict.passed.all()) and (complete or not (must_count or count is not None))
         record = dict(method=attempt.name, tried=list(tried), iterations=iterations,
                       residuals=verdict.residuals[:k], bounds=verdict.bounds[:k],

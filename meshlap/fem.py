@@ -12,6 +12,15 @@ intrinsic Delaunay triangulation (Bobenko and Springborn 2007): the same surface
 weights are non-negative, so that slivers and obtuse triangles of scans and CAD exports cost
 nothing.
 
+Triangles are computed from their side lengths a ≥ b ≥ c alone, by Kahan's form of Heron's
+formula, whose area is good to a few ulps even for needles and caps (the textbook form, or a Gram
+determinant, loses it to cancellation: a triangle of two vertices 10⁻⁶ of an edge apart was
+judged flat and dropped, 3% off the first eigenvalue). Sides known to ε cannot tell a triangle
+whose detour c − (a − b) is below ``_FLAT`` = 8ε·a from a flat one (its computed area would be
+O(√ε) of a², all roundoff): such a triangle is degenerate, zero stiffness and area. Flips unfold
+with atan2 angles for the same reason (acos keeps half the digits of a small angle). Segments
+and tetrahedra are degenerate where det G is within ``_FLAT`` of its scale^k, its own roundoff.
+
 The default mass is lumped: on triangles each vertex's mixed Voronoi area (Meyer, Desbrun,
 Schröder and Barr 2003; libigl's default mass, with the cotangent stiffness its pencil), on
 segments and tetrahedra the row sums D = diag(C·1) of the consistent mass C. Read point-wise,
@@ -40,8 +49,11 @@ from ._jit import jit
 from .errors import MeshError
 from .tuned import FEM_TIE as TIE
 
-__all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "gram_from_lengths",
-           "intrinsic_delaunay", "lumped_pencil", "part_labels", "separate_parts", "simplicial_cells",
+# sides (or a Gram determinant) known to ε: what is within this of flat is flat (module notes)
+_FLAT = 8.0 * float(np.finfo(np.float64).eps)
+
+__all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay",
+           "lumped_pencil", "part_labels", "separate_parts", "simplicial_cells", "triangle_areas",
            "voronoi_areas", "welded", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
@@ -71,12 +83,31 @@ def _halfedge_twins(F: np.ndarray) -> np.ndarray:
 
 
 @jit()
+def _area(a, b, c):  # pragma: no cover - compiled
+    # Kahan's Heron: the area to a few ulps of the sides, needles and caps too; 0 where the
+    # sides, known to ε, do not tell the triangle from a flat one (module notes)
+    if a < b:
+        a, b = b, a
+    if b < c:
+        b, c = c, b
+    if a < b:
+        a, b = b, a
+    if c - (a - b) <= _FLAT * a:
+        return 0.0
+    return 0.25 * math.sqrt((a + (b + c)) * (c - (a - b)) * (c + (a - b)) * (a + (b - c)))
+
+
+@jit()
 def _cot(a, b, c):  # pragma: no cover - compiled
     # cotangent of the angle opposite side a in the triangle of sides a, b, c
-    s = 0.5 * (a + b + c)
-    area = math.sqrt(max(s * (s - a) * (s - b) * (s - c), 0.0))
     floor = 1e-14 * max(a, b, c) ** 2
-    return (b * b + c * c - a * a) / (4.0 * max(area, floor))
+    return (b * b + c * c - a * a) / (4.0 * max(_area(a, b, c), floor))
+
+
+@jit()
+def _angle(a, b, c):  # pragma: no cover - compiled
+    # the angle opposite side a, by atan2: small angles keep their digits (acos loses half)
+    return math.atan2(4.0 * _area(a, b, c), b * b + c * c - a * a)
 
 
 @jit()
@@ -99,9 +130,11 @@ def _flip(F, L, twin, max_passes):  # pragma: no cover - compiled
                     continue
                 lab, lbc, lca, lad, ldb = L[f, c], L[f, c1], L[f, c2], L[g, d1], L[g, d2]
                 # the quad unfolded about ab: the angles at a on either side, then cd across
-                t1 = math.acos(min(1.0, max(-1.0, (lab * lab + lca * lca - lbc * lbc) / (2 * lab * lca))))
-                t2 = math.acos(min(1.0, max(-1.0, (lab * lab + lad * lad - ldb * ldb) / (2 * lab * lad))))
-                lcd = math.sqrt(max(lca * lca + lad * lad - 2 * lca * lad * math.cos(t1 + t2), 0.0))
+                # (law of cosines in the form without cancellation when c and d nearly meet)
+                half = 0.5 * (_angle(lbc, lab, lca) + _angle(ldb, lab, lad))
+                lcd = math.sqrt((lca - lad) ** 2 + 4.0 * lca * lad * math.sin(half) ** 2)
+                if lcd <= 0.0:
+                    continue
                 tw_ca, tw_ad, tw_db, tw_bc = twin[f, c2], twin[g, d1], twin[g, d2], twin[f, c1]
                 # f = (cc, a, dd), g = (dd, b, cc); slot 2 of each is the new diagonal
                 F[f, 0], F[f, 1], F[f, 2] = cc, a, dd
@@ -160,20 +193,30 @@ def intrinsic_delaunay(P: np.ndarray, tri: np.ndarray, max_passes: int = 1000
     return F, L
 
 
-def gram_from_lengths(L: np.ndarray) -> np.ndarray:
-    """Gram matrices E Eᵀ of triangles (E1 = p1 - p0, E2 = p2 - p0) from their side lengths,
-    ``L[:, c]`` the side c -> c + 1: what :func:`cell_matrices` reads in place of positions.
+def triangle_areas(lengths: np.ndarray) -> np.ndarray:
+    """Triangles' areas from their side lengths, by Kahan's form of Heron's formula (module
+    notes): good to a few ulps for needles and caps; 0 for a triangle its sides, known to ε, do
+    not tell from a flat one.
+
+    Parameters
+    ----------
+    lengths : (m, 3) ndarray
+        Each triangle's three side lengths, in any order.
+
+    Returns
+    -------
+    (m,) ndarray
 
     Examples
     --------
-    >>> gram_from_lengths(np.array([[3.0, 5.0, 4.0]]))[0].tolist()   # the right angle at corner 0
-    [[9.0, 0.0], [0.0, 16.0]]
+    >>> triangle_areas(np.array([[3.0, 5.0, 4.0], [1.0, 1.0, 1e-9], [2.0, 1.0, 1.0]])).tolist()
+    [6.0, 5e-10, 0.0]
     """
-    l01, l12, l20 = L[:, 0], L[:, 1], L[:, 2]
-    G = np.empty((len(L), 2, 2))
-    G[:, 0, 0], G[:, 1, 1] = l01**2, l20**2
-    G[:, 0, 1] = G[:, 1, 0] = 0.5 * (l01**2 + l20**2 - l12**2)
-    return G
+    L = np.sort(np.asarray(lengths, dtype=np.float64), axis=1)
+    c, b, a = L[:, 0], L[:, 1], L[:, 2]
+    detour = c - (a - b)
+    product = (a + (b + c)) * detour * (c + (a - b)) * (a + (b - c))
+    return np.where(detour > _FLAT * a, 0.25 * np.sqrt(np.maximum(product, 0.0)), 0.0)
 
 
 def voronoi_areas(lengths: np.ndarray) -> np.ndarray:
@@ -201,8 +244,7 @@ def voronoi_areas(lengths: np.ndarray) -> np.ndarray:
     """
     L = np.asarray(lengths, dtype=np.float64)
     l2 = L * L
-    s = L.sum(axis=1) / 2
-    area = np.sqrt(np.maximum(s * (s - L[:, 0]) * (s - L[:, 1]) * (s - L[:, 2]), 0.0))
+    area = triangle_areas(L)
     prev = np.roll(l2, 1, axis=1)  # the side ending at corner c
     across = np.roll(l2, -1, axis=1)  # the side opposite corner c
     dot = (l2 + prev - across) / 2  # |side c| |side c-1| cos θ_c
@@ -210,21 +252,22 @@ def voronoi_areas(lengths: np.ndarray) -> np.ndarray:
     circum = (l2 * np.roll(cot, -2, axis=1) + prev * np.roll(cot, -1, axis=1)) / 8
     obtuse = dot < 0
     split = np.where(obtuse, area[:, None] / 2, area[:, None] / 4)
-    return np.where(obtuse.any(axis=1)[:, None], split, circum)
+    return np.where(obtuse.any(axis=1)[:, None] | (area[:, None] == 0), split, circum)
 
 
-def cell_matrices(P: np.ndarray | None, cells: np.ndarray, gram: np.ndarray | None = None
+def cell_matrices(P: np.ndarray | None, cells: np.ndarray, lengths: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per-cell P1 stiffness and consistent mass of simplices, and their volumes.
 
     Parameters
     ----------
     P : (n, d) ndarray or None
-        Vertex positions (any ambient dimension d ≥ k); None when ``gram`` is given.
+        Vertex positions (any ambient dimension d ≥ k); None when triangles' ``lengths`` are given.
     cells : (m, k + 1) int ndarray
         Segments, triangles or tetrahedra.
-    gram : (m, k, k) ndarray, optional
-        The cells' Gram matrices E Eᵀ (e.g. from intrinsic edge lengths) instead of ``P``.
+    lengths : (m, 3) ndarray, optional
+        Triangles only: ``lengths[f, c]`` the side from corner c to c + 1 (e.g. intrinsic ones)
+        instead of ``P``.
 
     Returns
     -------
@@ -233,7 +276,7 @@ def cell_matrices(P: np.ndarray | None, cells: np.ndarray, gram: np.ndarray | No
     C : (m, k + 1, k + 1) ndarray
         ∫ φ_i φ_j over each cell.
     vol : (m,) ndarray
-        Length, area or volume (0 for a degenerate cell, whose K is 0).
+        Length, area or volume (0 for a degenerate cell, whose K is 0: module notes).
 
     Examples
     --------
@@ -244,19 +287,40 @@ def cell_matrices(P: np.ndarray | None, cells: np.ndarray, gram: np.ndarray | No
     """
     cells = np.asarray(cells, dtype=np.int64)
     k = cells.shape[1] - 1
-    if gram is None:
+    if k == 2:
+        if lengths is None:
+            lengths = np.linalg.norm(P[np.roll(cells, -1, axis=1)] - P[cells], axis=2)
+        K, vol = _triangle_stiffness(np.asarray(lengths, dtype=np.float64))
+    else:
+        if lengths is not None:
+            raise MeshError(f"side lengths give triangles, not cells of {k + 1} corners")
         E = P[cells[:, 1:]] - P[cells[:, :1]]
         gram = E @ np.swapaxes(E, 1, 2)
-    det = np.linalg.det(gram)
-    scale = np.einsum("mii->m", gram) / k
-    ok = det > 1e-12 * np.maximum(scale, 1e-300) ** k
-    vol = np.sqrt(np.where(ok, det, 0.0)) / math.factorial(k)
-    inv = np.zeros_like(gram)
-    inv[ok] = np.linalg.inv(gram[ok])
-    B = np.vstack([-np.ones((1, k)), np.eye(k)])
-    K = vol[:, None, None] * (B @ inv @ B.T)
+        det = np.linalg.det(gram)
+        ok = det > _FLAT * np.maximum(np.einsum("mii->m", gram) / k, 1e-300) ** k
+        vol = np.sqrt(np.where(ok, det, 0.0)) / math.factorial(k)
+        inv = np.zeros_like(gram)
+        inv[ok] = np.linalg.inv(gram[ok])
+        B = np.vstack([-np.ones((1, k)), np.eye(k)])
+        K = vol[:, None, None] * (B @ inv @ B.T)
     C = (vol / ((k + 1) * (k + 2)))[:, None, None] * (np.ones((k + 1, k + 1)) + np.eye(k + 1))
     return K, C, vol
+
+
+def _triangle_stiffness(L: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # the cotangent form of vol · B G⁻¹ Bᵀ, from Kahan's area: side c -> c + 1 gets half the
+    # cotangent of the angle at corner c + 2
+    area = triangle_areas(L)
+    l2 = L * L
+    cot = (l2 + np.roll(l2, 1, axis=1) - np.roll(l2, -1, axis=1)) / np.maximum(4 * area, 1e-300)[:, None]
+    K = np.zeros((len(L), 3, 3))
+    for c in range(3):
+        i, j = c, (c + 1) % 3
+        w = np.where(area > 0, 0.5 * cot[:, (c + 2) % 3], 0.0)
+        K[:, i, j] = K[:, j, i] = -w
+        K[:, i, i] += w
+        K[:, j, j] += w
+    return K, area
 
 
 def _scatter(cells: np.ndarray, local: np.ndarray, n: int) -> sp.csr_matrix:
@@ -436,13 +500,12 @@ def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lu
     P, n = (geo.points if points is None else points), geo.n_points
     rep = np.arange(n) if weld is None else np.asarray(weld, dtype=np.int64)
     cells = welded_cells(cells, rep)
-    gram = lengths = None
+    lengths = None
     if cells.shape[1] == 3 and intrinsic:
         cells, lengths = intrinsic_delaunay(P, cells)
-        gram = gram_from_lengths(lengths)
     elif cells.shape[1] == 3:
         lengths = np.linalg.norm(P[np.roll(cells, -1, axis=1)] - P[cells], axis=2)
-    K, C, _ = cell_matrices(P, cells, gram)
+    K, C, _ = cell_matrices(P, cells, lengths)
     S = -_scatter(cells, weight * K, n)
     Cm = _scatter(cells, weight * C, n)
     m = np.asarray(Cm.sum(axis=1)).ravel()

@@ -49,7 +49,7 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ----------
     lengths : (m, 3) ndarray
         ``lengths[f, c]`` the length of the side from corner c to corner c + 1; a degenerate
-        triangle (as :func:`meshlap.fem.cell_matrices` judges it) gets zero matrices.
+        triangle (as :func:`meshlap.fem.triangle_areas` judges it) gets zero matrices.
 
     Returns
     -------
@@ -70,13 +70,12 @@ def element_matrices(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     0.5
     """
     L = np.asarray(lengths, dtype=np.float64)
-    _, _, vol = fem.cell_matrices(None, np.zeros((len(L), 3), np.int64), fem.gram_from_lengths(L))
-    ok = vol > 0
+    area = fem.triangle_areas(L)
+    ok = area > 0
     L = np.where(ok[:, None], L, 1.0)  # a unit equilateral stand-in, zeroed by its area below
     l01, l12, l20 = L[:, 0], L[:, 1], L[:, 2]
     x = (l01**2 + l20**2 - l12**2) / (2 * l01)  # the triangle laid out: (0, 0), (l01, 0), (x, y)
-    y = np.sqrt(np.maximum(l20**2 - x**2, 0.0))
-    area = np.where(ok, 0.5 * l01 * y, 0.0)
+    y = np.where(ok, 2 * area / l01, np.sqrt(0.75))
     g1 = np.stack([1 / l01, -x / (l01 * y)], axis=1)
     g2 = np.stack([np.zeros_like(x), 1 / y], axis=1)
     g = np.stack([-g1 - g2, g1, g2], axis=1)  # (m, 3, 2) gradients of the barycentrics

@@ -3,6 +3,7 @@ nothing was skipped, the fallbacks, and meshlap.EigenError when none of them con
 
 import warnings
 
+import igl
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -110,6 +111,41 @@ def test_a_floor_from_roundoff_does_not_widen_the_tie_window(monkeypatch):
     assert np.abs(lam - [0, 2, 2, 2, 6, 6, 6, 6, 6]).max() < 0.02
 
 
+def _near_copies(eps):
+    # 200 vertices eps of an edge from a corner of a 2,000-vertex sphere's faces, each face split
+    V, F = shapes.sphere(2000, seed=0)
+    extra, faces = [], [F.copy()]
+    for f in range(0, 2000, 10):
+        a, b, c = F[f]
+        extra.append(V[a] + eps * ((V[b] + V[c]) / 2 - V[a]))
+        q = len(V) + len(extra) - 1
+        faces[0][f] = (a, b, q)
+        faces.append([[b, c, q], [c, a, q]])
+    return np.vstack([V, extra]), np.vstack(faces)
+
+
+@pytest.mark.parametrize("eps", [1e-6, 1e-8])
+def test_nearly_coincident_vertices_keep_their_triangles(eps):
+    """Vertices 1e-6 and 1e-8 of an edge from another: the triangles between them are needles
+    and caps whose area Kahan's formula keeps (fem's module notes). A Gram determinant cut at
+    1e-12 had dropped them (λ₁ 1.938 where 2.0031 is right, 1.9968 where libigl's 1.99996 is) and
+    1e-8 crashed the flips (ZeroDivisionError). The check's roundoff yardstick (±54 and ±5e5)
+    covers λ_k there: one count below 0 proves the values the lowest, in one run, with a warning."""
+    V, F = _near_copies(eps)
+    op = meshlap.laplacian(V, F)
+    cot = -igl.cotmatrix(V, F)
+    mass = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
+    ref = np.sort(sla_sparse.eigsh(cot.tocsc(), 5, mass.tocsc(), sigma=-1e-3, return_eigenvectors=False))
+    info = {}
+    with pytest.warns(meshlap.MeshWarning, match="roundoff limits the check"):
+        linear, _ = spectral.eigs(op, 5, elements="linear")
+        quadratic, _ = spectral.eigs(op, 5, info=info)
+    assert np.abs(linear - ref).max() < 1e-6 * 6
+    well, _ = spectral.eigs(meshlap.laplacian(*_near_copies(1e-3)), 5)
+    assert np.abs(quadratic - well).max() < 2e-4 and abs(quadratic[1] - 2.0031) < 1e-4
+    assert info["tried"] == ["shift-invert"] and info["complete"] and info["shift"] < 0
+
+
 def test_sparse_pencil_is_counted_and_ties_past_k_are_computed():
     """The cotangent pencil of four parts, k = 8: four zeros and 4 of the 12 values ≈ 2. The
     solver runs again until a computed value lies above λ_8's cluster; the count at σ between
@@ -179,8 +215,9 @@ def test_a_skipped_eigenvalue_is_found_by_the_count():
 
 def test_a_solver_that_finds_more_of_a_cluster_each_run_runs_again():
     """Deflated shift-invert on a 50-part model (the real corpus's truck, k = 20): the first run
-    returns 19 of the 50 zeros, the second 40 although asked for all 51 below σ, the third all.
-    A run that finds more runs again (the second had ended the solver: EigenError after 35 s)."""
+    returns 19 of the 50 zeros and 0.9, whose count asks for all 51 below σ; the second returns
+    40 zeros, and its λ_20 = 0 is within the check's yardstick of 0, so a count below 0 that
+    finds nothing proves the 20 zeros the lowest (a third run is not needed)."""
     d = np.r_[np.zeros(50), 0.9, 2.5, 2.8, 5.3, 6.0, 7.0]
     A = np.diag(d)
     found = [np.r_[np.arange(19), 50, 51], np.r_[np.arange(40), 50, 51, 52, 53], np.arange(len(d))]
@@ -194,8 +231,42 @@ def test_a_solver_that_finds_more_of_a_cluster_each_run_runs_again():
     info = {}
     lam, _ = _eigcheck.first_verified([_eigcheck.Attempt("deflating", deflating)], 20, lambda Y: A @ Y,
                                       np.ones(len(d)), 1e-8, 0.01, lambda s: int((d < s).sum()), info=info)
-    assert lam.tolist() == [0.0] * 20 and info["complete"] and info["count"] == 50
-    assert info["tried"] == ["deflating"] * 3 and asked[2] > asked[1]
+    assert lam.tolist() == [0.0] * 20 and info["complete"] and info["count"] == 0 and info["shift"] < 0
+    assert info["tried"] == ["deflating"] * 2 and asked[1] > 50
+
+
+def test_values_within_the_yardstick_of_zero_are_counted_below_zero_not_chased():
+    """A pencil whose roundoff yardstick (tol · floor = ±100 here, as nearly coincident vertices
+    make it) covers λ_k: every computed value ties with λ_k, and chasing the ties asked for
+    ever more pairs (an hour on 200 vertices 10⁻⁷ of an edge from another). One count below 0
+    ends it: none there, so the k values are the lowest to within the yardstick; a value below
+    0 that the solver missed is asked for once more."""
+    d = np.r_[0.0, 2.0, 2.0, 2.0, 6.0, 6.0, 6.0, 6.0, 6.0, np.arange(12.0, 60.0)]
+    A = np.diag(d)
+    asked = []
+
+    def solver(want):
+        asked.append(want)
+        return d[:want + 1], np.eye(len(d))[:, :want + 1], 1
+
+    info = {}
+    lam, _ = _eigcheck.first_verified([_eigcheck.Attempt("s", solver)], 5, lambda Y: A @ Y, np.ones(len(d)),
+                                      1e-8, 1e10, lambda s: int((d < s).sum()), info=info)
+    assert lam.tolist() == [0.0, 2.0, 2.0, 2.0, 6.0] and asked == [5] and info["complete"]
+    assert info["shift"] == -200.0 and info["count"] == 0
+
+    d2 = np.r_[-500.0, d]  # a value far below 0 the first run skips
+    runs = [np.arange(1, 7), np.arange(0, 8)]
+
+    def skipping(want):
+        asked.append(want)
+        idx = runs[min(len(asked) - 2, 1)]
+        return d2[idx], np.eye(len(d2))[:, idx], 1
+
+    info = {}
+    lam, _ = _eigcheck.first_verified([_eigcheck.Attempt("s", skipping)], 5, lambda Y: np.diag(d2) @ Y,
+                                      np.ones(len(d2)), 1e-8, 1e10, lambda s: int((d2 < s).sum()), info=info)
+    assert lam.tolist() == [-500.0, 0.0, 2.0, 2.0, 2.0] and info["complete"] and info["tried"] == ["s", "s"]
 
 
 def test_a_cluster_split_by_the_tie_window_is_counted_above_its_last_tie():
