@@ -50,8 +50,12 @@ def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Nam
     far = d if d.ndim == 1 else d.min(axis=0)
     print(f"heat-method distance from vertex {', '.join(map(str, sources))} (t = {hd.t:.3g}; set-up "
           f"{setup:.2f} s, {seconds:.2f} s for {len(sources) if args.each else 1} field(s))")
-    pct = np.percentile(far, [50, 90, 100])
-    print(f"median {pct[0]:.6g}, 90% {pct[1]:.6g}, max {pct[2]:.6g} at vertex {int(np.argmax(far))}")
+    reached = np.isfinite(far)
+    pct = np.percentile(far[reached], [50, 90, 100])
+    print(f"median {pct[0]:.6g}, 90% {pct[1]:.6g}, max {pct[2]:.6g} at vertex "
+          f"{int(np.flatnonzero(reached)[np.argmax(far[reached])])}")
+    if not reached.all():
+        print(f"{int((~reached).sum())} vertices lie on parts without a source: distance inf")
     if args.output:
         save_values(args.output, d.T)  # one column per source
     if args.png:
@@ -62,9 +66,18 @@ def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Nam
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
+        from .geometry.validation import check_faces
         from .plot import plot_mesh
 
-        ax = plot_mesh(V, F, far, title="geodesic distance", up=args.up)
+        title = "geodesic distance"
+        if not reached.all():  # the parts without a source are left out of the picture
+            title += f" ({int((~reached).sum())} unreached vertices not drawn)"
+            if F is None:
+                V, far = V[reached], far[reached]
+            else:
+                tris = check_faces(F, len(V)).triangles()
+                F, far = tris[reached[tris].all(axis=1)], np.where(reached, far, 0.0)
+        ax = plot_mesh(V, F, far, title=title, up=args.up)
         ax.figure.savefig(args.png, dpi=110, bbox_inches="tight")
         plt.close(ax.figure)
         print(f"wrote {args.png}")

@@ -52,6 +52,12 @@ X is a unit field of. Otherwise (a clean mesh, or ``denoise=False``) the distanc
 as given (its own polyhedral distance, 0.44% off libigl's exact one on the 10,000-vertex noisy
 sphere built with ``denoise=False``, where tilt lengthens a path by about σ̂²/ē², 1.3%).
 
+Parts. Heat does not cross from one connected part of the pencil to another, and each part's
+Poisson solution has its own constant: φ is matched to the planar distance on each part
+separately (on the source neighbourhood points of the same part), and a part that holds no
+source is at distance ``inf``. Matched once per column, two spheres with a source each were 0.39
+off on both (0.003 and 0.0015 each alone), and a part without a source read 1.5-1.6.
+
 The time step ``t = c ē²``, ē the geometry's mean spacing (``op.geometry.spacing``), c = 1:
 Crane et al.'s rule, and potpourri3d's, LaPy's and libigl's default. With log u the gradient's
 own error no longer asks for a large t; what bounds t from below is the discrete flow itself:
@@ -131,6 +137,17 @@ def _sparse_pencils(op: Any, grad: Gradient) -> tuple[Any, Any]:
     K = grad.stiffness()
     K_heat = K if grad.kind == "simplices" else _graph_stiffness(geo)
     return _wrapped(K_heat, mass), _wrapped(K, mass)
+
+
+def _parts(op: Any, lonely: np.ndarray, fill: sp.csr_matrix) -> np.ndarray:
+    """Connected parts of the pencil's graph (its off-diagonal entries); a point in no element
+    belongs to the part of the neighbour its value is filled from with the largest weight."""
+    from scipy.sparse.csgraph import connected_components
+
+    _, label = connected_components(sp.csr_matrix(op.S), directed=False)
+    if len(lonely):
+        label[lonely] = label[np.asarray(abs(fill).argmax(axis=1)).ravel()]
+    return label
 
 
 def _nearest(tree: cKDTree, Q: np.ndarray, k: int) -> np.ndarray:
@@ -250,6 +267,7 @@ class HeatDistance:
             first[rep[covered[::-1]]] = covered[::-1]  # each point's first copy in an element
             sub = first[rep[self._lonely]]
             self._stand_in[self._lonely[sub >= 0]] = sub[sub >= 0]
+        self._part = _parts(poisson_op, self._lonely, self._fill)
         self._tree = cKDTree(self._points)
         cells = self.grad.cells  # the elements' centres, and for each vertex the elements at it
         self._centres = self._points if cells is None else self._points[cells].mean(axis=1)
@@ -291,7 +309,8 @@ class HeatDistance:
         phi = self._poisson.solve(-self.grad.divergence(X), compatible=True)  # Σ_j ∇λ_j = 0: sums to 0
         if len(self._lonely):
             phi[self._lonely] = self._fill @ phi
-        phi -= self._offsets(phi, groups, src, col, near)
+        offsets = self._offsets(phi, groups, src, col, near)
+        phi = np.where(np.isfinite(offsets), phi - offsets, np.inf)  # inf: a part without a source
         for j, grp in enumerate(groups):
             phi[grp, j] = 0.0
         return np.maximum(phi, 0.0)
@@ -332,9 +351,10 @@ class HeatDistance:
     def _offsets(self, phi: np.ndarray, groups: list[np.ndarray], src: np.ndarray, col: np.ndarray,
                  idx: np.ndarray) -> np.ndarray:
         """The constants that make each column of φ the distance to its nearest source on each
-        source's nearest points (``idx``; sources ``src`` of groups ``col``), measured in those
-        points' own k-dimensional principal plane (geodesic and planar distance agree to O(r³)
-        there, and the plane drops the noise across the surface)."""
+        source's nearest points of its own part (``idx``; sources ``src`` of groups ``col``),
+        measured in those points' own k-dimensional principal plane (geodesic and planar distance
+        agree to O(r³) there, and the plane drops the noise across the surface): one per part and
+        column, (n, len(groups)), ``inf`` on a part that holds none of the column's sources."""
         P = self._points
         local = P[idx] - P[src][:, None, :]  # (sources, near, d)
         axes = _principal(local, self.op.geometry.dim)  # (sources, k, d)
@@ -346,8 +366,15 @@ class HeatDistance:
             for s in grp:
                 other = np.linalg.norm(np.einsum("snd,skd->snk", P[idx[mine]] - P[s], axes[mine]), axis=2)
                 planar[mine] = np.minimum(planar[mine], other)
-        shift = (phi[idx, col[:, None]] - planar).mean(axis=1)
-        return np.bincount(col, shift, minlength=len(groups)) / np.bincount(col, minlength=len(groups))
+        part = self._part
+        same = part[idx] == part[src][:, None]  # the source itself is always one
+        shift = ((phi[idx, col[:, None]] - planar) * same).sum(axis=1) / same.sum(axis=1)
+        n_parts = int(part.max()) + 1
+        key = col * n_parts + part[src]
+        total = np.bincount(key, shift, minlength=len(groups) * n_parts)
+        count = np.bincount(key, minlength=len(groups) * n_parts)
+        per = np.divide(total, count, out=np.full(len(total), np.inf), where=count > 0)
+        return per.reshape(len(groups), n_parts)[:, part].T
 
     def compute(self, sources: Any) -> np.ndarray:
         """Distance to the nearest of ``sources`` (one vertex index or several): (n,).
