@@ -65,6 +65,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .corrections.highorder import fewest_points
 from .denoise import noise_extent, surface_noise
 from .errors import MeshError
 from .fem import lumped_pencil, part_labels, welded
@@ -223,6 +224,10 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
+    if not pencil_rows and geo.n_points < fewest_points(geo.dim):
+        pencil_rows = True
+        reason += (f"; but {geo.n_points} points are too few to fit point-wise rows on "
+                   f"({fewest_points(geo.dim)} at least), so op @ f applies the pencil")
     # a mass named for the pencil asks for the pencil's own spectra
     quadratic = operator == "fem" and has_cells and geo.faces is not None and geo.dim == 2 and \
         "mass" not in opts

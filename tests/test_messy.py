@@ -408,6 +408,33 @@ def test_h_too_small_and_too_large(ball):
     assert_sound(op)
 
 
+@pytest.mark.parametrize("case", ["triangle", "square", "tetrahedron", "polyline", "cloud"])
+def test_inputs_too_small_for_fitted_rows_get_the_pencil_s(case):
+    """Fewer points than a quadratic fit needs (8 for k = 2): the default had raised "choose_rows
+    needs at least 8 points" on a single triangle. Now op @ f applies the pencil, the decision
+    says why, and the spectrum is linear FEM's (the unit square's two triangles: 0, then
+    10.56 and 10.85 against π² = 9.87; a 4-vertex segment, 5 needed for k = 1: 0, 9.82, 26.1
+    against π², 4π²)."""
+    rng = np.random.default_rng(0)
+    V, F, k = {"triangle": (np.eye(3), np.array([[0, 1, 2]]), None),
+               "square": (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]),
+                          np.array([[0, 1, 2], [1, 3, 2]]), None),
+               "tetrahedron": (np.r_[np.zeros((1, 3)), np.eye(3)], np.array([[0, 1, 2, 3]]), 3),
+               "polyline": (np.c_[np.linspace(0, 1, 4), np.zeros((4, 2))],
+                            np.c_[np.arange(3), np.arange(1, 4)], None),
+               "cloud": (rng.random((6, 3)), None, None)}[case]
+    op = meshlap.point_cloud_laplacian(V) if F is None else meshlap.laplacian(V, F, k=k)
+    assert op.decision.rows == "pencil" and "too few to fit point-wise rows" in op.decision.reason
+    Lx = op @ V[:, 0]
+    assert np.isfinite(Lx).all() and abs((op.M @ Lx).sum()) < 1e-9  # the pencil's rows: 1ᵀ S f = 0
+    lam, _ = meshlap.spectral.eigs(op, min(3, len(V) - 1))
+    assert abs(lam[0]) < 1e-9 and (lam[1:] > 0).all()
+    if case == "square":
+        assert np.allclose(lam, [0, 10.5606, 10.8515], atol=1e-3)
+    if case == "polyline":
+        assert np.allclose(lam, [0, 9.818, 26.104], atol=1e-2)
+
+
 def test_large_coordinates_translation_and_scale():
     V, F = shapes.sphere(400, kind="random", seed=5)
     h = 0.02

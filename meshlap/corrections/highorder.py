@@ -43,11 +43,24 @@ from ..errors import MeshError
 from ..geometry import check_points
 from ._fit_kernel import _rows, gather_columns
 
-__all__ = ["RowFit", "fit_rows", "knn_pattern", "mean_curvature", "mean_curvature_normal", "monomials",
-           "pointwise_rows"]
+__all__ = ["RowFit", "fewest_points", "fit_rows", "knn_pattern", "mean_curvature", "mean_curvature_normal",
+           "monomials", "pointwise_rows"]
 
 #: Highest polynomial degree of a row (the probes of the error model look two degrees higher).
 MAX_DEGREE = 6
+
+
+def fewest_points(k: int) -> int:
+    """The fewest points :func:`meshlap.corrections.rowchoice.choose_rows` fits rows on in
+    dimension k: a quadratic's (k + 1)(k + 2)/2 coefficients, and two more to measure the fit's
+    residual.
+
+    Examples
+    --------
+    >>> fewest_points(2)
+    8
+    """
+    return (k + 1) * (k + 2) // 2 + 2
 
 
 def monomials(k: int, degree: int) -> tuple[np.ndarray, np.ndarray]:

@@ -109,7 +109,7 @@ from ._gather import _assemble, _restrict, _table
 from ._levels import _local_noise, _scale
 from ._neighbours import _nearest, _Spread
 from ._ranks import _bounds, _min, _sum
-from .highorder import RowFit, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
+from .highorder import RowFit, fewest_points, fit_rows, knn_pattern, monomials, pointwise_rows  # noqa: F401
 
 __all__ = ["RowChoice", "choose_rows", "predicted_error", "wider_rows"]
 
@@ -362,7 +362,7 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
         owned[np.asarray(counted, dtype=np.int64)] = True
     ids = None if ids is None else np.asarray(ids, dtype=np.int64)
     total = n if comm is None else comm.allreduce(int(owned.sum()))
-    least = int(count[2]) + 2
+    least = fewest_points(k)
     if total < least:
         raise MeshError(f"choose_rows needs at least {least} points for k = {k}; got {total}")
     notes: list[str] = []
