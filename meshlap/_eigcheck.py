@@ -43,7 +43,8 @@ import scipy.sparse as sp
 from . import _ldl, _lobpcg
 from .errors import MeshWarning, user_stacklevel
 
-__all__ = ["Attempt", "Verdict", "count_below", "count_shift", "first_verified", "verify", "warn_roundoff"]
+__all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_shift", "first_verified", "uncertified",
+           "verify", "warn_roundoff"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
 _ORTHO = 1e-7
@@ -56,7 +57,7 @@ _TIE = 1e-3
 _TIE_CHECKS = 2.0
 _EPS = float(np.finfo(np.float64).eps)
 # relative accuracy of the smallest returned eigenvalue beyond which roundoff is warned of (0.1%)
-_UNCERTIFIED = 1e-3
+UNCERTIFIED = 1e-3
 
 
 class Verdict(NamedTuple):
@@ -101,11 +102,25 @@ def roundoff_floor(stiff: float, tol: float, scale: float) -> float:
     return max(0.01 * scale, 4 * _EPS * stiff / max(tol, _EPS))
 
 
+def uncertified(lam: np.ndarray, tol: float, floor: float, scale: float) -> float:
+    """The check's absolute yardstick ``tol · floor`` over the smallest returned value above 1%
+    of the scale (a part's zeros are certified absolutely); above ``UNCERTIFIED``, roundoff and
+    not ``tol`` limits what the check certified (:func:`warn_roundoff`).
+
+    Examples
+    --------
+    >>> uncertified(np.array([0.0, 2.0, 6.0]), 1e-8, 4e6, 1.0)   # a floor from roundoff
+    0.02
+    """
+    nonzero = lam[lam > 0.01 * scale]
+    return float(max(tol, _EPS) * floor / nonzero.min()) if len(nonzero) else 0.0
+
+
 def warn_roundoff(lam: np.ndarray, tol: float, floor: float, scale: float, stiff: float,
                   info: dict | None = None) -> float:
     """What the check certified of the returned eigenvalues where roundoff, not ``tol``, set it:
     its absolute yardstick ``tol · floor`` over the smallest returned value above 1% of the
-    scale (a part's zeros are certified absolutely). Beyond ``_UNCERTIFIED`` a
+    scale (a part's zeros are certified absolutely). Beyond ``UNCERTIFIED`` a
     :class:`meshlap.MeshWarning` names the cause; ``info["uncertified"]`` gets the ratio.
 
     Examples
@@ -113,12 +128,10 @@ def warn_roundoff(lam: np.ndarray, tol: float, floor: float, scale: float, stiff
     >>> warn_roundoff(np.array([0.0, 2.0, 6.0]), 1e-8, 0.01, 1.0, 4.0)   # a plain sphere
     5e-11
     """
-    nonzero = lam[lam > 0.01 * scale]
-    yardstick = max(tol, _EPS) * floor
-    ratio = float(yardstick / nonzero.min()) if len(nonzero) else 0.0
+    ratio, yardstick = uncertified(lam, tol, floor, scale), max(tol, _EPS) * floor
     if info is not None:
         info["uncertified"] = ratio
-    if ratio > _UNCERTIFIED:
+    if ratio > UNCERTIFIED:
         warnings.warn(f"eigs: roundoff limits the check to ±{yardstick:.2g} ({ratio:.1%} of the smallest "
                       f"nonzero eigenvalue returned, not tol = {tol:g}): a row of this pencil has "
                       f"S_ii/m_i = {stiff:.2g}, near-degenerate triangles or nearly coincident vertices; "

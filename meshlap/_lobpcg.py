@@ -62,8 +62,11 @@ from scipy.linalg import blas
 from . import _ldl
 from ._jit import _threads, jit
 
-__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "combine", "csr_times", "eig_error", "inner",
-           "lobpcg", "lobpcg_progress", "matmul", "svqb"]
+__all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "block_size", "combine", "csr_times", "eig_error",
+           "inner", "lobpcg", "lobpcg_progress", "matmul", "start_width", "svqb"]
+
+# the relative width of the k-th eigenvalue's cluster that LOBPCG's block must hold
+_CLUSTER = 0.1
 
 # the relative half-width of the window of Ritz values counted as one cluster by the bound
 _WINDOW = 0.05
@@ -524,3 +527,16 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         else:
             XP, AXP = combine([(XP, CE[:q], W, CE[q:]), (AXP, CE[:q], AW, CE[q:])])
     return Ritz(lam, np.ascontiguousarray(X), it, res, ratio)
+
+
+def start_width(k: int, least: int, n: int) -> int:
+    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends."""
+    return max(least, min(n // 3, least + k // 4))
+
+
+def block_size(theta: np.ndarray, k: int, least: int) -> int:
+    """Columns LOBPCG carries: at least ``least``, and the whole cluster of λ_k plus two (every
+    start Ritz value θ below (1 + _CLUSTER)·θ_{k-1}): a block ending inside a cluster converges
+    at the tiny gap within it (k = 50 on a 20,000-vertex sphere: 148 iterations, 12 without)."""
+    near = int(np.searchsorted(theta, (1.0 + _CLUSTER) * theta[k - 1], side="right"))
+    return int(min(len(theta), max(least, near + 2)))

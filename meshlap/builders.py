@@ -119,7 +119,8 @@ def laplacian(
                                        "denoise": denoise, "mass": None if mass == "lumped" else mass})
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
-    if chosen.rows == "pencil" and "pointwise" not in kernel_options and chosen.operator != "paper":
+    if chosen.rows == "pencil" and not {"pointwise", "pointwise_degree"} & set(kernel_options) and \
+            not matrix_free and chosen.operator != "paper":
         named["pointwise"] = False  # too few points to fit rows on: op @ f applies the pencil
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
                        denoise=chosen.denoise, mass=mass, **{**kernel_options, **named})

@@ -2,11 +2,8 @@
 
 Every function takes any operator with the common surface ``.L, .M, .S, .mass, .n_vertices``
 and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 2008) or a
-:class:`~meshlap.baselines.SparseLaplacian` such as the cotangent scheme, so that one call
-compares the two.
-
-The generalized problem is ``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite,
-so λ ≥ 0 and the eigenvectors are M-orthonormal.
+:class:`~meshlap.baselines.SparseLaplacian` such as the cotangent scheme. The problem is
+``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite: λ ≥ 0, φ M-orthonormal.
 
 Why not ``scipy.sparse.linalg.eigsh`` with shift-invert: the heat-kernel operator keeps every
 pair of vertices closer than the cut-off radius, hundreds to thousands of entries per row,
@@ -37,9 +34,9 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.special import eval_legendre
 
-from . import _eigcheck, _ldl, _lobpcg, _shiftinvert, quadratic
+from . import _eigcheck, _ldl, _lobpcg, _parts, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
-from .errors import MeshError
+from .errors import EigenError, MeshError
 from .fem import expand_copies, welded
 from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
@@ -56,8 +53,6 @@ _SPARSE_ROW_MAX = 40
 # for a dense-row operator up to this many entries (5.1 M: 65 s on 2 cores, LOBPCG 18 s)
 _DENSE_FALLBACK = 4000
 _FALLBACK_NNZ = 8_000_000
-# the relative width of the k-th eigenvalue's cluster that LOBPCG's block must hold
-_CLUSTER = 0.1
 # the cotangent start's residual, relative: the operator's own iterations do not depend on it
 # below ~0.3, as the start's error is then the two operators' difference (36 eigenpairs of a
 # 16k sphere: 7 iterations from a start to 0.3, 0.1, 0.03, 0.01 or 0.001, which took 5-8)
@@ -94,7 +89,6 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
     L = None if getattr(op, "matrix_free", False) else symmetric_L(op)
     Y = np.asarray(op @ X2) if not sp.issparse(L) or L.format != "csr" else _lobpcg.csr_times(L, X2)
     return Y.ravel() if vector else Y
-
 
 
 # -- the problem on the vertices with mass ------------------------------------------------------
@@ -407,7 +401,8 @@ def eigs(
         ladder.insert(1 if method == "lobpcg" else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
         ladder.append(exact)
-    if method == "shift-invert" and n_p > _DENSE_FALLBACK:
+    parted = sparse and _parts.part_labels(S_P())[0] > 1  # then each part at its own scale comes next
+    if method == "shift-invert" and n_p > _DENSE_FALLBACK and not parted:
         ladder.append(wider)
     counted = (sparse if count is None else count) and not matrix_free
     counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume)) if counted else None
@@ -425,10 +420,24 @@ def eigs(
         return -m[:, None] * np.asarray(LX)[P]
 
     stiff = 0.0 if matrix_free else float(np.abs(symmetric_L(op).diagonal()[P]).max())  # max S_ii / m_i
-    floor = _eigcheck.roundoff_floor(stiff, tol, _scale_shift(m))
+    scale = _scale_shift(m)
+    floor = _eigcheck.roundoff_floor(stiff, tol, scale)
     with one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
-        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count), info=info)
-    _eigcheck.warn_roundoff(lam, tol, floor, _scale_shift(m), stiff, info)
+        try:
+            lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count),
+                                              info=info)
+            failed = None
+        except EigenError as error:
+            failed = error
+    if parted and (failed or _eigcheck.uncertified(lam, tol, floor, scale) > _eigcheck.UNCERTIFIED):
+        # parts of far apart scales: each solved and checked at its own (meshlap._parts)
+        solve = functools.partial(eigs, method=method, tol=tol, maxiter=maxiter, extra=extra, seed=seed,
+                                  count=count)
+        lam, X = _parts.by_part(S_P(), m, k, solve, info)
+        return lam, _normalize_signs(_extend(op, P, X))
+    if failed:
+        raise failed
+    _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
@@ -436,19 +445,6 @@ def eigs(
 
 def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ₁ = 2)
     return 4.0 * math.pi / float(m.sum())
-
-
-def _start_width(k: int, least: int, n: int) -> int:
-    """Columns of the start on the cotangent problem: room to see where λ_k's cluster ends."""
-    return max(least, min(n // 3, least + k // 4))
-
-
-def _block_size(theta: np.ndarray, k: int, least: int) -> int:
-    """Columns LOBPCG carries: at least ``least``, and the whole cluster of λ_k plus two (every
-    start Ritz value θ below (1 + _CLUSTER)·θ_{k-1}): a block ending inside a cluster converges
-    at the tiny gap within it (k = 50 on a 20,000-vertex sphere: 148 iterations, 12 without)."""
-    near = int(np.searchsorted(theta, (1.0 + _CLUSTER) * theta[k - 1], side="right"))
-    return int(min(len(theta), max(least, near + 2)))
 
 
 def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None):
@@ -485,7 +481,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
         K = sp.csc_matrix(K[order][:, order])
     T = _lobpcg.CotPreconditioner(K, m, diag, sigma)
     rng = np.random.default_rng(seed)
-    X0 = rng.standard_normal((n_p, _start_width(k, nb, n_p) if adapt and K is not None else nb))[order]
+    X0 = rng.standard_normal((n_p, _lobpcg.start_width(k, nb, n_p) if adapt and K is not None else nb))[order]
     with one_blas_thread():
         if K is not None:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
@@ -499,7 +495,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
             X0 = T.lu.solve(m[:, None] * X0)
             start = _lobpcg.lobpcg(lambda Y: _lobpcg.csr_times(Kr, Y), m, T.lu.solve, X0, k, _START_TOL, 10,
                                    on_values=False, report=cb, cheap=True)
-            X0 = start.X[:, :_block_size(start.lam, k, nb) if adapt else nb]
+            X0 = start.X[:, :_lobpcg.block_size(start.lam, k, nb) if adapt else nb]
         out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, least=0.01 * sigma,
                              report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
     X = out.X  # the whole block: the values past k give the check the gap above λ_k

@@ -419,7 +419,7 @@ def eigs(
             # past k, all that the count asked for converge (λ_k's ties, or values skipped)
             goal = max(k, min(want, n_p // 3 - (nb - k)))
             more = (nb - k) + (max(4, k // 2) if wide else 0)
-            width = spectral._start_width(goal, goal + more, n_p) if adapt and not wide else goal + more
+            width = _lobpcg.start_width(goal, goal + more, n_p) if adapt and not wide else goal + more
             X0 = np.random.default_rng([seed + wide, rank]).standard_normal((len(P), min(width, n_p)))
             start = None
             with one_blas_thread():
@@ -432,7 +432,7 @@ def eigs(
                                            _START_ITERATIONS, allsum, on_values=False,
                                            report=_lobpcg.lobpcg_progress(report, "cotangent start",
                                                                           0.05, 0.2))
-                    X0 = start.X[:, :spectral._block_size(start.lam, goal, goal + more) if adapt and not wide
+                    X0 = start.X[:, :_lobpcg.block_size(start.lam, goal, goal + more) if adapt and not wide
                                  else goal + more]
                 out = _lobpcg.lobpcg(apply_A, m, T, X0, goal, tol, 2 * maxiter if wide else maxiter, allsum,
                                      least=0.01 * sigma,
