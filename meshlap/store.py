@@ -13,6 +13,7 @@ those of the saved one. What is stored:
 * the masses, the kernel parameters (h, tol, radius, correction, the moment factor,
   per-vertex widths) and the geometry (points, faces or cells, boundary, intrinsic
   dimension), unless ``mesh=False``;
+* the policy's decision (``op.decision``: what was built and why), as JSON;
 * ``meshlap_format``, the layout's version: files of another version are refused with
   :class:`OperatorFormatError`.
 
@@ -23,8 +24,9 @@ rank 0 (:meth:`~meshlap.distributed.DistributedLaplacian.to_scipy`) and saved th
 
 from __future__ import annotations
 
+import json
 import os
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +39,7 @@ from .geometry import Geometry, Polygons
 from .geometry.validation import check_faces, check_function, existing_file
 from .lumped import LumpedLaplacian
 from .operator import MeshLaplacian
+from .policy import Decision
 from .spectral import symmetric_L
 
 __all__ = ["FORMAT_VERSION", "OperatorFormatError", "SavedLaplacian", "load_operator", "save_operator"]
@@ -63,7 +66,8 @@ class SavedLaplacian(LumpedLaplacian):
     ``mass``, the kernel parameters ``h``, ``tol``, ``radius``, ``h_auto``, ``correction`` (None
     for operators without them, such as the cotangent Laplacian), and when the geometry was
     saved ``V``, ``faces``, ``geometry``, ``dim``, ``pencil_points``, ``area_scale`` and ``elements`` (what
-    :func:`meshlap.spectral.eigs` solves; "linear" without the geometry).
+    :func:`meshlap.spectral.eigs` solves; "linear" without the geometry); ``decision``, the
+    policy's :class:`~meshlap.policy.Decision` (None for an operator without one).
 
     Examples
     --------
@@ -71,8 +75,8 @@ class SavedLaplacian(LumpedLaplacian):
     >>> V, F = meshlap.shapes.sphere(200, seed=0)
     >>> op = meshlap.laplacian(V, F, h=0.02)
     >>> back = load_operator(save_operator(pathlib.Path(tempfile.mkdtemp()) / "op", op))
-    >>> bool(np.array_equal(back @ V, op @ V)), back.correction
-    (True, 'richardson')
+    >>> bool(np.array_equal(back @ V, op @ V)), back.correction, back.decision == op.decision
+    (True, 'richardson', True)
     """
 
     matrix_free = False
@@ -80,8 +84,9 @@ class SavedLaplacian(LumpedLaplacian):
     def __init__(self, applied: sp.csr_matrix, symmetric: sp.csr_matrix, mass: np.ndarray,
                  params: dict[str, Any], S: sp.csr_matrix | None = None,
                  geometry: Geometry | None = None, pencil_points: np.ndarray | None = None,
-                 area_scale: np.ndarray | None = None) -> None:
+                 area_scale: np.ndarray | None = None, decision: Decision | None = None) -> None:
         self._applied, self._sym, self.mass, self._S = applied, symmetric, mass, S
+        self.decision = decision
         self._exact_S = S is not None  # S stored as such (the cotangent Laplacian's), not M @ L_sym
         self.name = str(params.get("name", "BSW"))
         for key in _PARAMS:
@@ -277,6 +282,8 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
             arrays["h_vertex"] = op.h_vertex
         if mesh:
             arrays.update(_geometry_arrays(op), elements=np.array(getattr(op, "elements", "linear")))
+        if getattr(op, "decision", None) is not None:  # what the policy built and why, as JSON
+            arrays["decision"] = np.array(json.dumps(asdict(op.decision), default=lambda v: v.item()))
     if "data" in arrays:
         arrays["format"] = np.array("csr")
     arrays.update(meshlap_format=np.array(FORMAT_VERSION), meshlap_version=np.array(__version__),
@@ -381,5 +388,6 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
         S = _matrix(data, "S_", n, path.name) if "S_shape" in data else None
         moved = data["pencil_points"] if "pencil_points" in data else None
         scale = data["area_scale"] if "area_scale" in data else None
+        decision = Decision(**json.loads(str(data["decision"]))) if "decision" in data else None
     return SavedLaplacian(applied, sym, mass, params, S=S, geometry=geo, pencil_points=moved,
-                          area_scale=scale)
+                          area_scale=scale, decision=decision)

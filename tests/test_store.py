@@ -35,7 +35,7 @@ def test_every_kind_round_trips_bit_for_bit(kind, tmp_path):
         assert same_csr(getattr(back, name), getattr(op, name)), name
     assert back.L.dtype == op.L.dtype
     assert np.array_equal(back.mass, op.mass)
-    for name in ("h", "tol", "radius", "h_auto", "correction"):
+    for name in ("h", "tol", "radius", "h_auto", "correction", "decision"):
         assert getattr(back, name) == getattr(op, name, None if name != "h_auto" else False), name
     if hasattr(op, "geometry"):
         assert np.array_equal(back.V, op.V) and back.dim == op.dim
