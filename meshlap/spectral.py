@@ -434,10 +434,10 @@ def eigs(
         solve = functools.partial(eigs, method=method, tol=tol, maxiter=maxiter, extra=extra, seed=seed,
                                   count=count)
         lam, X = _parts.by_part(S_P(), m, k, solve, info)
-        return lam, _normalize_signs(_extend(op, P, X))
-    if failed:
+    elif failed:
         raise failed
-    _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
+    else:
+        _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
