@@ -1,0 +1,120 @@
+"""Degenerate inputs against libigl's cotangent Laplacian, in one process: nearly coincident
+vertices, and parts of far apart sizes.
+
+    python benchmarks/bench_degenerate.py            # RESULTS.md
+    python benchmarks/bench_degenerate.py --no-write
+
+Table 1: a 2,000-vertex sphere whose every 10th face is split at a new vertex placed ``d`` of the
+way from a corner to the opposite side's midpoint (200 needles and caps between the corner and
+its copy; at 10⁻⁹ the copies are welded). λ₁ of the default's pencil (linear, and quadratic, the
+default's spectra) beside libigl's cotangent pencil (eigsh, shift-invert) on the same triangles,
+``eigs``' ``info["uncertified"]`` (roundoff's yardstick over λ₁: a MeshWarning above 1e-3), its
+shift-invert runs and the CPU seconds of build + 6 pairs.
+
+Table 2: a unit sphere (800 vertices) beside one of radius ``s`` (200 vertices): the two zeros,
+then λ₂ ... of the large sphere; ``info["parts"]`` is set where the whole was solved part by
+part (:mod:`meshlap._parts`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import igl
+import numpy as np
+from scipy.sparse.linalg import eigsh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_file import write_section  # noqa: E402
+
+import meshlap  # noqa: E402
+from meshlap import shapes, spectral  # noqa: E402
+
+
+def near_copies(d: float) -> tuple[np.ndarray, np.ndarray]:
+    V, F = shapes.sphere(2000, seed=0)
+    extra, faces = [], [F.copy()]
+    for f in range(0, 2000, 10):
+        a, b, c = F[f]
+        extra.append(V[a] + d * ((V[b] + V[c]) / 2 - V[a]))
+        q = len(V) + len(extra) - 1
+        faces[0][f] = (a, b, q)
+        faces.append([[b, c, q], [c, a, q]])
+    return np.vstack([V, extra]), np.vstack(faces)
+
+
+def solve(op, elements: str) -> tuple[np.ndarray, dict, float]:
+    info: dict = {}
+    t = time.process_time()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lam, _ = spectral.eigs(op, 6, elements=elements, info=info)
+    return lam, info, time.process_time() - t
+
+
+def copies_rows() -> list[str]:
+    rows = []
+    for d in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
+        V, F = near_copies(d)
+        t = time.process_time()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            op = meshlap.laplacian(V, F)
+        build = time.process_time() - t
+        lin, _, _ = solve(op, "linear")
+        quad, info, seconds = solve(op, "quadratic")
+        M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).tocsc()
+        cot = eigsh(-igl.cotmatrix(V, F).tocsc(), 5, M, sigma=-1e-3, return_eigenvectors=False)
+        runs = info["tried"].count("shift-invert")
+        rows.append(f"| {d:.0e} | {lin[1]:.5f} | {np.sort(cot)[1]:.5f} | {quad[1]:.5f} | "
+                    f"{info['uncertified']:.1e} | {runs} | {build + seconds:.2f} |")
+        print(rows[-1], file=sys.stderr, flush=True)
+    return rows
+
+
+def parts_rows() -> list[str]:
+    V, F = shapes.sphere(800, seed=0)
+    v, f = shapes.sphere(200, seed=1)
+    rows = []
+    for s in (1e-2, 1e-3, 1e-4, 1e-5, 1e-6):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            op = meshlap.laplacian(np.vstack([V, s * v + [0, 0, 1.0]]), np.vstack([F, f + 800]))
+        lam, info, seconds = solve(op, "auto")
+        rows.append(f"| {s:.0e} | {lam[0]:.2g} | {lam[1]:.2g} | {lam[2]:.5f} | {lam[5]:.5f} | "
+                    f"{info.get('parts', '—')} | {info['complete']} | {seconds:.2f} |")
+        print(rows[-1], file=sys.stderr, flush=True)
+    return rows
+
+
+HEAD1 = ("Nearly coincident vertices: λ₁ (2.0 on the unit sphere) of the default's pencil, of libigl's "
+         "cotangent pencil on the same triangles, and of the quadratic elements (the default's spectra), "
+         "what roundoff leaves `eigs`' check (`info['uncertified']`: MeshWarning above 1e-3), its "
+         "shift-invert runs, CPU s of build + 6 pairs.")
+COLS1 = ("| d | default, linear | libigl cotangent | default, quadratic | uncertified | shift-invert runs "
+         "| CPU s |")
+HEAD2 = ("A unit sphere beside one of radius s: the two zeros, then the large sphere's λ₂ (2.0078 ×3) and "
+         "λ₅ (6.0234), `info['parts']` where the whole was solved part by part, `info['complete']`, CPU s.")
+COLS2 = "| s | λ₀ | λ₁ | λ₂ | λ₅ | parts | complete | CPU s |"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--no-write", action="store_true", help="print; leave RESULTS.md")
+    args = ap.parse_args()
+    spectral.eigs(meshlap.laplacian(*shapes.sphere(300, seed=0)), 4)  # compile first
+    start = time.time()
+    lines = [HEAD1, "", COLS1, "|" + "---|" * 7, *copies_rows(), "", HEAD2, "", COLS2, "|" + "---|" * 8,
+             *parts_rows()]
+    print("\n".join(lines))
+    if not args.no_write:
+        write_section("bench_degenerate.py", [f"Command: `python benchmarks/bench_degenerate.py` "
+                                              f"({time.time() - start:.0f} s).", "", *lines])
+
+
+if __name__ == "__main__":
+    main()
