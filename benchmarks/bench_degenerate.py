@@ -4,9 +4,9 @@ vertices, and parts of far apart sizes.
     python benchmarks/bench_degenerate.py            # RESULTS.md
     python benchmarks/bench_degenerate.py --no-write
 
-Table 1: a 2,000-vertex sphere whose every 10th face is split at a new vertex placed ``d`` of the
-way from a corner to the opposite side's midpoint (200 needles and caps between the corner and
-its copy; at 10⁻⁹ the copies are welded). λ₁ of the default's pencil (linear, and quadratic, the
+Table 1: a 2,000-vertex sphere whose every 10th of its first 2,000 faces is split at a new
+vertex ``d`` of the way from a corner to the opposite side's midpoint (``shapes.near_copies``:
+200 copies, with needles and caps between each and its corner; at 10⁻⁹ the copies are welded). λ₁ of the default's pencil (linear, and quadratic, the
 default's spectra) beside libigl's cotangent pencil (eigsh, shift-invert) on the same triangles,
 ``eigs``' ``info["uncertified"]`` (roundoff's yardstick over λ₁: a MeshWarning above 1e-3), its
 shift-invert runs and the CPU seconds of build + 6 pairs.
@@ -36,15 +36,7 @@ from meshlap import shapes, spectral  # noqa: E402
 
 
 def near_copies(d: float) -> tuple[np.ndarray, np.ndarray]:
-    V, F = shapes.sphere(2000, seed=0)
-    extra, faces = [], [F.copy()]
-    for f in range(0, 2000, 10):
-        a, b, c = F[f]
-        extra.append(V[a] + d * ((V[b] + V[c]) / 2 - V[a]))
-        q = len(V) + len(extra) - 1
-        faces[0][f] = (a, b, q)
-        faces.append([[b, c, q], [c, a, q]])
-    return np.vstack([V, extra]), np.vstack(faces)
+    return shapes.near_copies(*shapes.sphere(2000, seed=0), d, np.arange(0, 2000, 10))
 
 
 def solve(op, elements: str) -> tuple[np.ndarray, dict, float]:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,6 +34,7 @@ __all__ = [
     "fibonacci_sphere",
     "loop_limit",
     "mean_edge_estimate",
+    "near_copies",
     "plane",
     "plane_functions",
     "sphere",
@@ -321,6 +323,28 @@ def triangle_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
         cos = np.einsum("ij,ij->i", u, w) / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
         out[:, k] = np.arccos(np.clip(cos, -1.0, 1.0))
     return out
+
+
+def near_copies(V: np.ndarray, F: np.ndarray, d: float, split: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """The triangles ``split`` (indices; default every 10th) split at a new vertex ``d`` of the
+    way from their first corner towards the opposite side's midpoint: nearly coincident
+    vertices, joined by needles and caps (a test of degenerate input;
+    ``benchmarks/bench_degenerate.py``).
+
+    Examples
+    --------
+    >>> V, F = sphere(200, seed=0)
+    >>> W, G = near_copies(V, F, 1e-6)
+    >>> len(W) - len(V), len(G) - len(F), bool(np.linalg.norm(W[200:] - V[F[::10, 0]], axis=1).max() < 1e-6)
+    (40, 80, True)
+    """
+    V, F = np.asarray(V, dtype=np.float64), np.array(F, dtype=np.int64)
+    split = np.arange(0, len(F), 10) if split is None else np.asarray(split, dtype=np.int64)
+    a, b, c = F[split].T
+    q = len(V) + np.arange(len(split))
+    added = V[a] + d * ((V[b] + V[c]) / 2 - V[a])
+    F[split] = np.c_[a, b, q]
+    return np.vstack([V, added]), np.vstack([F, np.c_[b, c, q], np.c_[c, a, q]])
 
 
 Func = tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]

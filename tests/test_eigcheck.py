@@ -134,16 +134,7 @@ def test_a_floor_from_roundoff_does_not_widen_the_tie_window(monkeypatch):
 
 
 def _near_copies(eps):
-    # 200 vertices eps of an edge from a corner of a 2,000-vertex sphere's faces, each face split
-    V, F = shapes.sphere(2000, seed=0)
-    extra, faces = [], [F.copy()]
-    for f in range(0, 2000, 10):
-        a, b, c = F[f]
-        extra.append(V[a] + eps * ((V[b] + V[c]) / 2 - V[a]))
-        q = len(V) + len(extra) - 1
-        faces[0][f] = (a, b, q)
-        faces.append([[b, c, q], [c, a, q]])
-    return np.vstack([V, extra]), np.vstack(faces)
+    return shapes.near_copies(*shapes.sphere(2000, seed=0), eps, np.arange(0, 2000, 10))
 
 
 @pytest.mark.parametrize("eps", [1e-6, 1e-8])
