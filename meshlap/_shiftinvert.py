@@ -8,8 +8,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 
 from ._ldl import factor
+from .errors import EigenError
 
 __all__ = ["shift_invert", "shift_operator"]
+
+# ARPACK's restarts at most (its default, 10 n, is hours at 10⁵ unknowns): a solve that converges
+# takes a few; one that does not ends in EigenError rather than a hang
+_RESTARTS = 300
 
 
 def shift_operator(S: sp.csr_matrix, m: np.ndarray, sigma: float, supernodal: bool = False):
@@ -37,8 +42,13 @@ def shift_invert(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, t
     OPinv = sp.linalg.LinearOperator(A.shape, matvec=apply, dtype=np.float64)
     v0 = np.random.default_rng(seed).standard_normal(n)
     v0 -= X0 @ (MX0.T @ v0)
-    lam, X = sp.linalg.eigsh(A, k=min(want, n - 1 - len(lam0)), M=sp.diags(m).tocsc(), sigma=-sigma,
-                             OPinv=OPinv, tol=tol, v0=v0)
+    try:
+        lam, X = sp.linalg.eigsh(A, k=min(want, n - 1 - len(lam0)), M=sp.diags(m).tocsc(), sigma=-sigma,
+                                 OPinv=OPinv, tol=tol, v0=v0, maxiter=_RESTARTS)
+    except sp.linalg.ArpackNoConvergence as exc:
+        raise EigenError(f"shift-invert: ARPACK converged {len(exc.eigenvalues)} of {want} pairs in "
+                         f"{_RESTARTS} restarts", eigenvalues=exc.eigenvalues, vectors=exc.eigenvectors,
+                         tried=("shift-invert",)) from exc
     lam, X = np.concatenate([lam0, lam]), np.hstack([X0, X])
     order = np.argsort(lam)
     return lam[order], X[:, order], 0

@@ -100,6 +100,30 @@ def test_parts_far_apart_in_scale_are_solved_each_at_its_own(size):
     assert small.sum() == 1 and np.ptp(phi[800:, small]) < 1e-9  # its constant, ~0 on the other
 
 
+def test_shift_invert_that_does_not_converge_ends_in_eigen_error(monkeypatch):
+    """ARPACK is given at most _RESTARTS restarts (its default, 10 n, is hours at 10⁵ unknowns;
+    solves that converge take up to 20 here, a deflated run for 4 pairs of a 2,000-vertex
+    sphere the most), and one that does not converge ends in EigenError with what converged,
+    not in scipy's ArpackNoConvergence from deep inside."""
+    real = sla_sparse.eigsh
+    seen = []
+
+    def stalled(*args, **kwargs):
+        seen.append(kwargs.get("maxiter"))
+        n = kwargs["M"].shape[0]
+        raise sla_sparse.ArpackNoConvergence("no convergence", np.zeros(1), np.zeros((n, 1)))
+
+    op = meshlap.laplacian(*shapes.sphere(1500, seed=0))
+    monkeypatch.setattr(sla_sparse, "eigsh", stalled)
+    with pytest.raises(meshlap.EigenError, match="ARPACK converged 1 of"):
+        spectral.eigs(op, 6, elements="linear", method="shift-invert")
+    assert seen == [_shiftinvert._RESTARTS]
+    monkeypatch.setattr(sla_sparse, "eigsh", real)
+    monkeypatch.setattr(_shiftinvert, "_RESTARTS", 20)  # what the solves here need at most
+    lam, _ = spectral.eigs(meshlap.laplacian(*shapes.sphere(2000, seed=0)), 50)
+    assert abs(lam[1] - 2) < 0.01 and abs(lam[49] - 56) < 0.5
+
+
 def test_a_floor_from_roundoff_does_not_widen_the_tie_window(monkeypatch):
     """Ten slivers on a 2,000-vertex sphere (a vertex 1e-5 of the way from a corner to the
     opposite side): roundoff lifts the check's floor to 4.6 million times the scale, far above
