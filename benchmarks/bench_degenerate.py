@@ -1,7 +1,7 @@
 """Degenerate inputs against libigl's cotangent Laplacian, in one process: nearly coincident
 vertices, and parts of far apart sizes.
 
-    python benchmarks/bench_degenerate.py            # RESULTS.md
+    MESHLAP_CORPUS=/path/to/corpus python benchmarks/bench_degenerate.py   # RESULTS.md
     python benchmarks/bench_degenerate.py --no-write
 
 Table 1: a 2,000-vertex sphere whose every 10th of its first 2,000 faces is split at a new
@@ -15,6 +15,14 @@ shift-invert runs and the CPU seconds of build + 6 pairs.
 Table 2: a unit sphere (800 vertices) beside one of radius ``s`` (200 vertices): the two zeros,
 then λ₂ ... of the large sphere; ``info["parts"]`` is set where the whole was solved part by
 part (:mod:`meshlap._parts`).
+
+Table 3: what solving part by part costs where the whole passes: the corpus's multi-part
+meshes ($MESHLAP_CORPUS; skipped without it), build + 10 pairs whole (the default) and forced
+part by part, beside libigl's cotangent + eigsh.
+
+Table 4: geodesic distance on two spheres (radius 1 and 0.5, 1,000 vertices each, 0.05 apart)
+with a source on each: mean error against the great-circle distance on each sphere, and the
+vertices at ``inf`` from one source, for meshlap's heat method, libigl's and potpourri3d's.
 """
 
 from __future__ import annotations
@@ -27,13 +35,21 @@ from pathlib import Path
 
 import igl
 import numpy as np
+import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import real_corpus as rc  # noqa: E402
 from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
-from meshlap import shapes, spectral  # noqa: E402
+from meshlap import _parts, quadratic, shapes, spectral  # noqa: E402
+
+
+def cpu(fn, *args):
+    t = time.process_time()
+    out = fn(*args)
+    return out, time.process_time() - t
 
 
 def near_copies(d: float) -> tuple[np.ndarray, np.ndarray]:
@@ -84,6 +100,61 @@ def parts_rows() -> list[str]:
     return rows
 
 
+def by_part(op) -> tuple[np.ndarray, np.ndarray]:
+    # the default's quadratic pencil, forced part by part
+    fine = quadratic.fine_pencil(op)
+    P = np.flatnonzero(fine.mass > 0)
+    S = sp.csr_matrix(fine.S)[P][:, P]
+    return _parts.by_part(S, _parts.part_labels(S)[1], fine.mass[P], 10, spectral.eigs)
+
+
+def cot_eigs(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).tocsc()
+    return eigsh(-igl.cotmatrix(V, F).tocsc(), 10, M, sigma=-1e-8, return_eigenvectors=False)
+
+
+def whole_and_by_part() -> list[str]:
+    folder = rc.corpus_dir(None)
+    rows = []
+    for name in ("truck", "box-parts", "airplane-parts", "teapot"):
+        paths = sorted(folder.glob(f"{name}.*")) if folder.exists() else []
+        if not paths:
+            continue
+        mesh = rc.load(paths[0])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            op = meshlap.laplacian(mesh.V, mesh.faces)
+            _, t_whole = cpu(spectral.eigs, op, 10)
+            _, t_part = cpu(by_part, op)
+        _, t_cot = cpu(cot_eigs, mesh.Vw, mesh.Cw)
+        parts = _parts.part_labels(sp.csr_matrix(op.S))[0]
+        rows.append(f"| {name} | {len(mesh.Vw):,} | {parts} | {t_whole:.2f} | {t_part:.2f} | {t_cot:.2f} |")
+        print(rows[-1], file=sys.stderr, flush=True)
+    return rows
+
+
+def geodesic_rows() -> list[str]:
+    import potpourri3d as pp3d
+
+    V, F = shapes.sphere(1000, seed=0)
+    v, f = shapes.sphere(1000, seed=1)
+    W, G = np.vstack([V, 0.5 * v + [2.05, 0, 0]]), np.vstack([F, f + 1000])
+    exact = np.r_[np.arccos(np.clip(V @ V[0], -1, 1)), 0.5 * np.arccos(np.clip(v @ v[0], -1, 1))]
+    hd = meshlap.HeatDistance(meshlap.laplacian(W, G))
+    data = igl.HeatGeodesicsData()
+    igl.heat_geodesics_precompute(W, G, data)
+    solver = pp3d.MeshHeatMethodDistanceSolver(W, G)
+    out = {"meshlap": (hd.compute([0, 1000]), hd.compute(0)),
+           "libigl heat_geodesics": (igl.heat_geodesics_solve(data, np.array([0, 1000])),
+                                     igl.heat_geodesics_solve(data, np.array([0]))),
+           "potpourri3d": (solver.compute_distance_multisource([0, 1000]), solver.compute_distance(0))}
+    rows = []
+    for name, (both, one) in out.items():
+        err = [np.abs(both[s] - exact[s]).mean() for s in (slice(0, 1000), slice(1000, None))]
+        rows.append(f"| {name} | {err[0]:.4f} | {err[1]:.4f} | {int(np.isinf(one[1000:]).sum())} of 1,000 |")
+    return rows
+
+
 HEAD1 = ("Nearly coincident vertices: λ₁ (2.0 on the unit sphere) of the default's pencil, of libigl's "
          "cotangent pencil on the same triangles, and of the quadratic elements (the default's spectra), "
          "what roundoff leaves `eigs`' check (`info['uncertified']`: MeshWarning above 1e-3), its "
@@ -93,6 +164,14 @@ COLS1 = ("| d | default, linear | libigl cotangent | default, quadratic | uncert
 HEAD2 = ("A unit sphere beside one of radius s: the two zeros, then the large sphere's λ₂ (2.0078 ×3) and "
          "λ₅ (6.0234), `info['parts']` where the whole was solved part by part, `info['complete']`, CPU s.")
 COLS2 = "| s | λ₀ | λ₁ | λ₂ | λ₅ | parts | complete | CPU s |"
+HEAD3 = ("Where the whole passes, part by part costs more: build + 10 pairs, CPU s, the default (whole) "
+         "and forced part by part (`meshlap._parts.by_part` on the same quadratic pencil), beside "
+         "libigl's cotangent + eigsh.")
+COLS3 = "| mesh | vertices | parts | whole s | by part s | COT + eigsh s |"
+HEAD4 = ("Geodesic distance on two spheres (radius 1 and 0.5, 0.05 apart), a source on each: mean error "
+         "against the great-circle distance on each sphere, and the vertices of the second sphere at `inf` "
+         "from a source on the first.")
+COLS4 = "| method | error, sphere 1 | error, sphere 2 | unreached at inf |"
 
 
 def main() -> None:
@@ -102,10 +181,12 @@ def main() -> None:
     spectral.eigs(meshlap.laplacian(*shapes.sphere(300, seed=0)), 4)  # compile first
     start = time.time()
     lines = [HEAD1, "", COLS1, "|" + "---|" * 7, *copies_rows(), "", HEAD2, "", COLS2, "|" + "---|" * 8,
-             *parts_rows()]
+             *parts_rows(), "", HEAD3, "", COLS3, "|" + "---|" * 6, *whole_and_by_part(), "", HEAD4, "",
+             COLS4, "|" + "---|" * 4, *geodesic_rows()]
     print("\n".join(lines))
     if not args.no_write:
-        write_section("bench_degenerate.py", [f"Command: `python benchmarks/bench_degenerate.py` "
+        write_section("bench_degenerate.py", ["Command: `MESHLAP_CORPUS=/path/to/corpus python "
+                                              f"benchmarks/bench_degenerate.py` "
                                               f"({time.time() - start:.0f} s).", "", *lines])
 
 

@@ -11,8 +11,8 @@ each part is solved and checked at its own scale. The k lowest of the whole are 
 part's k lowest, so each part is asked for k pairs (all of its own where it has no more than
 k + 1 rows, densely) and the merged k lowest are returned. It is the fallback, where the whole's
 check fails or roundoff leaves it uncertified (:func:`meshlap._eigcheck.uncertified`), not the
-first try: 50 solves cost more than one (the corpus's 50-part truck: 0.11 s whole, 0.82 s by
-part).
+first try: 50 solves cost more than one (the corpus's 50-part truck: 0.14-0.16 s whole, 0.75-0.86 s
+by part; ``benchmarks/bench_degenerate.py``).
 """
 
 from __future__ import annotations
@@ -46,10 +46,11 @@ def part_labels(S: sp.spmatrix) -> tuple[int, np.ndarray]:
     return connected_components(sp.csr_matrix(S), directed=False)
 
 
-def by_part(S: sp.csr_matrix, m: np.ndarray, k: int, solve: Callable[..., tuple[np.ndarray, np.ndarray]],
-            info: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The k smallest eigenpairs of ``-S φ = λ diag(m) φ`` (S of several parts) from those of
-    each part.
+def by_part(S: sp.csr_matrix, labels: np.ndarray, m: np.ndarray, k: int,
+            solve: Callable[..., tuple[np.ndarray, np.ndarray]], info: dict | None = None
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """The k smallest eigenpairs of ``-S φ = λ diag(m) φ`` from those of each part (``labels``,
+    :func:`part_labels`').
 
     ``solve(pencil, k, info=info_p)`` returns the k smallest pairs of a part's pencil (a
     :class:`~meshlap.lumped.SparseLaplacian`; verified, M-orthonormal) and fills ``info_p``
@@ -64,11 +65,10 @@ def by_part(S: sp.csr_matrix, m: np.ndarray, k: int, solve: Callable[..., tuple[
     --------
     >>> A = sp.block_diag([np.array([[1.0, -1.0], [-1.0, 1.0]]), 1e6 * np.array([[1.0, -1.0], [-1.0, 1.0]])])
     >>> S, m = -A.tocsr(), np.ones(4)
-    >>> lam, X = by_part(S, m, 3, lambda *a, **kw: None)
+    >>> lam, X = by_part(S, part_labels(S)[1], m, 3, lambda *a, **kw: None)
     >>> lam.round(6).tolist()
     [0.0, 0.0, 2.0]
     """
-    _, labels = part_labels(S)
     cols: list[tuple[float, int, int]] = []  # (λ, part, column)
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, dict]] = []
     for p in range(int(labels.max()) + 1):

@@ -139,12 +139,13 @@ def _sparse_pencils(op: Any, grad: Gradient) -> tuple[Any, Any]:
     return _wrapped(K_heat, mass), _wrapped(K, mass)
 
 
-def _parts(op: Any, lonely: np.ndarray, fill: sp.csr_matrix) -> np.ndarray:
-    """Connected parts of the pencil's graph (its off-diagonal entries); a point in no element
-    belongs to the part of the neighbour its value is filled from with the largest weight."""
-    from scipy.sparse.csgraph import connected_components
-
-    _, label = connected_components(sp.csr_matrix(op.S), directed=False)
+def _parts(label: np.ndarray, lonely: np.ndarray, fill: sp.csr_matrix) -> np.ndarray:
+    """Each point's connected part of the pencil (``label``, the Poisson solver's; a point
+    without mass a part of its own); a point in no element belongs to the part of the neighbour
+    its value is filled from with the largest weight."""
+    label = label.copy()
+    alone = label < 0
+    label[alone] = label.max() + 1 + np.arange(int(alone.sum()))
     if len(lonely):
         label[lonely] = label[np.asarray(abs(fill).argmax(axis=1)).ravel()]
     return label
@@ -267,7 +268,7 @@ class HeatDistance:
             first[rep[covered[::-1]]] = covered[::-1]  # each point's first copy in an element
             sub = first[rep[self._lonely]]
             self._stand_in[self._lonely[sub >= 0]] = sub[sub >= 0]
-        self._part = _parts(poisson_op, self._lonely, self._fill)
+        self._part = _parts(self._poisson.part_label, self._lonely, self._fill)
         self._tree = cKDTree(self._points)
         cells = self.grad.cells  # the elements' centres, and for each vertex the elements at it
         self._centres = self._points if cells is None else self._points[cells].mean(axis=1)

@@ -175,6 +175,7 @@ class PoissonSolver:
         ncomp, label = connected_components(S[P][:, P], directed=False)
         lab = np.full(n, -1)
         lab[P] = label
+        self.part_label = lab  # each vertex's connected part through S (-1: no mass)
         anchored = np.zeros(ncomp, dtype=bool)
         anchored[lab[self.fixed][lab[self.fixed] >= 0]] = True
         # each floating part's free vertices, and the vertices without mass, found once for every solve

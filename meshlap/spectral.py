@@ -401,8 +401,9 @@ def eigs(
         ladder.insert(1 if method == "lobpcg" else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
         ladder.append(exact)
-    parted = sparse and _parts.part_labels(S_P())[0] > 1  # then each part at its own scale comes next
-    if method == "shift-invert" and n_p > _DENSE_FALLBACK and not parted:
+    # the pencil's connected parts, found where asked: with several, each at its own scale comes next
+    parts = functools.cache(lambda: _parts.part_labels(S_P()) if sparse else (1, None))
+    if method == "shift-invert" and n_p > _DENSE_FALLBACK and parts()[0] == 1:
         ladder.append(wider)
     counted = (sparse if count is None else count) and not matrix_free
     counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume)) if counted else None
@@ -429,11 +430,11 @@ def eigs(
             failed = None
         except EigenError as error:
             failed = error
-    if parted and (failed or _eigcheck.uncertified(lam, tol, floor, scale) > _eigcheck.UNCERTIFIED):
+    if (failed or _eigcheck.uncertified(lam, tol, floor, scale) > _eigcheck.UNCERTIFIED) and parts()[0] > 1:
         # parts of far apart scales: each solved and checked at its own (meshlap._parts)
         solve = functools.partial(eigs, method=method, tol=tol, maxiter=maxiter, extra=extra, seed=seed,
                                   count=count)
-        lam, X = _parts.by_part(S_P(), m, k, solve, info)
+        lam, X = _parts.by_part(S_P(), parts()[1], m, k, solve, info)
     elif failed:
         raise failed
     else:
