@@ -17,6 +17,7 @@ by part; ``benchmarks/bench_degenerate.py``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -24,6 +25,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from .errors import MeshWarning, user_stacklevel
 from .lumped import SparseLaplacian
 
 __all__ = ["by_part", "part_labels"]
@@ -69,6 +71,27 @@ def by_part(S: sp.csr_matrix, labels: np.ndarray, m: np.ndarray, k: int,
     >>> lam.round(6).tolist()
     [0.0, 0.0, 2.0]
     """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lam, X = _merged(S, labels, m, k, solve, info)
+    _rewarn(caught, int(labels.max()) + 1)
+    return lam, X
+
+
+def _rewarn(caught: list[warnings.WarningMessage], n_parts: int) -> None:
+    # one MeshWarning for the parts that warned (50 parts could give 50), the others as they came
+    mesh = [w for w in caught if issubclass(w.category, MeshWarning)]
+    for w in caught:
+        if w not in mesh:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if mesh:
+        warnings.warn(f"eigs, solved part by part: {len(mesh)} warning(s) from the {n_parts} parts; "
+                      f"the first: {mesh[0].message}", MeshWarning, stacklevel=user_stacklevel())
+
+
+def _merged(S: sp.csr_matrix, labels: np.ndarray, m: np.ndarray, k: int,
+            solve: Callable[..., tuple[np.ndarray, np.ndarray]], info: dict | None
+            ) -> tuple[np.ndarray, np.ndarray]:
     cols: list[tuple[float, int, int]] = []  # (λ, part, column)
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, dict]] = []
     for p in range(int(labels.max()) + 1):

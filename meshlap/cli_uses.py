@@ -72,11 +72,10 @@ def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Nam
         title = "geodesic distance"
         if not reached.all():  # the parts without a source are left out of the picture
             title += f" ({int((~reached).sum())} unreached vertices not drawn)"
-            if F is None:
-                V, far = V[reached], far[reached]
-            else:
+            if F is not None:  # renumbered onto the reached vertices, so the axes span them alone
                 tris = check_faces(F, len(V)).triangles()
-                F, far = tris[reached[tris].all(axis=1)], np.where(reached, far, 0.0)
+                F = np.cumsum(reached)[tris[reached[tris].all(axis=1)]] - 1
+            V, far = V[reached], far[reached]
         ax = plot_mesh(V, F, far, title=title, up=args.up)
         ax.figure.savefig(args.png, dpi=110, bbox_inches="tight")
         plt.close(ax.figure)

@@ -232,6 +232,25 @@ def test_missing_stack_names_the_install(monkeypatch):
         distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), correction="none", h=0.1)
 
 
+def test_mpi4py_without_an_mpi_library_names_the_install(monkeypatch):
+    """mpi4py 4 from PyPI imports on a machine without MPI and raises RuntimeError when MPI is
+    first touched: that is a missing install too, not a crash inside mpi4py."""
+    import types
+
+    from meshlap import distributed
+
+    fake = types.ModuleType("mpi4py")
+
+    def no_library(name):
+        raise RuntimeError("cannot load MPI library\nlibmpi.so: cannot open shared object file")
+
+    fake.__getattr__ = no_library
+    monkeypatch.setitem(sys.modules, "mpi4py", fake)
+    monkeypatch.delitem(sys.modules, "mpi4py.MPI", raising=False)
+    with pytest.raises(ImportError, match="no MPI library.*cannot load MPI library.*install-mpi"):
+        distributed.laplacian(np.zeros((3, 3)), mass=np.ones(3), correction="none", h=0.1)
+
+
 def test_kernel_row_subsets_match_full_build():
     """kernel.fill_csr(rows=...) and kernel.apply(rows=...), which each rank uses for its own
     rows, give exactly the full build's rows."""

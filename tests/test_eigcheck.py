@@ -100,6 +100,32 @@ def test_parts_far_apart_in_scale_are_solved_each_at_its_own(size):
     assert small.sum() == 1 and np.ptp(phi[800:, small]) < 1e-9  # its constant, ~0 on the other
 
 
+def test_parts_that_warn_give_one_warning():
+    """Solved part by part, the parts' MeshWarnings (one per part: 50 on the corpus's truck) come
+    out as one that counts them and quotes the first; other warnings pass through as they came."""
+    from meshlap import _parts
+
+    path = -np.array([[1.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+    S = sp.block_diag([path] * 5).tocsr()
+    calls = []
+
+    def solve(pencil, k, info):
+        calls.append(k)
+        warnings.warn(f"part {len(calls)} uncertified", meshlap.MeshWarning, stacklevel=2)
+        warnings.warn("something else", UserWarning, stacklevel=2)
+        lam, X = sla.eigh(-pencil.S.toarray(), np.diag(pencil.mass))
+        info.update(method="shift-invert", residuals=np.zeros(k), bounds=np.zeros(k), complete=True)
+        return lam[:k], X[:, :k]
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        lam, _ = _parts.by_part(S, _parts.part_labels(S)[1], np.ones(15), 1, solve, {})
+    mesh = [str(w.message) for w in caught if w.category is meshlap.MeshWarning]
+    assert calls == [1] * 5 and lam.tolist() == [0.0]
+    assert mesh == ["eigs, solved part by part: 5 warning(s) from the 5 parts; the first: part 1 uncertified"]
+    assert sum(w.category is UserWarning for w in caught) == 5
+
+
 def test_shift_invert_that_does_not_converge_ends_in_eigen_error(monkeypatch):
     """ARPACK is given at most _RESTARTS restarts (its default, 10 n, is hours at 10⁵ unknowns;
     solves that converge take up to 20 here, a deflated run for 4 pairs of a 2,000-vertex

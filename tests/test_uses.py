@@ -326,7 +326,7 @@ def test_projection_round_trip_and_low_pass(sphere_mesh_op):
     assert abs(coef[1:4] @ coef[1:4]) > 0.9 * (coef @ coef)
 
 
-def test_cli_distance(tmp_path, capsys):
+def test_cli_distance(tmp_path, capsys, monkeypatch):
     from meshlap.cli import main
 
     V, F = meshlap.shapes.sphere(800, seed=0)
@@ -356,6 +356,19 @@ def test_cli_distance(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "800 vertices lie on parts without a source: distance inf" in out and "nan" not in out
     assert (tmp_path / "d.png").stat().st_size > 1000
+    from meshlap import plot
+
+    drawn = {}
+    plot_mesh = plot.plot_mesh
+
+    def spy(V, F, values, **kw):
+        drawn.update(V=V, F=F, values=values)
+        return plot_mesh(V, F, values, **kw)
+
+    monkeypatch.setattr(plot, "plot_mesh", spy)
+    assert main(["distance", str(two), "--source", "0", "--png", str(tmp_path / "d.png")]) == 0
+    assert np.allclose(drawn["V"], V) and np.array_equal(drawn["F"], F)  # the reached sphere alone
+    assert np.isfinite(drawn["values"]).all()
 
 
 def test_unreferenced_vertex_gets_its_neighbours_fitted_distance():

@@ -20,6 +20,8 @@ _INSTALL = ("meshlap.distributed needs mpi4py, petsc4py and slepc4py: `pip insta
             "libpetsc-real-dev libslepc-real-dev, then PETSC_DIR=$(pkg-config --variable=prefix PETSc) "
             "pip install --no-build-isolation petsc4py==3.18.5 and likewise slepc4py==3.18.2 with "
             "SLEPC_DIR; or run .ci/install-mpi). See the README section 'Beyond one machine'.")
+# mpi4py 4 imports without an MPI library and raises RuntimeError on first use of MPI
+_NO_LIBMPI = "mpi4py is installed but finds no MPI library to load (Debian: apt-get install libopenmpi-dev)"
 # the halo and partition margins: wider than r by far more than the rounding of d² <= r², so
 # that no pair the kernel keeps is ever missing from a rank
 _MARGIN = 1e-6
@@ -36,6 +38,8 @@ def _mpi():
         from petsc4py import PETSc
     except ImportError as exc:
         raise ImportError(_INSTALL) from exc
+    except RuntimeError as exc:
+        raise ImportError(f"{_NO_LIBMPI}: {str(exc).splitlines()[0]}. {_INSTALL}") from exc
     return MPI, PETSc
 
 
