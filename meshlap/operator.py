@@ -343,7 +343,7 @@ class MeshLaplacian(LumpedLaplacian):
         >>> op = meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0))
         >>> op.assemble() is op
         True
-        >>> "pencil=on first use" in repr(meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0)))
+        >>> "pencil=fem, on first use" in repr(meshlap.laplacian(*meshlap.shapes.sphere(800, seed=0)))
         True
         >>> op.correction          # the default's pencil: linear FEM on the faces
         'fem'
@@ -530,8 +530,8 @@ class MeshLaplacian(LumpedLaplacian):
             ("tol", "0 (exact)" if self.exact else f"{self.tol:.3g}"),
             ("radius", "∞" if self.exact else f"{self.radius:.6g}"),
         ]
-        if pencil is None:
-            rows.append(("pencil", "on first use"))
+        if pencil is None:  # the builder the options name (laplacian's operator=), not built yet
+            rows.append(("pencil", f"{_named(self.options)}, on first use"))
         elif pencil.quadrature == "fem":
             rows.append(("pencil", f"linear FEM on the cells (intrinsic Delaunay, {self.options.mass} mass)"))
         elif pencil.quadrature == "galerkin":
