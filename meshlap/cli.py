@@ -57,8 +57,8 @@ def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -
 
     dtype = np.float32 if getattr(args, "float32", False) else np.float64
     # the library's default operator (the one notebooks and scripts get), unless --correction
-    options = {"h": args.h, "tol": args.tol, "dtype": dtype, "progress": args.progress or None,
-               "correction": args.correction}
+    options = {"h": args.h, "tol": args.tol, "dtype": dtype, "correction": args.correction,
+               "progress": getattr(args, "progress", False) or None}
     if getattr(args, "denoise", None) is not None:  # distance --denoise / --no-denoise
         options["denoise"] = args.denoise
     if _is_cloud(F):
@@ -121,10 +121,10 @@ def _use_agg() -> None:
 
 # -- subcommands ------------------------------------------------------------------------
 def cmd_info(args: argparse.Namespace) -> int:
-    """Describe a mesh (or a saved operator) and what the operator would cost."""
+    """Describe a mesh (or a saved operator), what the default builds from it, and its cost."""
     if Path(args.input).suffix.lower() == ".npz":
         op = load_operator(args.input)
-        rows = [("file", str(args.input)), ("operator", op.name), ("vertices", f"{op.n_vertices:,}")]
+        rows = [("file", str(args.input)), ("operator", _chosen(op)), ("vertices", f"{op.n_vertices:,}")]
         if op.h is not None:
             rows += [("h", f"{op.h:.6g}"), ("tol", f"{op.tol:.3g}"), ("radius", f"{op.radius:.6g}")]
         rows += [
@@ -134,38 +134,42 @@ def cmd_info(args: argparse.Namespace) -> int:
         ]
         print(_table(rows))
         return 0
-    from . import geometry
-    from .geometry import point_cloud_geometry
     from .geometry.topology import diagnose
-    from .operator import DEFAULT_TOL, MeshLaplacian
+    from .operator import MeshLaplacian
 
     V, cells, k = _read(args)
-    tol = DEFAULT_TOL if args.tol is None else args.tol
-    geo = point_cloud_geometry(V, args.dim) if _is_cloud(cells) else geometry.from_mesh(V, cells, k)
-    # matrix-free: sets up the kernel (h, radius, cell grid) without assembling L
-    probe = MeshLaplacian(geo, h=args.h, tol=tol, matrix_free=True, correction="none")
-    nnz = probe.estimate_nnz()
+    op = _build(args, V, cells, k)  # the decision only: the pencil and the rows come on first use
+    geo, decision = op.geometry, op.decision
     bbox = V.max(axis=0) - V.min(axis=0)
     kind, measure = _KINDS[geo.dim]
     rows = [("file", str(args.input)), ("points" if _is_cloud(cells) else "vertices", f"{len(V):,}")]
-    if _is_cloud(cells):
-        rows.append(("kind", f"point cloud (k={geo.dim}, --dim)"))
-    elif k == 2:
-        rows.append(("faces", _face_summary(cells, len(V))))
-    else:
-        rows.append(("cells", f"{len(cells):,} {'tetrahedra' if k == 3 else 'edges'} ({kind})"))
+    rows.append(("kind", f"point cloud (k={geo.dim}, --dim)") if _is_cloud(cells) else
+                ("faces", _face_summary(cells, len(V))) if k == 2 else
+                ("cells", f"{len(cells):,} {'tetrahedra' if k == 3 else 'edges'} ({kind})"))
     rows += [
-        (measure, f"{probe.mass.sum():.6g}"),
+        (measure, f"{geo.mass.sum():.6g}"),
         ("bounding box", " x ".join(f"{b:.4g}" for b in bbox)),
-        ("h", f"{probe.h:.6g}" + (" (auto: (2·spacing)²)" if probe.h_auto else "")),
-        ("tol, radius", f"{probe.tol:.3g}, {probe.radius:.6g}"),
-        ("nnz of L", f"≈ {nnz:,} ({nnz / len(V):.0f} per row), "
-                     f"≈ {nnz * 12 / 2**20:.1f} MiB in float64"),  # 8-byte value + 4-byte index
+        ("operator", _chosen(op)),
+        ("why", decision.reason),
+        ("eigs solves", f"{decision.elements} elements (spectral.eigs)"),
+        ("h", dict(op._summary())["h"]),  # the kernel's width, as the operator's repr gives it
+        ("tol, radius", f"{op.tol:.3g}, {op.radius:.6g}"),
     ]
+    if decision.operator == "fem":  # linear FEM's pencil: cheap, so counted exactly
+        nnz, what = op.assemble().nnz, "nnz of S"
+    else:  # the kernel's: estimated from a sample of rows, without assembling it
+        probe = MeshLaplacian(geo, h=op.h, tol=op.tol, matrix_free=True, correction="none")
+        nnz, what = probe.estimate_nnz(), "nnz of S ≈"
+    rows.append((what, f"{nnz:,} ({nnz / len(V):.1f} per row), {nnz * 12 / 2**20:.1f} MiB in float64"))
     print(_table(rows))
     if k == 2 and not _is_cloud(cells):
         print(diagnose(V, cells))
     return 0
+
+
+def _chosen(op: Any) -> str:  # what the policy built, by the names laplacian's operator= takes
+    d = getattr(op, "decision", None)
+    return op.name if d is None else f"{d.operator} pencil, {d.rows} rows (op.decision)"
 
 
 def cmd_build(args: argparse.Namespace) -> int:
@@ -434,13 +438,13 @@ def _positive_float(text: str) -> float:
 
 def _kernel_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--h", type=_positive_float, default=None,
-                   help="kernel width h (exp(-d²/4h)); default (2·mean edge length)²")
+                   help="kernel width h (exp(-d²/4h)): the corrected kernel at that width, not the default")
     p.add_argument("--tol", type=float, default=None,
                    help="kernel tolerance: weights below it are dropped (default 1e-6 corrected, "
                         "1e-8 on curves and with --correction none; 0 = exact)")
     p.add_argument("--correction", choices=("richardson", "none"), default=None,
-                   help="default as meshlap.laplacian: richardson (the O(h) bias removed) on surface "
-                        "meshes, none (the paper's operator) on point clouds, curves and volumes")
+                   help="the kernel, not meshlap.laplacian's default (linear FEM on a mesh's cells): "
+                        "richardson (the O(h) bias removed) or none (the paper's operator)")
     p.add_argument("--dim", type=int, choices=(1, 2, 3), default=2,
                    help="intrinsic dimension of a point cloud: 1 curve, 2 surface (default), 3 volume")
 
@@ -468,8 +472,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser("info", help="describe a mesh, point cloud, volume or saved operator",
-                       description="Print a mesh's size, area, the default h, the operator's expected "
-                                   "size and a diagnosis (boundaries, unreferenced vertices, ...).")
+                       description="Print a mesh's size and area, what meshlap.laplacian builds from it and "
+                                   "why (op.decision), its pencil's size and a diagnosis (boundaries, ...).")
     p.add_argument("input", help="mesh, point cloud or volume file, or an operator .npz")
     _kernel_options(p)
     p.set_defaults(func=cmd_info)

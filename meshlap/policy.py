@@ -82,6 +82,8 @@ Operator = Literal["auto", "fem", "kernel", "galerkin", "paper"]
 _REASONS = {
     "cells": "the input has cells: linear FEM on them (intrinsic Delaunay, Voronoi mass), point-wise rows "
              "fitted by the kernel",
+    "tetrahedra": "the input has tetrahedra: linear FEM on them (lumped mass: the consistent mass's row "
+                  "sums), point-wise rows fitted by the kernel",
     "segments": "a curve's segments: the corrected heat kernel integrated over them (consistent mass); a "
                 "segment has no shape to resolve, unlike a thin triangle",
     "noisy surface": "the input has cells and normal noise that adds area and dominates what smoothing "
@@ -213,8 +215,9 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         elif has_cells and geo.dim == 1:
             operator, reason = "galerkin", _REASONS["segments"]
         elif has_cells or stars and not projected:
-            operator, reason = "fem", _REASONS["noisy surface" if read and denoise else
-                                               "cells" if has_cells else "stars"]
+            cells = "tetrahedra" if geo.dim == 3 else "cells"
+            operator, reason = "fem", _REASONS["noisy surface" if read and denoise else cells if has_cells
+                                               else "stars"]
         else:
             operator, reason = "kernel", _REASONS["noisy" if stars else "cloud"]
     else:

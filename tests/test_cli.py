@@ -1,5 +1,6 @@
 """The ``meshlap`` command, run in-process through ``meshlap.cli.main``."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -76,8 +77,19 @@ def test_info_mesh(capsys):
     assert float(fields["h"].split()[0]) == pytest.approx(meshlap.default_h(V, F), rel=1e-5)
     assert float(fields["surface"].split()[-1]) == pytest.approx(meshlap.vertex_mass(V, F).sum(), rel=1e-5)
     assert "no problems found" in out
+    # what meshlap.laplacian builds, and why; its pencil counted exactly (linear FEM is cheap)
+    fields = dict(re.split(r"\s{2,}", line, maxsplit=1) for line in table)
+    op = meshlap.laplacian(V, F)
+    assert fields["operator"] == "fem pencil, fitted rows (op.decision)"
+    assert fields["why"] == op.decision.reason
+    assert fields["eigs solves"] == "quadratic elements (spectral.eigs)"
+    assert fields["nnz of S"].startswith(f"{op.assemble().nnz:,} (7.0 per row)")
     code, out, _ = run(capsys, "info", DATA / "spot-quads.obj", "--h", "0.002")
     assert code == 0 and "2,928 quads" in out and "0.002" in out
+    assert "kernel pencil, fitted rows" in out and "a kernel width h was given" in out and "nnz of S ≈" in out
+    code, out, _ = run(capsys, "info", SPOT, "--correction", "none")  # the paper's operator, estimated
+    assert code == 0 and "paper pencil, pencil rows" in out and "nnz of S ≈" in out
+
 
 
 def test_info_mixed_polygons(capsys, tmp_path):

@@ -1,5 +1,7 @@
 """The ``meshlap`` command on point clouds and tetrahedral meshes (issue 21)."""
 
+import re
+
 import numpy as np
 import pytest
 from test_cli import fails, run
@@ -76,6 +78,10 @@ def test_info_build_and_curvature_of_clouds_and_volumes(capsys, cloud, tets, tmp
     code, out, _ = run(capsys, "info", tets)
     volume = float(next(line for line in out.splitlines() if line.startswith("volume")).split()[-1])
     assert code == 0 and "1,296 tetrahedra" in out and volume == pytest.approx(1.0)
+    fields = dict(re.split(r"\s{2,}", line, maxsplit=1) for line in out.splitlines() if line.strip())
+    V, T = meshlap.samples.cube_tetrahedra(6)
+    assert fields["why"].startswith("the input has tetrahedra: linear FEM on them")
+    assert fields["nnz of S"].startswith(f"{meshlap.laplacian(V, T, k=3).assemble().nnz:,} ")
     code, _, _ = run(capsys, "build", tets, "-o", tmp_path / "cube.npz")
     op = meshlap.io.load_operator(tmp_path / "cube.npz")
     assert code == 0 and op.dim == 3 and op.geometry.source == "tetrahedra"
