@@ -1,10 +1,12 @@
-"""Legacy ASCII VTK ``POLYDATA`` files, as LaPy and FreeSurfer-era tools write them.
+"""Legacy VTK ``POLYDATA`` files (``.vtk``), ASCII or binary, of file versions up to 5.1.
 
-LaPy's ``TriaMesh.write_vtk`` writes triangles as ``POLYGONS`` of 3 indices and its
-``TetMesh.write_vtk`` writes tetrahedra as ``POLYGONS`` of 4 indices in a ``POLYDATA`` dataset,
-which meshio refuses (a polygon data set holds no volume cells). meshlap reads such files
-itself: a ``POLYGONS`` block of 4-index cells whose corners span a volume is read as
-tetrahedra; one whose corners are coplanar (quads of a surface) as polygons.
+meshio refuses the ``POLYDATA`` data set, which is what pyvista's ``PolyData.save("x.vtk")``
+writes (binary, version 5.1: cells as ``OFFSETS`` and ``CONNECTIVITY`` arrays) and what LaPy's
+``TriaMesh.write_vtk`` and ``TetMesh.write_vtk`` write (ASCII, triangles or tetrahedra as
+``POLYGONS`` of 3 or 4 indices, a count before each cell). meshlap reads these itself: a
+``POLYGONS`` block of 4-index cells whose corners span a volume is read as tetrahedra; one whose
+corners are coplanar (quads of a surface) as polygons; triangle strips as their triangles.
+Attributes (``POINT_DATA``, ``CELL_DATA``, ``FIELD``) are not read.
 """
 
 from __future__ import annotations
@@ -19,10 +21,57 @@ from .errors import MeshError
 _CELL_SECTIONS = ("VERTICES", "LINES", "POLYGONS", "TRIANGLE_STRIPS")
 # a tetrahedron's volume against the cube of its mean edge: 0.118 for a regular one; a planar quad's is 0
 _SOLID = 1e-3
+# the value types of the legacy format, big-endian in binary files
+_TYPES = {"float": ">f4", "double": ">f8", "int": ">i4", "unsigned_int": ">u4", "long": ">i8",
+          "unsigned_long": ">u8", "short": ">i2", "unsigned_short": ">u2", "char": ">i1",
+          "unsigned_char": ">u1", "vtktypeint64": ">i8", "vtktypeint32": ">i4", "vtkidtype": ">i8"}
 
 
-def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray, int] | None:
-    """``(V, cells, k)`` of a legacy ASCII VTK POLYDATA file, or None if ``path`` is not one.
+class _Cursor:
+    """Lines and arrays of a legacy VTK file, read in order from its bytes."""
+
+    def __init__(self, data: bytes, binary: bool, name: str) -> None:
+        self.data, self.pos, self.binary, self.name = data, 0, binary, name
+
+    def line(self) -> bytes | None:
+        """The next line (b"" if blank), or None at the end."""
+        if self.pos >= len(self.data):
+            return None
+        end = self.data.find(b"\n", self.pos)
+        end = len(self.data) if end < 0 else end
+        out, self.pos = self.data[self.pos:end].strip(), end + 1
+        return out
+
+    def words(self) -> list[str]:
+        """The words of the next line that has any ([] at the end)."""
+        while (line := self.line()) is not None:
+            if line:
+                return line.decode("latin-1").split()
+        return []
+
+    def array(self, count: int, kind: str, what: str) -> np.ndarray:
+        """``count`` values of type ``kind`` (of a ``what`` block): raw big-endian bytes in a binary
+        file, words in an ASCII one."""
+        if self.binary:
+            if kind.lower() not in _TYPES:
+                raise MeshError(f"{self.name}: unknown VTK value type {kind!r}")
+            dtype = np.dtype(_TYPES[kind.lower()])
+            raw = self.data[self.pos:self.pos + count * dtype.itemsize]
+            if len(raw) < count * dtype.itemsize:
+                raise MeshError(f"{self.name}: the file ends inside its {what} block ({count} values)")
+            self.pos += len(raw)
+            return np.frombuffer(raw, dtype=dtype)
+        words: list[str] = []
+        while len(words) < count and (more := self.words()):
+            words += more
+        if len(words) != count:
+            found = len(words) if len(words) < count else "more"
+            raise MeshError(f"{self.name}: malformed {what} block ({found} values; it announces {count})")
+        return np.array(words, dtype=np.float64 if kind.lower() in ("float", "double") else np.int64)
+
+
+def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | None:
+    """``(V, cells, k)`` of a legacy VTK POLYDATA file, or None if ``path`` is not one.
 
     ``k`` is 3 when the cells are tetrahedra (4 indices each, spanning a volume), else 2.
 
@@ -37,27 +86,33 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray, int] | None:
     ([[0, 1, 2, 3]], 3)
     """
     with open(path, "rb") as f:
-        head = [f.readline() for _ in range(4)]
-    if not head[0].startswith(b"# vtk DataFile") or head[2].strip().upper() != b"ASCII" \
+        data = f.read()
+    cur = _Cursor(data, False, path.name)
+    head = [cur.line() or b"" for _ in range(4)]
+    mode = head[2].upper()
+    if not head[0].startswith(b"# vtk DataFile") or mode not in (b"ASCII", b"BINARY") \
             or head[3].split()[:2] != [b"DATASET", b"POLYDATA"]:
         return None
-    tokens = path.read_text(errors="replace").split("\n", 4)[4].split()
-    V, cells, i = None, [], 0
+    cur.binary = mode == b"BINARY"
+    version = head[0].split()[-1].decode("latin-1")
+    offsets = not version[:1].isdigit() or int(version.split(".")[0]) >= 5  # 5.x: OFFSETS, CONNECTIVITY
+    V, cells = None, []
     try:
-        while i < len(tokens):
-            key = tokens[i].upper()
+        while words := cur.words():
+            key = words[0].upper()
             if key == "POINTS":
-                n = int(tokens[i + 1])
-                V = np.array(tokens[i + 3:i + 3 + 3 * n], dtype=np.float64).reshape(n, 3)
-                i += 3 + 3 * n
+                V = cur.array(3 * int(words[1]), words[2], key).astype(np.float64).reshape(-1, 3)
             elif key in _CELL_SECTIONS:
-                size = int(tokens[i + 2])
-                if key == "POLYGONS":
-                    cells += _cells(np.array(tokens[i + 3:i + 3 + size], dtype=np.int64), path.name)
-                i += 3 + size
-            else:  # POINT_DATA, CELL_DATA, FIELD, METADATA: attributes, not geometry
+                block = _offset_cells(cur, int(words[1]), key) if offsets else \
+                    _cells(cur.array(int(words[2]), "int", key), path.name)
+                if key in ("POLYGONS", "TRIANGLE_STRIPS"):  # vertices and lines bound no surface
+                    cells += block if key == "POLYGONS" else _strip_triangles(block)
+            elif key == "METADATA":  # field names and information keys, up to a blank line
+                while cur.line():
+                    pass
+            else:  # POINT_DATA, CELL_DATA, FIELD: attributes, not geometry
                 break
-    except ValueError as exc:  # a short or non-numeric section
+    except (ValueError, IndexError) as exc:  # a short or non-numeric section
         raise MeshError(f"{path.name}: malformed VTK POLYDATA file ({exc})") from None
     if V is None or not cells:
         raise MeshError(f"{path.name}: a VTK POLYDATA file without {'POINTS' if V is None else 'POLYGONS'}")
@@ -65,6 +120,25 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray, int] | None:
     if sizes == {4} and _solid(V, np.array(cells)):
         return V, np.array(cells), 3
     return V, np.array(cells) if len(sizes) == 1 else cells, 2
+
+
+def _offset_cells(cur: _Cursor, n_offsets: int, what: str) -> list[list[int]]:
+    # version 5: "OFFSETS type" (n_offsets values), then "CONNECTIVITY type" (the indices)
+    key, kind = cur.words()[:2]
+    offsets = cur.array(n_offsets, kind, what).astype(np.int64)
+    key2, kind2 = cur.words()[:2]
+    if (key.upper(), key2.upper()) != ("OFFSETS", "CONNECTIVITY") or len(offsets) < 1 or offsets[0] != 0 \
+            or np.any(np.diff(offsets) < 1):
+        raise MeshError(f"{cur.name}: malformed {what} block (OFFSETS and CONNECTIVITY expected, offsets "
+                        "rising from 0)")
+    flat = cur.array(int(offsets[-1]), kind2, what).astype(np.int64)
+    return [flat[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+
+
+def _strip_triangles(strips: list[list[int]]) -> list[list[int]]:
+    # a strip's i-th triangle is (s[i], s[i+1], s[i+2]), every other one flipped to keep the orientation
+    return [[s[i], s[i + 1], s[i + 2]] if i % 2 == 0 else [s[i + 1], s[i], s[i + 2]]
+            for s in strips for i in range(len(s) - 2)]
 
 
 def _cells(flat: np.ndarray, name: str) -> list[list[int]]:

@@ -27,7 +27,7 @@ __all__ = ["main"]
 PROG = "meshlap"
 #: What info, build, eigs and curvature read (meshio adds its formats: pip install "meshlap[io]").
 INPUTS = ("surface meshes (.obj .off .ply .stl), point clouds (.ply without faces, .xyz .csv .txt .pts "
-          ".npy), tetrahedra (TetGen .node/.ele; .vtk .vtu .msh ... with meshio)")
+          ".npy), legacy VTK polydata (.vtk), tetrahedra (TetGen .node/.ele; .vtk .vtu .msh ... with meshio)")
 
 
 # -- helpers ----------------------------------------------------------------------------

@@ -156,8 +156,9 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
 
     Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces,
     .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
-    lines), TetGen's .node/.ele, legacy ASCII VTK POLYDATA (LaPy's tetrahedra: polygons of 4
-    corners spanning a volume), and with meshio installed every format meshio reads.
+    lines), TetGen's .node/.ele, legacy VTK POLYDATA, ASCII or binary (pyvista's ``save``; LaPy's
+    tetrahedra: polygons of 4 corners spanning a volume), and with meshio installed every format
+    meshio reads.
 
     Examples
     --------

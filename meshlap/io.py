@@ -421,7 +421,7 @@ def read_polyline(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
 
 def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
     """Read a tetrahedral mesh: TetGen's ``.node`` + ``.ele`` pair, LaPy's ``.vtk`` (legacy
-    ASCII POLYDATA whose polygons are tetrahedra, as ``lapy.TetMesh.write_vtk`` writes them), or
+    POLYDATA whose polygons are tetrahedra, as ``lapy.TetMesh.write_vtk`` writes them), or
     any volume format that meshio reads (``.vtk``, ``.vtu``, ``.msh``, ...) when it is installed.
 
     Pass either file of the TetGen pair. Returns ``(V, T)`` for

@@ -167,3 +167,33 @@ def test_legacy_vtk_quads_stay_a_surface_and_bad_ones_end_in_one_line(capsys, tm
     fails(capsys, "malformed POLYGONS block", "info", tmp_path / "short.vtk")
     (tmp_path / "none.vtk").write_text(head + grid)
     fails(capsys, "a VTK POLYDATA file without POLYGONS", "info", tmp_path / "none.vtk")
+
+
+@pytest.mark.parametrize("version", [51, 42])
+@pytest.mark.parametrize("binary", [True, False])
+def test_pyvista_saved_polydata_is_read_as_written(tmp_path, binary, version):
+    """pyvista's PolyData.save("x.vtk") writes legacy POLYDATA (binary, version 5.1: OFFSETS and
+    CONNECTIVITY arrays), which meshio refuses; VTK writes 4.2 (a count before each cell) on
+    request. Each is read as pyvista reads it, triangle strips as their triangles."""
+    pv = pytest.importorskip("pyvista", reason="pyvista absent (pip install pyvista)")
+    from vtkmodules.vtkIOLegacy import vtkPolyDataWriter
+
+    sphere = pv.Sphere(theta_resolution=12, phi_resolution=9)
+    for name, mesh in (("tris", sphere), ("strips", sphere.strip())):
+        path = tmp_path / f"{name}.vtk"
+        writer = vtkPolyDataWriter()
+        writer.SetInputData(mesh)
+        writer.SetFileName(str(path))
+        writer.SetFileVersion(version)
+        writer.SetFileType(2 if binary else 1)  # VTK_BINARY, VTK_ASCII
+        writer.Write()
+        V, F, k = read_input(path)
+        tris = pv.read(path).triangulate()
+        assert k == 2 and np.allclose(V, tris.points) and len(F) == tris.n_cells == sphere.n_cells
+        assert sorted(map(sorted, F.tolist())) == sorted(map(sorted, tris.regular_faces.tolist()))
+        normals = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        assert np.all(np.einsum("ij,ij->i", normals, V[F].mean(axis=1)) > 0)  # outward, as written
+    data = path.read_bytes()
+    path.write_bytes(data[:len(data) // 2])
+    with pytest.raises(meshlap.MeshError, match="strips.vtk: (the file ends inside|malformed)"):
+        read_input(path)
