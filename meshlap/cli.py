@@ -26,8 +26,8 @@ __all__ = ["main"]
 
 PROG = "meshlap"
 #: What info, build, eigs and curvature read (meshio adds its formats: pip install "meshlap[io]").
-INPUTS = ("surface meshes (.obj .off .ply .stl), point clouds (.ply without faces, .xyz .csv .txt .pts "
-          ".npy), legacy VTK polydata (.vtk), tetrahedra (TetGen .node/.ele; .vtk .vtu .msh ... with meshio)")
+INPUTS = ("surfaces (.obj .off .ply .stl .vtk; .vtp with pyvista, .glb with trimesh), point clouds (.ply "
+          "without faces, .xyz .csv .txt .pts .npy), tetrahedra (TetGen .node/.ele; .vtu .msh with meshio)")
 
 
 # -- helpers ----------------------------------------------------------------------------

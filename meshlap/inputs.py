@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -158,7 +159,8 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
     .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
     lines), TetGen's .node/.ele, legacy VTK POLYDATA, ASCII or binary (pyvista's ``save``; LaPy's
     tetrahedra: polygons of 4 corners spanning a volume), and with meshio installed every format
-    meshio reads.
+    meshio reads; VTK's XML formats (.vtp, ...) with pyvista, scenes (.glb, .gltf, .3mf, .dae) with
+    trimesh.
 
     Examples
     --------
@@ -189,21 +191,83 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
     polydata = read_polydata(path) if suffix == ".vtk" else None  # LaPy's tetrahedra, legacy surfaces
     if polydata is not None:
         return polydata
+    if suffix in _OTHER_READERS:  # formats meshio does not read
+        package, reader = _OTHER_READERS[suffix]
+        try:
+            return reader(path)
+        except ImportError:
+            raise MeshError(f"{path.name}: meshlap reads {suffix} files with {package}: pip install {package}"
+                            ) from None
     try:
-        import meshio
-    except ImportError as exc:
-        known = ", ".join(MESH_FORMATS + POINT_FORMATS + TETGEN_FORMATS)
+        return _by_meshio(path)
+    except ImportError:
+        known = ", ".join(MESH_FORMATS + POINT_FORMATS + TETGEN_FORMATS + tuple(_OTHER_READERS))
         what = suffix or "files without a suffix"
         raise MeshError(f"{path.name}: meshlap reads {known} itself; for {what} "
-                        'install meshio (pip install "meshlap[io]")') from exc
+                        'install meshio (pip install "meshlap[io]")') from None
+
+
+def _by_meshio(path: Path) -> GeometryInput:
+    import meshio
+
     said = io.StringIO()
     try:  # on a bad file meshio prints its reasons and calls sys.exit; keep them for the message
         with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
             mesh = meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio's ReadError, ValueError, KeyError, exit, ...
-        why = (said.getvalue().strip().splitlines() or [str(exc) or type(exc).__name__])[0]
+        why = (said.getvalue().strip().splitlines() or [_why(exc)])[0]
         raise MeshError(f"{path.name}: meshio could not read it ({why})") from None
     return _from_cell_blocks(mesh.points, mesh.cells_dict, path.name)
+
+
+def _by_pyvista(path: Path) -> GeometryInput:
+    # VTK's own formats (.vtp XML polydata, ...), which meshio does not read
+    import pyvista
+
+    try:
+        with _quiet_stderr(), warnings.catch_warnings():  # a bad file's VTK errors: logged, and warned
+            warnings.simplefilter("ignore")
+            mesh = pyvista.read(path)
+        if isinstance(mesh, pyvista.MultiBlock):  # a scene: its blocks as one grid (cells_dict)
+            mesh = mesh.combine()
+    except Exception as exc:  # pyvista raises ValueError, IOError, VTK errors, ...
+        raise MeshError(f"{path.name}: pyvista could not read it ({_why(exc)})") from None
+    if not mesh.n_points:
+        raise MeshError(f"{path.name}: pyvista read no points from it")
+    return as_geometry_input(mesh)
+
+
+def _by_trimesh(path: Path) -> GeometryInput:
+    # scene formats (.glb, .gltf, .3mf, .dae), their meshes concatenated
+    import trimesh
+
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:  # trimesh raises ValueError, KeyError, NotImplementedError, ...
+        raise MeshError(f"{path.name}: trimesh could not read it ({_why(exc)})") from None
+    V, F, _ = as_geometry_input(mesh)
+    return V, F, None if F is None else 2  # trimesh's faces are triangles
+
+
+@contextlib.contextmanager
+def _quiet_stderr() -> Any:
+    saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(null)
+
+
+#: suffixes meshio does not read: VTK's XML formats (pyvista) and scene formats (trimesh)
+_OTHER_READERS = {suffix: ("pyvista", _by_pyvista) for suffix in (".vtp", ".vts", ".vtr", ".vti", ".vtm")} | \
+    {suffix: ("trimesh", _by_trimesh) for suffix in (".glb", ".gltf", ".3mf", ".dae")}
+
+
+def _why(exc: BaseException) -> str:
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
 
 
 def boundary_triangles(T: Any) -> np.ndarray:

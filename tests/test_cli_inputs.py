@@ -197,3 +197,29 @@ def test_pyvista_saved_polydata_is_read_as_written(tmp_path, binary, version):
     path.write_bytes(data[:len(data) // 2])
     with pytest.raises(meshlap.MeshError, match="strips.vtk: (the file ends inside|malformed)"):
         read_input(path)
+
+
+def test_formats_meshio_does_not_read_go_to_pyvista_and_trimesh(capsys, tmp_path):
+    """VTK's XML polydata (.vtp, pyvista's own format) through pyvista and a glTF scene (.glb)
+    through trimesh, each read as its package reads it; a bad file ends in one line naming the
+    reader."""
+    pv = pytest.importorskip("pyvista", reason="pyvista absent (pip install pyvista)")
+    trimesh = pytest.importorskip("trimesh", reason="trimesh absent (pip install trimesh)")
+    sphere = pv.Sphere(theta_resolution=12, phi_resolution=9)
+    sphere.save(tmp_path / "s.vtp")
+    V, F, k = read_input(tmp_path / "s.vtp")
+    assert k == 2 and np.allclose(V, sphere.points) and np.array_equal(F.triangles(), sphere.regular_faces)
+    P = np.random.default_rng(0).random((50, 3))
+    pv.PolyData(P).save(tmp_path / "c.vtp")
+    Q, cells, _ = read_input(tmp_path / "c.vtp")
+    assert cells is None and np.allclose(Q, P)
+    ico = trimesh.creation.icosphere(subdivisions=2)
+    ico.export(tmp_path / "s.glb")
+    V, F, k = read_input(tmp_path / "s.glb")
+    assert k == 2 and np.allclose(V, ico.vertices) and np.array_equal(F, ico.faces)
+    code, out, _ = run(capsys, "info", tmp_path / "s.glb")
+    assert code == 0 and "320 triangles" in out
+    (tmp_path / "bad.vtp").write_text("garbage")
+    fails(capsys, "bad.vtp: pyvista read no points from it", "info", tmp_path / "bad.vtp")
+    (tmp_path / "bad.glb").write_text("garbage")
+    fails(capsys, "bad.glb: trimesh could not read it", "info", tmp_path / "bad.glb")
