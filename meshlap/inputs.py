@@ -10,11 +10,14 @@ none of these libraries is needed, or imported, by meshlap:
   ``pyvista.UnstructuredGrid`` (``points``, ``cells_dict``: tetrahedra);
 * ``open3d.geometry.TriangleMesh`` (``vertices``, ``triangles``), ``TetraMesh``
   (``vertices``, ``tetras``) and ``PointCloud`` (``points``);
-* ``meshio.Mesh`` (``points``, ``cells_dict``).
+* ``meshio.Mesh`` (``points``, ``cells_dict``);
+* ``pyvista.MultiBlock`` and ``trimesh.Scene``: their parts as one input (``combine``; the
+  scene's meshes where its transforms place them), each part a part of the operator.
 
 :func:`read_input` reads any file the command line takes: surface meshes, point clouds,
-TetGen's ``.node``/``.ele`` and, with meshio installed (``pip install "meshlap[io]"``),
-every format meshio reads (VTK, VTU, Gmsh ``.msh``, ...).
+TetGen's ``.node``/``.ele``, legacy VTK POLYDATA and, with meshio installed (``pip install
+"meshlap[io]"``), every format meshio reads (VTK, VTU, Gmsh ``.msh``, ...); VTK's XML formats
+with pyvista, scene formats with trimesh.
 """
 
 from __future__ import annotations
@@ -124,6 +127,11 @@ def as_geometry_input(obj: Any) -> GeometryInput:
     name = type(obj).__name__
     if isinstance(obj, (np.ndarray, list)):
         return np.asarray(obj, dtype=np.float64), None, None
+    if hasattr(obj, "combine") and hasattr(obj, "n_blocks"):  # pyvista.MultiBlock: its blocks as one grid
+        return as_geometry_input(obj.combine())
+    if hasattr(obj, "geometry") and hasattr(obj, "dump"):  # trimesh.Scene: its meshes where it places them
+        placed = obj.to_geometry() if hasattr(obj, "to_geometry") else obj.dump(concatenate=True)
+        return as_geometry_input(placed)
     if hasattr(obj, "points") and hasattr(obj, "cells_dict"):  # meshio.Mesh, pyvista.UnstructuredGrid
         return _from_cell_blocks(obj.points, dict(obj.cells_dict), name)
     if hasattr(obj, "points") and hasattr(obj, "faces") and hasattr(obj, "n_points"):  # pyvista.PolyData
@@ -228,8 +236,6 @@ def _by_pyvista(path: Path) -> GeometryInput:
         with _quiet_stderr(), warnings.catch_warnings():  # a bad file's VTK errors: logged, and warned
             warnings.simplefilter("ignore")
             mesh = pyvista.read(path)
-        if isinstance(mesh, pyvista.MultiBlock):  # a scene: its blocks as one grid (cells_dict)
-            mesh = mesh.combine()
     except Exception as exc:  # pyvista raises ValueError, IOError, VTK errors, ...
         raise MeshError(f"{path.name}: pyvista could not read it ({_why(exc)})") from None
     if not mesh.n_points:

@@ -45,6 +45,23 @@ def test_pyvista_objects():
     assert len(np.unique(hull)) - len(edges) + len(hull) == 2
 
 
+def test_scenes_are_their_parts():
+    """A pyvista MultiBlock and a trimesh Scene of two spheres: one operator on both parts, two
+    zero eigenvalues (one per part), the Scene's meshes where its transforms place them."""
+    pv, trimesh = pytest.importorskip("pyvista"), pytest.importorskip("trimesh")
+    faces = np.column_stack([np.full(len(F), 3), F]).ravel()
+    blocks = pv.MultiBlock([pv.PolyData(V, faces), pv.PolyData(V + [3.0, 0, 0], faces)])
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.Trimesh(V, F, process=False))
+    scene.add_geometry(trimesh.Trimesh(V, F, process=False),
+                       transform=trimesh.transformations.translation_matrix([3.0, 0, 0]))
+    for obj, n_parts in ((blocks, 2), (scene, 2)):
+        P_, cells, _ = as_geometry_input(obj)
+        assert len(P_) == n_parts * len(V) and np.ptp(P_[:, 0]) == pytest.approx(5.0, abs=0.02)
+        lam = meshlap.spectral.eigs(meshlap.laplacian(obj), n_parts + 1)[0]
+        assert np.abs(lam[:n_parts]).max() < 1e-10 and lam[n_parts] > 1.9
+
+
 def test_meshio_objects(tmp_path):
     meshio = pytest.importorskip("meshio")
     vol = meshio.Mesh(VT, [("triangle", boundary_triangles(T)), ("tetra", T)])
