@@ -191,10 +191,10 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 
     _need_suffixes(args)
     op, V, F = _operator_from(args)
-    t0 = time.perf_counter()
-    lam, phi = eigs(op, args.k, elements=args.elements)
+    t0, info = time.perf_counter(), {}
+    lam, phi = eigs(op, args.k, elements=args.elements, info=info)
     seconds = time.perf_counter() - t0
-    columns = {getattr(op, "name", "BSW"): lam}
+    columns = {f"{d.operator}, {info['elements']}" if (d := getattr(op, "decision", None)) else op.name: lam}
     if args.compare_cot:
         if getattr(op, "faces", None) is None:
             raise MeshError("--compare-cot needs a surface mesh: a mesh file or an operator saved with it")
@@ -202,11 +202,11 @@ def cmd_eigs(args: argparse.Namespace) -> int:
 
         columns["COT"] = eigs(cotangent(V, op.faces), args.k)[0]
     print(f"{args.k} smallest eigenvalues of -L (-S φ = λ M φ; φ M-orthonormal), {seconds:.1f} s:")
-    print(f"{'i':>4}" + "".join(f"{name:>14}" for name in columns))
+    print(f"{'i':>4}" + "".join(f"{name:>16}" for name in columns))
     for i in range(args.k):
         # the constant eigenvector's λ is 0 to rounding: print it as 0
         cells = [0.0 if abs(col[i]) < 1e-10 * max(abs(col[-1]), 1.0) else col[i] for col in columns.values()]
-        print(f"{i:>4}" + "".join(f"{v:>14.6g}" for v in cells))
+        print(f"{i:>4}" + "".join(f"{v:>16.6g}" for v in cells))
     if args.output:
         np.savez(args.output, eigenvalues=lam, eigenvectors=phi)
         print(f"wrote {args.output}")

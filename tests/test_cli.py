@@ -183,7 +183,7 @@ def test_eigs_of_a_mesh_and_of_a_saved_operator(capsys, tmp_path, sphere_file):
 
     code, out, _ = run(capsys, "eigs", sphere_file, "-k", "9", "--h", "0.02", "--compare-cot",
                        "-o", tmp_path / "e.npz", "--png", tmp_path / "modes.png")
-    assert code == 0 and "BSW" in out and "COT" in out
+    assert code == 0 and "kernel, linear" in out and "COT" in out  # what was built and solved, by name
     table = eigen_table(out)
     V, F = io.read_mesh(sphere_file)
     lam, phi = eigs(meshlap.laplacian(V, F, h=0.02), 9)
@@ -204,8 +204,10 @@ def test_eigs_of_a_mesh_and_of_a_saved_operator(capsys, tmp_path, sphere_file):
     # the same from the saved operator
     assert run(capsys, "build", sphere_file, "--h", "0.02", "-o", tmp_path / "op.npz")[0] == 0
     code, out, _ = run(capsys, "eigs", tmp_path / "op.npz", "-k", "9")
-    assert code == 0
+    assert code == 0 and "kernel, linear" in out  # the saved decision names the column
     np.testing.assert_allclose(eigen_table(out)[:, 0], table[:, 0], rtol=1e-5, atol=1e-12)
+    code, out, _ = run(capsys, "eigs", sphere_file, "-k", "4")  # the default: FEM, quadratic elements
+    assert code == 0 and "fem, quadratic" in out
 
 
 def test_eigs_errors(capsys, tmp_path, sphere_file):
