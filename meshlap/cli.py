@@ -21,6 +21,8 @@ from .cli_uses import add_distance_parser, save_values
 from .errors import EigenError, MeshError
 from .geometry.validation import check_faces
 from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
+from .plot import plot_functions, plot_mesh  # matplotlib is imported where a figure is drawn
+from .viewer import save_html, show
 
 __all__ = ["main"]
 
@@ -213,8 +215,6 @@ def cmd_eigs(args: argparse.Namespace) -> int:
     if args.html:
         if V is None:
             raise MeshError("--html needs the mesh: give a mesh file or an operator saved with it")
-        from .viewer import save_html, show
-
         shown = list(range(1, args.k))  # skip the constant eigenvector
         plot = show(V, F, phi[:, shown], titles=[f"φ{i}  λ = {lam[i]:.4g}" for i in shown], cmap="RdBu_r",
                     symmetric=True, up=args.up)
@@ -223,10 +223,8 @@ def cmd_eigs(args: argparse.Namespace) -> int:
         if V is None:
             raise MeshError("--png needs the mesh: give a mesh file or an operator saved with it")
         _use_agg()
-        from .plot import plot_functions
-
-        show = list(range(1, min(args.k, 9)))  # skip the constant eigenvector
-        fig = plot_functions(V, F, phi[:, show], titles=[f"φ{i}, λ = {lam[i]:.4g}" for i in show],
+        drawn = list(range(1, min(args.k, 9)))  # skip the constant eigenvector
+        fig = plot_functions(V, F, phi[:, drawn], titles=[f"φ{i}, λ = {lam[i]:.4g}" for i in drawn],
                              up=args.up)
         _save_png(fig, args.png)
     return 0
@@ -251,7 +249,8 @@ def cmd_smooth(args: argparse.Namespace) -> int:
         if report is not None:
             report(1.0, "done")
         print(f"{len(info['volume']) - 1} denoising mean-curvature-flow step(s) of dt = 4σ² = "
-              f"{info['dt']:.4g} (measured normal noise σ = {info['noise']:.4g})")
+              f"{info['dt']:.4g} (measured normal noise σ = {info['noise']:.4g})" if info["dt"] else
+              "no step: the mesh reads as clean (op.decision.denoise; --dt gives the plain flow)")
         return _smoothed(V, W, F, info["volume"], out)
     # (mean edge)² for both: the operator damps frequencies up to about 1/h, and a step of
     # dt = h halves the components at that scale, i.e. noise at the scale of the edges
@@ -335,15 +334,11 @@ def cmd_curvature(args: argparse.Namespace) -> int:
         save_values(args.output, H)
     lo, hi = np.nanpercentile(H, [2, 98])  # a few extreme vertices would wash out the rest
     if args.html:
-        from .viewer import save_html, show
-
         plot = show(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), cmap="coolwarm", vmin=lo, vmax=hi,
                     up=args.up, titles=[f"mean curvature of {Path(args.input).name}"])
         print(f"wrote {save_html(plot, args.html)}")
     if args.png:
         _use_agg()
-        from .plot import plot_mesh
-
         ax = plot_mesh(V, F, np.nan_to_num(H, nan=float(np.nanmedian(H))), vmin=lo, vmax=hi,
                        cmap="coolwarm", up=args.up, title=f"mean curvature of {Path(args.input).name}")
         _save_png(ax.figure, args.png)
