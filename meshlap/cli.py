@@ -20,7 +20,7 @@ import numpy as np
 from .cli_uses import add_distance_parser, save_values
 from .errors import EigenError, MeshError
 from .geometry.validation import check_faces
-from .io import MESH_FORMATS, load_operator, read_mesh, save_operator
+from .io import MESH_FORMATS, load_operator, save_operator
 from .plot import plot_functions, plot_mesh  # matplotlib is imported where a figure is drawn
 from .viewer import save_html, show
 
@@ -236,7 +236,8 @@ def cmd_smooth(args: argparse.Namespace) -> int:
     from .smoothing import mean_curvature_flow
     from .widths import default_h
 
-    V, F = read_mesh(args.input)
+    V, F, k = _read(args)
+    _surface_only(F, k, "smooth")
     out = Path(args.output)
     if out.suffix.lower() not in MESH_FORMATS:
         raise MeshError(f"--output must end in one of {', '.join(MESH_FORMATS)}; got {out.name!r}")

@@ -15,6 +15,7 @@ the normals, with a time step from the noise the fits measure (:data:`~meshlap.t
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -234,11 +235,14 @@ def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool
     from .builders import laplacian as bsw
     from .widths import default_h
 
+    if h is None:
+        with warnings.catch_warnings():  # the operator built next gives the input's warnings
+            warnings.simplefilter("ignore")
+            h0 = default_h(X, faces)  # the paper's (2ē)²
     if not denoise:
-        h = default_h(X, faces) if h is None else h
+        h = h0 if h is None else h
         return (lambda P, Q: bsw(P, Q, h=h)), h
-    # default_h is the paper's (2ē)²
-    h = DENOISE_H * default_h(X, faces) / 4 if h is None else h
+    h = DENOISE_H * h0 / 4 if h is None else h
     quadrature = "galerkin" if (faces.sizes == 3).all() else "vertex"
 
     def build(P: np.ndarray, Q: Any) -> Any:
@@ -250,7 +254,9 @@ def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool
 def _reads_noise(X: np.ndarray, faces: Any) -> bool:
     from .builders import laplacian as bsw
 
-    return bool(bsw(X, faces).decision.denoise)  # the policy's reading (meshlap.denoise); builds nothing
+    with warnings.catch_warnings():  # the flow's own operator gives the input's warnings
+        warnings.simplefilter("ignore")
+        return bool(bsw(X, faces).decision.denoise)  # the policy's reading (meshlap.denoise); builds nothing
 
 
 def _fitted_noise(op: Any) -> float:

@@ -89,6 +89,9 @@ def test_info_build_and_curvature_of_clouds_and_volumes(capsys, cloud, tets, tmp
     H = np.load(tmp_path / "H.npy")
     assert code == 0 and "unsigned" in out and np.median(H) == pytest.approx(1.0, abs=0.03)
     fails(capsys, "curvature needs a surface or a point cloud", "curvature", tets)
+    smoothed = tmp_path / "s.obj"
+    fails(capsys, "smooth needs a surface mesh; this input is a volume", "smooth", tets, "-o", smoothed)
+    fails(capsys, "smooth needs a surface mesh; this input is a point cloud", "smooth", cloud, "-o", smoothed)
     fails(capsys, "--compare-cot needs a surface mesh", "eigs", cloud, "-k", "3", "--compare-cot")
 
 
@@ -171,7 +174,7 @@ def test_legacy_vtk_quads_stay_a_surface_and_bad_ones_end_in_one_line(capsys, tm
 
 @pytest.mark.parametrize("version", [51, 42])
 @pytest.mark.parametrize("binary", [True, False])
-def test_pyvista_saved_polydata_is_read_as_written(tmp_path, binary, version):
+def test_pyvista_saved_polydata_is_read_as_written(capsys, tmp_path, binary, version):
     """pyvista's PolyData.save("x.vtk") writes legacy POLYDATA (binary, version 5.1: OFFSETS and
     CONNECTIVITY arrays), which meshio refuses; VTK writes 4.2 (a count before each cell) on
     request. Each is read as pyvista reads it, triangle strips as their triangles."""
@@ -193,6 +196,8 @@ def test_pyvista_saved_polydata_is_read_as_written(tmp_path, binary, version):
         assert sorted(map(sorted, F.tolist())) == sorted(map(sorted, tris.regular_faces.tolist()))
         normals = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         assert np.all(np.einsum("ij,ij->i", normals, V[F].mean(axis=1)) > 0)  # outward, as written
+    code, out, _ = run(capsys, "smooth", path, "-o", tmp_path / "smooth.obj")  # every command reads it
+    assert code == 0 and (tmp_path / "smooth.obj").exists()
     data = path.read_bytes()
     path.write_bytes(data[:len(data) // 2])
     with pytest.raises(meshlap.MeshError, match="strips.vtk: (the file ends inside|malformed)"):
