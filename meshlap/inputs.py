@@ -12,7 +12,11 @@ none of these libraries is needed, or imported, by meshlap:
   (``vertices``, ``tetras``) and ``PointCloud`` (``points``);
 * ``meshio.Mesh`` (``points``, ``cells_dict``);
 * ``pyvista.MultiBlock`` and ``trimesh.Scene``: their parts as one input (``combine``; the
-  scene's meshes where its transforms place them), each part a part of the operator.
+  scene's meshes where its transforms place them), each part a part of the operator;
+* pyvista's grids of hexahedra or voxels, split into tetrahedra by VTK (``triangulate``).
+
+Cells meshlap does not take (hexahedra, wedges, ...) in a meshio mesh raise a MeshError naming
+them, never dropped.
 
 :func:`read_input` reads any file the command line takes: surface meshes, point clouds,
 TetGen's ``.node``/``.ele``, legacy VTK POLYDATA and, with meshio installed (``pip install
@@ -45,6 +49,13 @@ TETGEN_FORMATS = (".node", ".ele")
 # cell type names (meshio) and VTK cell type codes (pyvista) → intrinsic dimension
 _CELL_DIMS = {"tetra": 3, "triangle": 2, "quad": 2, "line": 1}
 _VTK_NAMES = {10: "tetra", 5: "triangle", 9: "quad", 3: "line"}
+#: cells meshlap does not take, by their dimension (meshio's names; VTK's cell type numbers below)
+_OTHER_DIMS = {"poly_line": 1, "line3": 1, "triangle_strip": 2, "polygon": 2, "pixel": 2, "triangle6": 2,
+               "quad8": 2, "quad9": 2, "voxel": 3, "hexahedron": 3, "wedge": 3, "pyramid": 3, "tetra10": 3,
+               "hexahedron20": 3, "hexahedron27": 3, "wedge15": 3, "pyramid13": 3}
+_VTK_OTHER = {4: "poly_line", 21: "line3", 6: "triangle_strip", 7: "polygon", 8: "pixel", 22: "triangle6",
+              23: "quad8", 28: "quad9", 11: "voxel", 12: "hexahedron", 13: "wedge", 14: "pyramid",
+              24: "tetra10", 25: "hexahedron20", 29: "hexahedron27", 26: "wedge15", 27: "pyramid13"}
 
 GeometryInput = tuple[np.ndarray, "np.ndarray | Polygons | None", "int | None"]
 
@@ -66,15 +77,21 @@ def _obj_kind(path: Path) -> str:
 
 def _from_cell_blocks(points: Any, blocks: dict[Any, Any], name: str) -> GeometryInput:
     # the highest-dimensional cells present: tetrahedra, else faces, else lines, else none
-    named = {_VTK_NAMES.get(int(t), str(t)) if not isinstance(t, str) else t: np.asarray(c)
+    named = {t if isinstance(t, str) else (_VTK_NAMES | _VTK_OTHER).get(int(t), f"VTK cell type {t}"): c
              for t, c in blocks.items()}
     P = check_vertices(np.asarray(points, dtype=np.float64), name=f"points of {name}")
+    dim = max((k for kind, k in _CELL_DIMS.items() if kind in named), default=0)
+    if other := [kind for kind in named if _OTHER_DIMS.get(kind, 0) >= max(dim, 1)]:  # never dropped unsaid
+        raise MeshError(f"{name} holds {', '.join(f'{len(named[kind]):,} {kind}' for kind in other)} cells, "
+                        "which meshlap does not take: split them into tetrahedra or triangles (pyvista: "
+                        "mesh.triangulate()), or pass the pyvista object itself")
     for kind, k in sorted(_CELL_DIMS.items(), key=lambda kv: -kv[1]):
         if kind in named:
             if k == 2:  # triangles and quads together as polygons
-                faces = [f for key in ("triangle", "quad") if key in named for f in named[key].tolist()]
+                faces = [f for key in ("triangle", "quad") if key in named
+                         for f in np.asarray(named[key]).tolist()]
                 return P, check_faces(faces, len(P), name=f"faces of {name}"), 2
-            return P, named[kind].astype(np.int64), k
+            return P, np.asarray(named[kind]).astype(np.int64), k
     return P, None, None
 
 
@@ -132,7 +149,12 @@ def as_geometry_input(obj: Any) -> GeometryInput:
     if hasattr(obj, "geometry") and hasattr(obj, "dump"):  # trimesh.Scene: its meshes where it places them
         placed = obj.to_geometry() if hasattr(obj, "to_geometry") else obj.dump(concatenate=True)
         return as_geometry_input(placed)
-    if hasattr(obj, "points") and hasattr(obj, "cells_dict"):  # meshio.Mesh, pyvista.UnstructuredGrid
+    if hasattr(obj, "cast_to_unstructured_grid") and not hasattr(obj, "faces"):  # pyvista's grids
+        grid = obj.cast_to_unstructured_grid()
+        if {int(t) for t in grid.cells_dict} - set(_VTK_NAMES):  # hexahedra, voxels, ...: VTK splits them
+            grid = grid.triangulate()
+        return _from_cell_blocks(grid.points, dict(grid.cells_dict), name)
+    if hasattr(obj, "points") and hasattr(obj, "cells_dict"):  # meshio.Mesh
         return _from_cell_blocks(obj.points, dict(obj.cells_dict), name)
     if hasattr(obj, "points") and hasattr(obj, "faces") and hasattr(obj, "n_points"):  # pyvista.PolyData
         faces, lines = np.asarray(obj.faces).ravel(), np.asarray(getattr(obj, "lines", [])).ravel()
