@@ -105,6 +105,19 @@ def test_bad_cells_name_the_problem(V, F, kw, match):
         meshlap.laplacian(V, F, **kw)
 
 
+def test_faces_given_as_columns_are_warned_of():
+    """An (m, 3) array transposed is 3 faces of m corners each: a warning says so and how to read it
+    (before, only the non-manifold edges it makes were warned of); a real (m, 3) array is not."""
+    V, F = meshlap.shapes.sphere(300, seed=0)
+    check_faces = meshlap.validation.check_faces
+    with pytest.warns(meshlap.MeshWarning, match=r"F has shape \(3, 596\): 3 faces of 596 corners each"):
+        meshlap.laplacian(V, F.T)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", meshlap.MeshWarning)
+        check_faces(F, len(V))
+        check_faces(np.array([[0, 1, 2, 3, 4]] * 3), 5)  # three pentagons: few corners, no warning
+
+
 def test_cube_neumann_eigenvalues_from_mirror_images():
     # The unit cube's Neumann eigenvalues π²(a² + b² + c²). The plain kernel loses the pairs
     # cut by the boundary; the default's mirror images across the hull restore them.

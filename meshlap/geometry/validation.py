@@ -10,13 +10,14 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import MeshError, MeshWarning
+from ..errors import MeshError, MeshWarning, user_stacklevel
 from .polygons import Polygons
 
 __all__ = [
@@ -37,6 +38,8 @@ _MAX_COORD = 1e150
 _H_RANGE = (1e-150, 1e150)
 # libigl's doublearea squares 2D double areas: below this extent they underflow to zero.
 _MIN_SPAN = 1e-60
+# an array of 3 or 4 rows of at least this many corners is warned of as faces given as columns
+_WIDE = 12
 
 
 def _as_real_array(x: Any, name: str) -> np.ndarray:
@@ -148,6 +151,10 @@ def check_faces(F: Any, n_vertices: int, name: str = "F") -> Polygons:
             raise MeshError(f"{name} is empty: the mesh has no faces")
         if a.shape[1] < 3:
             raise MeshError(f"faces need at least 3 corners; {name} has shape {a.shape}")
+        if a.shape[0] in (3, 4) and a.shape[1] >= _WIDE:  # more likely triangles or quads as columns
+            warnings.warn(f"{name} has shape {a.shape}: {a.shape[0]} faces of {a.shape[1]} corners each; if "
+                          f"its columns are the faces, pass {name}.T", MeshWarning,
+                          stacklevel=user_stacklevel())
         a = _integral(a, name)
         indices = np.ascontiguousarray(a.reshape(-1))
         offsets = np.arange(0, a.size + 1, a.shape[1], dtype=np.int64)
