@@ -143,10 +143,12 @@ def test_parts_are_parts():
     V, F = meshlap.shapes.sphere(1500, seed=0)
     V2 = np.vstack([V, V + [2.02, 0, 0]])
     F2 = np.vstack([F, F + len(V)])
-    for operator in ("fem", "kernel"):
+    for operator in ("fem", "kernel", "galerkin"):
         lam, _ = meshlap.spectral.eigs(meshlap.laplacian(V2, F2, operator=operator), 6)
         assert np.abs(lam[:2]).max() < 1e-8 and lam[2] > 1.9, operator
     assert meshlap.laplacian(V2, F2).decision.measured["parts"] == 2
+    # the paper's operator, bit for bit, reaches across the gap (docs/messy.md)
+    assert meshlap.spectral.eigs(meshlap.laplacian(V2, F2, operator="paper"), 3)[0][1] > 0.1
 
 
 def test_unwelded_seam_is_welded():
