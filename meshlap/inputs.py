@@ -279,7 +279,11 @@ def _by_trimesh(path: Path) -> GeometryInput:
 
 @contextlib.contextmanager
 def _quiet_stderr() -> Any:
-    saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    try:
+        saved, null = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    except OSError:  # no file descriptor 2 to quiet (a GUI process)
+        yield
+        return
     try:
         os.dup2(null, 2)
         yield

@@ -235,8 +235,11 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
                 V, F, _ = igl.readSTL(str(path))
                 if len(F):
                     V, _, _, F = igl.remove_duplicate_vertices(V, F, 0.0)
-            else:
+            else:  # libigl reads a malformed ASCII vertex as zeros: meshlap's own reading names it
+                own = _ply_vertices(path.read_bytes(), path.name).shape
                 V, F = igl.read_triangle_mesh(str(path))
+                if V.shape != own:
+                    raise MeshError(f"{path.name}: libigl read {len(V)} vertices, the header {own[0]}")
         except RuntimeError as exc:
             raise MeshError(f"{path.name}: libigl could not read it ({exc})") from exc
         if V.size == 0 or F.size == 0:

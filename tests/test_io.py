@@ -108,6 +108,35 @@ def test_off_polygons_and_errors(tmp_path):
             io.read_mesh(p)
 
 
+def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
+    """libigl reads a PLY mesh's malformed ASCII vertex as zeros without a word (then its faces as
+    garbage indices); meshlap reads the vertices itself and names the row. Well-formed PLY meshes,
+    ASCII and big-endian binary with extra properties, read as written."""
+    V, F = meshlap.shapes.sphere(200, seed=0)
+    head = (f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty double x\nproperty double y\n"
+            f"property double z\nproperty double nx\nproperty double ny\nproperty double nz\n"
+            f"element face {len(F)}\nproperty list uchar uint vertex_indices\nend_header\n")
+    rows = [" ".join(repr(float(x)) for x in v) + " 0 0 1" for v in V]
+    faces = "".join(f"3 {a} {b} {c}\n" for a, b, c in F.tolist())
+    (tmp_path / "a.ply").write_text(head + "\n".join(rows) + "\n" + faces)
+    Vr, Fr = io.read_mesh(tmp_path / "a.ply")
+    assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
+    rows[5] = "0.1 zero 0.3 0 0 1"
+    (tmp_path / "bad.ply").write_text(head + "\n".join(rows) + "\n" + faces)
+    with pytest.raises(meshlap.MeshError, match="bad.ply: bad vertex row .*'zero'"):
+        io.read_mesh(tmp_path / "bad.ply")
+    vertex = np.zeros(len(V), dtype=[("x", ">f8"), ("y", ">f8"), ("z", ">f8"), ("red", "u1")])
+    vertex["x"], vertex["y"], vertex["z"] = V.T
+    face = np.zeros(len(F), dtype=[("n", "u1"), ("i", ">i4", (3,))])
+    face["n"], face["i"] = 3, F
+    head = (f"ply\nformat binary_big_endian 1.0\nelement vertex {len(V)}\nproperty double x\n"
+            "property double y\nproperty double z\nproperty uchar red\n"
+            f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
+    (tmp_path / "be.ply").write_bytes(head.encode() + vertex.tobytes() + face.tobytes())
+    Vr, Fr = io.read_mesh(tmp_path / "be.ply")
+    assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
+
+
 def test_missing_file_and_unknown_format(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such mesh file"):
         io.read_mesh(tmp_path / "nope.obj")
