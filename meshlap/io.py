@@ -153,6 +153,11 @@ def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]
         raise MeshError(f"{name}: not a plain OFF file (it must start with OFF; found {found!r})")
     head = lines[0][1:] or (lines[1] if len(lines) > 1 else [])
     body = lines[1:] if lines[0][1:] else lines[2:]
+    thin = next((i for i, ln in enumerate(body[:int(head[0]) if head and head[0].isdigit() else 0])
+                 if len(ln) < 3), None)
+    if thin is not None:
+        raise MeshError(f"{name}: vertex {thin} has {len(body[thin])} coordinate(s), where OFF gives 3"
+                        + (" (the file ends there)" if thin == len(body) - 1 else ""))
     try:
         nv, nf = int(head[0]), int(head[1])
         V = np.array([[float(t) for t in ln[:3]] for ln in body[:nv]], dtype=np.float64)

@@ -100,6 +100,7 @@ def test_off_polygons_and_errors(tmp_path):
     for text, message in [
         ("COFF\n3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n", "plain OFF"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "truncated"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0.5", "vertex 2 has 1 coordinate.s., where OFF gives 3 .the file ends"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n", "refers to vertex 5"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "fewer corners"),
     ]:
