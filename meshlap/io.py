@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -191,7 +192,7 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
         The file; its suffix picks the reader.
     triangulate : bool, default False
         Split polygons into fans of triangles (for code that needs triangles, such as the
-        cotangent Laplacian). By default OBJ and OFF polygons are kept.
+        cotangent Laplacian). By default OBJ, OFF and PLY polygons are kept.
 
     Returns
     -------
@@ -232,19 +233,17 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
             raise MeshError(f"{path.name}: not a text file ({exc})") from exc
         parse = parse_obj if suffix == ".obj" else _parse_off
         V, F = parse(text, path.name)
+    elif suffix == ".ply":  # meshlap's own reader: libigl's aborts the process on a file cut in its faces
+        V, F = _ply.read(path.read_bytes(), path.name)
+        if F is None or len(F) == 0:
+            raise MeshError(f"{path.name}: a PLY file without faces (read it with read_points)")
     else:
         import igl
 
         try:
-            if suffix == ".stl":
-                V, F, _ = igl.readSTL(str(path))
-                if len(F):
-                    V, _, _, F = igl.remove_duplicate_vertices(V, F, 0.0)
-            else:  # libigl reads a malformed ASCII vertex as zeros: meshlap's own reading names it
-                own = _ply_vertices(path.read_bytes(), path.name).shape
-                V, F = igl.read_triangle_mesh(str(path))
-                if V.shape != own:
-                    raise MeshError(f"{path.name}: libigl read {len(V)} vertices, the header {own[0]}")
+            V, F, _ = igl.readSTL(str(path))
+            if len(F):
+                V, _, _, F = igl.remove_duplicate_vertices(V, F, 0.0)
         except RuntimeError as exc:
             raise MeshError(f"{path.name}: libigl could not read it ({exc})") from exc
         if V.size == 0 or F.size == 0:
@@ -256,59 +255,15 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     return V, _faces_out(faces)
 
 
-_PLY_TYPES = {
-    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
-    "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
-    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
-}
-
-
-def _ply_vertices(data: bytes, name: str) -> np.ndarray:
-    # The vertex element of a PLY file (ASCII or binary), which must come first; faces, if
-    # any, follow it and are not read.
-    end = data.find(b"end_header")
-    if not data.startswith(b"ply") or end < 0:
-        raise MeshError(f"{name}: not a PLY file (no 'ply' ... 'end_header' header)")
-    header = data[:end].decode("ascii", errors="replace").splitlines()
-    body = data[data.index(b"\n", end) + 1:]
-    fmt, count, props, element = None, 0, [], None
-    for line in header:
-        parts = line.split()
-        if not parts:
-            continue
-        if parts[0] == "format":
-            fmt = parts[1]
-        elif parts[0] == "element":
-            element = parts[1]
-            if element == "vertex":
-                count = int(parts[2])
-            elif count == 0:
-                raise MeshError(f"{name}: the vertex element must come first in the PLY header")
-        elif parts[0] == "property" and element == "vertex":
-            if parts[1] == "list" or parts[1] not in _PLY_TYPES:
-                raise MeshError(f"{name}: unsupported vertex property {' '.join(parts[1:])!r}")
-            props.append((parts[2], _PLY_TYPES[parts[1]]))
-    names = [p for p, _ in props]
-    if count == 0 or not {"x", "y", "z"} <= set(names):
-        raise MeshError(f"{name}: no vertex element with x, y, z properties")
-    if fmt == "ascii":
-        rows = body.decode("ascii", errors="replace").split("\n")[:count]
-        try:
-            table = np.array([r.split()[:len(props)] for r in rows], dtype=np.float64)
-        except ValueError as exc:
-            raise MeshError(f"{name}: bad vertex row ({exc})") from exc
-        if table.shape != (count, len(props)):
-            raise MeshError(f"{name}: expected {count} vertex rows of {len(props)} values")
-        cols = [names.index(c) for c in "xyz"]
-        return table[:, cols]
-    if fmt not in ("binary_little_endian", "binary_big_endian"):
-        raise MeshError(f"{name}: unknown PLY format {fmt!r}")
-    order = "<" if fmt == "binary_little_endian" else ">"
-    dtype = np.dtype([(p, order + t) for p, t in props])
-    if len(body) < count * dtype.itemsize:
-        raise MeshError(f"{name}: the file ends before its {count} vertices")
-    table = np.frombuffer(body, dtype=dtype, count=count)
-    return np.column_stack([table[c].astype(np.float64) for c in "xyz"])
+def _numbers(rows: list[list[str]], width: int, what: str) -> np.ndarray:
+    # rows of at least width numbers as an array, naming the first that is short or not a number
+    short = next((i for i, r in enumerate(rows) if len(r) < width), None)
+    if short is not None:
+        raise MeshError(f"{what} {short} has {len(rows[short])} of its {width} values")
+    try:
+        return np.array([r[:width] for r in rows], dtype=np.float64).reshape(len(rows), width)
+    except ValueError as exc:
+        raise MeshError(f"{what}s hold something that is not a number ({exc})") from None
 
 
 def _text_columns(path: Path, columns: Any) -> np.ndarray:
@@ -365,7 +320,7 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     path = existing_file(path, "point cloud")
     suffix = _suffix(path, POINT_FORMATS, "point cloud")
     if suffix == ".ply":
-        P = _ply_vertices(path.read_bytes(), path.name)
+        P = _ply.read(path.read_bytes(), path.name, faces=False)[0]
     elif suffix == ".npy":
         try:
             P = np.load(path, allow_pickle=False)
@@ -376,10 +331,7 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     elif suffix == ".obj":  # the 'v' lines, with or without faces
         text = path.read_text(encoding="utf-8", errors="replace")
         rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
-        try:
-            P = np.array(rows, dtype=np.float64) if rows else np.zeros((0, 3))
-        except ValueError as exc:
-            raise MeshError(f"{path.name}: bad vertex coordinate ({exc})") from exc
+        P = _numbers(rows, 3, f"{path.name}: vertex") if rows else np.zeros((0, 3))
     else:
         P = _text_columns(path, columns)
     return check_points(P, name=f"points of {path.name}")
@@ -455,11 +407,13 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
         def table(f: Path, width: int) -> np.ndarray:
             rows = [ln.split("#", 1)[0].split() for ln in f.read_text(errors="replace").splitlines()]
             rows = [r for r in rows if r]
+            if not rows:
+                raise MeshError(f"{f.name}: an empty TetGen file")
             try:
                 count = int(rows[0][0])
-                table = np.array([r[:width] for r in rows[1:count + 1]], dtype=np.float64)
-            except (IndexError, ValueError) as exc:
-                raise MeshError(f"{f.name}: malformed TetGen file ({exc})") from exc
+            except ValueError as exc:
+                raise MeshError(f"{f.name}: malformed TetGen header ({exc})") from exc
+            table = _numbers(rows[1:count + 1], width, f"{f.name}: row")
             if count < 1 or table.shape != (count, width):
                 raise MeshError(f"{f.name}: the header announces {count} rows of {width} numbers; "
                                 f"found {len(rows) - 1} rows")

@@ -138,6 +138,34 @@ def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
     assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
 
 
+def test_files_cut_short_end_in_one_line_naming_where(tmp_path):
+    """A PLY mesh cut inside its faces aborted the whole process in libigl's reader (a double free);
+    meshlap reads PLY itself. Every cut names where the file ends or which row is short."""
+    V, F = meshlap.shapes.sphere(60, seed=0)
+    io.write_mesh(tmp_path / "a.ply", V, F)  # ASCII
+    vertex = np.zeros(len(V), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+    vertex["x"], vertex["y"], vertex["z"] = V.T
+    face = np.zeros(len(F), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    face["n"], face["i"] = 3, F
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(V)}\nproperty float x\n"
+            f"property float y\nproperty float z\nelement face {len(F)}\n"
+            "property list uchar int vertex_indices\nend_header\n")
+    (tmp_path / "b.ply").write_bytes(head.encode() + vertex.tobytes() + face.tobytes())
+    assert np.array_equal(io.read_mesh(tmp_path / "b.ply")[1], F)
+    for name, message in (("a.ply", "the file ends at face"), ("b.ply", "the file ends inside face")):
+        data = (tmp_path / name).read_bytes()
+        (tmp_path / f"cut-{name}").write_bytes(data[:int(0.83 * len(data))])
+        with pytest.raises(meshlap.MeshError, match=f"cut-{name}: {message}"):
+            io.read_mesh(tmp_path / f"cut-{name}")
+    (tmp_path / "v.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1\n")  # no faces: a point cloud, cut
+    with pytest.raises(meshlap.MeshError, match="v.obj: vertex 2 has 2 of its 3 values"):
+        io.read_points(tmp_path / "v.obj")
+    (tmp_path / "t.node").write_text("3 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1\n")
+    (tmp_path / "t.ele").write_text("1 4 0\n1 1 2 3 3\n")
+    with pytest.raises(meshlap.MeshError, match="t.node: row 2 has 3 of its 4 values"):
+        io.read_tetrahedra(tmp_path / "t.ele")
+
+
 def test_missing_file_and_unknown_format(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such mesh file"):
         io.read_mesh(tmp_path / "nope.obj")
