@@ -11,10 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import MeshError
+from .geometry.validation import check_rows
 
 __all__: list[str] = []
 
-TYPES = {
+_TYPES = {
     "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
     "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
     "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
@@ -22,8 +23,9 @@ TYPES = {
 _CORNERS = ("vertex_indices", "vertex_index")
 
 
-def _header(data: bytes, name: str) -> tuple[str, list[tuple[str, int, list]], int]:
-    # (format, [(element, count, [(property, type) or (property, (count type, item type))])], body start)
+def header(data: bytes, name: str) -> tuple[str, list[tuple[str, int, list]], int]:
+    """``(format, [(element, count, [(property, type) or (property, (count type, item type))])],
+    where the body starts)`` of a PLY file's bytes (its header, at least)."""
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
         raise MeshError(f"{name}: not a PLY file (no 'ply' ... 'end_header' header)")
@@ -36,7 +38,7 @@ def _header(data: bytes, name: str) -> tuple[str, list[tuple[str, int, list]], i
             elif parts and parts[0] == "element":
                 elements.append((parts[1], int(parts[2]), []))
             elif parts and parts[0] == "property" and elements:
-                kind = (TYPES[parts[2]], TYPES[parts[3]]) if parts[1] == "list" else TYPES[parts[1]]
+                kind = (_TYPES[parts[2]], _TYPES[parts[3]]) if parts[1] == "list" else _TYPES[parts[1]]
                 elements[-1][2].append((parts[-1], kind))
         except (IndexError, KeyError, ValueError):
             raise MeshError(f"{name}: malformed PLY header line {line.strip()!r}") from None
@@ -59,10 +61,14 @@ def read(data: bytes, name: str, faces: bool = True) -> tuple[np.ndarray, list |
     >>> V.shape, F.tolist()
     ((3, 3), [[0, 1, 2]])
     """
-    fmt, elements, start = _header(data, name)
-    vertex = next((props for element, _, props in elements if element == "vertex"), None)
-    if vertex is None or not {"x", "y", "z"} <= {p for p, _ in vertex}:
+    fmt, elements, start = header(data, name)
+    props = {element: p for element, _, p in elements}
+    if not {"x", "y", "z"} <= {p for p, _ in props.get("vertex", [])}:
         raise MeshError(f"{name}: no vertex element with x, y, z properties")
+    if any(isinstance(kind, tuple) for _, kind in props["vertex"]):
+        raise MeshError(f"{name}: a list property in the vertex element")
+    if faces and "face" in props and not any(p in _CORNERS for p, _ in props["face"]):
+        raise MeshError(f"{name}: the face element has no vertex_indices list")
     read_element = _ascii_elements if fmt == "ascii" else _binary_elements
     got = read_element(data[start:], elements, "<" if fmt == "binary_little_endian" else ">", name,
                        {"vertex", "face"} if faces else {"vertex"})
@@ -89,24 +95,14 @@ def _ascii_elements(body: bytes, elements: list, order: str, name: str, wanted: 
 
 
 def _ascii_table(rows: list[str], props: list, name: str) -> dict:
-    if any(isinstance(kind, tuple) for _, kind in props):
-        raise MeshError(f"{name}: a list property in the vertex element")
-    width = len(props)
-    for i, r in enumerate(rows):
-        values = r.split()
-        if len(values) < width:
-            raise MeshError(f"{name}: vertex row {i} has {len(values)} of its {width} values")
-    try:
-        table = np.array([r.split()[:width] for r in rows], dtype=np.float64)
-    except ValueError as exc:
-        raise MeshError(f"{name}: bad vertex row ({exc})") from None
+    table = check_rows([r.split() for r in rows], len(props), f"{name}: vertex")
     # each value at its declared precision, as a binary file holds it
     return {p: table[:, j].astype(kind).astype(np.float64) for j, (p, kind) in enumerate(props)}
 
 
 def _ascii_face(values: list[str], props: list, name: str, row: int) -> list[int]:
     try:
-        i, corners = 0, None
+        i, corners = 0, []
         for prop, kind in props:
             if isinstance(kind, tuple):
                 n = int(values[i])
@@ -119,8 +115,6 @@ def _ascii_face(values: list[str], props: list, name: str, row: int) -> list[int
                 i += 1
     except (IndexError, ValueError) as exc:
         raise MeshError(f"{name}: bad face row {row} ({exc})") from None
-    if corners is None:
-        raise MeshError(f"{name}: the face element has no vertex_indices list")
     return corners
 
 

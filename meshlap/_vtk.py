@@ -104,7 +104,7 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | Non
                 V = cur.array(3 * int(words[1]), words[2], key).astype(np.float64).reshape(-1, 3)
             elif key in _CELL_SECTIONS:
                 block = _offset_cells(cur, int(words[1]), key) if offsets else \
-                    _cells(cur.array(int(words[2]), "int", key), path.name)
+                    _cells(cur.array(int(words[2]), "int", key), path.name, key)
                 if key in ("POLYGONS", "TRIANGLE_STRIPS"):  # vertices and lines bound no surface
                     cells += block if key == "POLYGONS" else _strip_triangles(block)
             elif key == "METADATA":  # field names and information keys, up to a blank line
@@ -112,6 +112,8 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | Non
                     pass
             else:  # POINT_DATA, CELL_DATA, FIELD: attributes, not geometry
                 break
+    except MeshError:  # already says what and where
+        raise
     except (ValueError, IndexError) as exc:  # a short or non-numeric section
         raise MeshError(f"{path.name}: malformed VTK POLYDATA file ({exc})") from None
     if V is None or not cells:
@@ -141,12 +143,12 @@ def _strip_triangles(strips: list[list[int]]) -> list[list[int]]:
             for s in strips for i in range(len(s) - 2)]
 
 
-def _cells(flat: np.ndarray, name: str) -> list[list[int]]:
+def _cells(flat: np.ndarray, name: str, what: str) -> list[list[int]]:
     out, i = [], 0
     while i < len(flat):
         c = int(flat[i])
         if c < 1 or i + 1 + c > len(flat):
-            raise MeshError(f"{name}: malformed POLYGONS block (a cell of {c} indices at entry {i})")
+            raise MeshError(f"{name}: malformed {what} block (a cell of {c} indices at entry {i})")
         out.append(flat[i + 1:i + 1 + c].tolist())
         i += 1 + c
     return out

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -49,25 +50,24 @@ TETGEN_FORMATS = (".node", ".ele")
 # cell type names (meshio) and VTK cell type codes (pyvista) → intrinsic dimension
 _CELL_DIMS = {"tetra": 3, "triangle": 2, "quad": 2, "line": 1}
 _VTK_NAMES = {10: "tetra", 5: "triangle", 9: "quad", 3: "line"}
-#: cells meshlap does not take, by their dimension (meshio's names; VTK's cell type numbers below)
-_OTHER_DIMS = {"poly_line": 1, "line3": 1, "triangle_strip": 2, "polygon": 2, "pixel": 2, "triangle6": 2,
-               "quad8": 2, "quad9": 2, "voxel": 3, "hexahedron": 3, "wedge": 3, "pyramid": 3, "tetra10": 3,
-               "hexahedron20": 3, "hexahedron27": 3, "wedge15": 3, "pyramid13": 3}
-_VTK_OTHER = {4: "poly_line", 21: "line3", 6: "triangle_strip", 7: "polygon", 8: "pixel", 22: "triangle6",
-              23: "quad8", 28: "quad9", 11: "voxel", 12: "hexahedron", 13: "wedge", 14: "pyramid",
-              24: "tetra10", 25: "hexahedron20", 29: "hexahedron27", 26: "wedge15", 27: "pyramid13"}
+#: cells meshlap does not take, by their dimension (meshio's names; VTK's cell type numbers below);
+#: a kind named in neither table counts as a volume's, so that it is never dropped unsaid
+_OTHER_DIMS = {"vertex": 0, "poly_vertex": 0, "poly_line": 1, "line3": 1, "triangle_strip": 2,
+               "polygon": 2, "pixel": 2, "triangle6": 2, "quad8": 2, "quad9": 2, "voxel": 3, "hexahedron": 3,
+               "wedge": 3, "pyramid": 3, "tetra10": 3, "hexahedron20": 3, "hexahedron27": 3, "wedge15": 3,
+               "pyramid13": 3}
+_VTK_OTHER = {1: "vertex", 2: "poly_vertex", 4: "poly_line", 21: "line3", 6: "triangle_strip", 7: "polygon",
+              8: "pixel", 22: "triangle6", 23: "quad8", 28: "quad9", 11: "voxel", 12: "hexahedron",
+              13: "wedge", 14: "pyramid", 24: "tetra10", 25: "hexahedron20", 29: "hexahedron27",
+              26: "wedge15", 27: "pyramid13"}
 
 GeometryInput = tuple[np.ndarray, "np.ndarray | Polygons | None", "int | None"]
 
 
 def _has_faces(path: Path) -> bool:
     # a PLY file is a mesh when its header declares faces, else a point cloud
-    head = path.read_bytes()[:4096].split(b"end_header", 1)[0].decode("ascii", errors="replace")
-    for line in head.splitlines():
-        parts = line.split()
-        if parts[:2] == ["element", "face"] and len(parts) > 2:
-            return parts[2] != "0"
-    return False
+    elements = _ply.header(path.read_bytes()[:1 << 16], path.name)[1]
+    return any(element == "face" and count > 0 for element, count, _ in elements)
 
 
 def _obj_kind(path: Path) -> str:
@@ -81,7 +81,8 @@ def _from_cell_blocks(points: Any, blocks: dict[Any, Any], name: str) -> Geometr
              for t, c in blocks.items()}
     P = check_vertices(np.asarray(points, dtype=np.float64), name=f"points of {name}")
     dim = max((k for kind, k in _CELL_DIMS.items() if kind in named), default=0)
-    if other := [kind for kind in named if _OTHER_DIMS.get(kind, 0) >= max(dim, 1)]:  # never dropped unsaid
+    taken = max(dim, 1)  # cells below it (vertices; a volume's faces) add nothing; the rest is said
+    if other := [kind for kind in named if kind not in _CELL_DIMS and _OTHER_DIMS.get(kind, 3) >= taken]:
         raise MeshError(f"{name} holds {', '.join(f'{len(named[kind]):,} {kind}' for kind in other)} cells, "
                         "which meshlap does not take: split them into tetrahedra or triangles (pyvista: "
                         "mesh.triangulate()), or pass the pyvista object itself")

@@ -27,7 +27,7 @@ from . import _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
-from .geometry.validation import check_faces, check_vertices, existing_file
+from .geometry.validation import check_faces, check_rows, check_vertices, existing_file
 from .store import FORMAT_VERSION, OperatorFormatError, SavedLaplacian, load_operator, save_operator
 
 __all__ = [
@@ -154,16 +154,13 @@ def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]
         raise MeshError(f"{name}: not a plain OFF file (it must start with OFF; found {found!r})")
     head = lines[0][1:] or (lines[1] if len(lines) > 1 else [])
     body = lines[1:] if lines[0][1:] else lines[2:]
-    thin = next((i for i, ln in enumerate(body[:int(head[0]) if head and head[0].isdigit() else 0])
-                 if len(ln) < 3), None)
-    if thin is not None:
-        raise MeshError(f"{name}: vertex {thin} has {len(body[thin])} coordinate(s), where OFF gives 3"
-                        + (" (the file ends there)" if thin == len(body) - 1 else ""))
     try:
         nv, nf = int(head[0]), int(head[1])
-        V = np.array([[float(t) for t in ln[:3]] for ln in body[:nv]], dtype=np.float64)
+        V = check_rows(body[:nv], 3, f"{name}: vertex")
         faces = [[int(t) for t in ln[1 : 1 + int(ln[0])]] for ln in body[nv : nv + nf]]
         short = next((i for i, ln in enumerate(body[nv : nv + nf]) if len(ln) <= int(ln[0])), None)
+    except MeshError:  # names the row already
+        raise
     except (IndexError, ValueError) as exc:
         raise MeshError(f"{name}: malformed OFF file ({exc})") from exc
     if nv == 0 or nf == 0:
@@ -255,17 +252,6 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     return V, _faces_out(faces)
 
 
-def _numbers(rows: list[list[str]], width: int, what: str) -> np.ndarray:
-    # rows of at least width numbers as an array, naming the first that is short or not a number
-    short = next((i for i, r in enumerate(rows) if len(r) < width), None)
-    if short is not None:
-        raise MeshError(f"{what} {short} has {len(rows[short])} of its {width} values")
-    try:
-        return np.array([r[:width] for r in rows], dtype=np.float64).reshape(len(rows), width)
-    except ValueError as exc:
-        raise MeshError(f"{what}s hold something that is not a number ({exc})") from None
-
-
 def _text_columns(path: Path, columns: Any) -> np.ndarray:
     lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
     rows = [ln.replace(",", " ").replace(";", " ").split() for ln in lines]
@@ -331,7 +317,7 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     elif suffix == ".obj":  # the 'v' lines, with or without faces
         text = path.read_text(encoding="utf-8", errors="replace")
         rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
-        P = _numbers(rows, 3, f"{path.name}: vertex") if rows else np.zeros((0, 3))
+        P = check_rows(rows, 3, f"{path.name}: vertex") if rows else np.zeros((0, 3))
     else:
         P = _text_columns(path, columns)
     return check_points(P, name=f"points of {path.name}")
@@ -413,7 +399,7 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
                 count = int(rows[0][0])
             except ValueError as exc:
                 raise MeshError(f"{f.name}: malformed TetGen header ({exc})") from exc
-            table = _numbers(rows[1:count + 1], width, f"{f.name}: row")
+            table = check_rows(rows[1:count + 1], width, f"{f.name}: row")
             if count < 1 or table.shape != (count, width):
                 raise MeshError(f"{f.name}: the header announces {count} rows of {width} numbers; "
                                 f"found {len(rows) - 1} rows")

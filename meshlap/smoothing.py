@@ -15,7 +15,6 @@ the normals, with a time step from the noise the fits measure (:data:`~meshlap.t
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -23,8 +22,10 @@ import numpy as np
 
 from .errors import MeshError
 from .geometry.frames import vertex_normals
+from .geometry.mass import _mean_edge_length
 from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
+from .policy import decide
 from .tuned import DENOISE_DT, DENOISE_H, DENOISE_STEPS
 
 __all__ = ["smooth_function", "mean_curvature_flow", "enclosed_volume"]
@@ -204,7 +205,7 @@ def mean_curvature_flow(
         sigma = _fitted_noise(op)
         # by default only what the library reads as noise (the FEM pencil's test): the fits of a
         # coarse clean mesh leave residuals too, and flowing them shrank the decimated knight 31%
-        clean = auto and not _reads_noise(X, faces)
+        clean = auto and not decide(op.geometry).denoise
         dt = (0.0 if clean else DENOISE_DT * sigma**2) if dt is None else dt
     volume = [enclosed_volume(X, faces)]
     kept = 1.0
@@ -233,12 +234,8 @@ def mean_curvature_flow(
 
 def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool) -> tuple[Callable, float]:
     from .builders import laplacian as bsw
-    from .widths import default_h
 
-    if h is None:
-        with warnings.catch_warnings():  # the operator built next gives the input's warnings
-            warnings.simplefilter("ignore")
-            h0 = default_h(X, faces)  # the paper's (2ē)²
+    h0 = (2.0 * _mean_edge_length(X, faces)) ** 2  # the paper's default width, meshlap.default_h
     if not denoise:
         h = h0 if h is None else h
         return (lambda P, Q: bsw(P, Q, h=h)), h
@@ -249,14 +246,6 @@ def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool
         return bsw(P, Q, h=h, quadrature=quadrature)
 
     return build, h
-
-
-def _reads_noise(X: np.ndarray, faces: Any) -> bool:
-    from .builders import laplacian as bsw
-
-    with warnings.catch_warnings():  # the flow's own operator gives the input's warnings
-        warnings.simplefilter("ignore")
-        return bool(bsw(X, faces).decision.denoise)  # the policy's reading (meshlap.denoise); builds nothing
 
 
 def _fitted_noise(op: Any) -> float:

@@ -200,7 +200,8 @@ def test_pyvista_saved_polydata_is_read_as_written(capsys, tmp_path, binary, ver
     assert code == 0 and (tmp_path / "smooth.obj").exists()
     data = path.read_bytes()
     path.write_bytes(data[:len(data) // 2])
-    with pytest.raises(meshlap.MeshError, match="strips.vtk: (the file ends inside|malformed)"):
+    cut = r"^strips\.vtk: (the file ends inside its|malformed) \w+ block"  # said once, not wrapped
+    with pytest.raises(meshlap.MeshError, match=cut):
         read_input(path)
 
 

@@ -55,11 +55,12 @@ def test_scenes_are_their_parts():
     scene.add_geometry(trimesh.Trimesh(V, F, process=False))
     scene.add_geometry(trimesh.Trimesh(V, F, process=False),
                        transform=trimesh.transformations.translation_matrix([3.0, 0, 0]))
+    alone = meshlap.spectral.eigs(meshlap.laplacian(V, F), 2)[0][1]  # 2.0156: each part as if alone
     for obj, n_parts in ((blocks, 2), (scene, 2)):
         P_, cells, _ = as_geometry_input(obj)
         assert len(P_) == n_parts * len(V) and np.ptp(P_[:, 0]) == pytest.approx(5.0, abs=0.02)
         lam = meshlap.spectral.eigs(meshlap.laplacian(obj), n_parts + 1)[0]
-        assert np.abs(lam[:n_parts]).max() < 1e-10 and lam[n_parts] > 1.9
+        assert np.abs(lam[:n_parts]).max() < 1e-10 and lam[n_parts] == pytest.approx(alone, rel=1e-9)
 
 
 def test_grids_of_hexahedra_are_split_or_refused_never_read_as_points():
@@ -79,6 +80,15 @@ def test_grids_of_hexahedra_are_split_or_refused_never_read_as_points():
     for blocks in ([("hexahedron", hexes)], [("hexahedron", hexes), ("triangle", np.array([[0, 1, 9]]))]):
         with pytest.raises(meshlap.MeshError, match="holds 512 hexahedron cells, which meshlap does not"):
             as_geometry_input(meshio.Mesh(cube.points, blocks))
+
+    class Cells:  # a cell kind named nowhere (a polyhedron) is refused too; vertex cells add nothing
+        points = VT
+        cells_dict = {"polyhedron": T, "vertex": np.arange(len(VT))[:, None]}
+
+    with pytest.raises(meshlap.MeshError, match=f"holds {len(T)} polyhedron cells"):
+        as_geometry_input(Cells())
+    Cells.cells_dict = {"tetra": T, "vertex": np.arange(len(VT))[:, None]}
+    assert as_geometry_input(Cells())[2] == 3
 
 
 def test_meshio_objects(tmp_path):

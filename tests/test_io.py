@@ -100,7 +100,8 @@ def test_off_polygons_and_errors(tmp_path):
     for text, message in [
         ("COFF\n3 1 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n", "plain OFF"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n", "truncated"),
-        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0.5", "vertex 2 has 1 coordinate.s., where OFF gives 3 .the file ends"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0.5", "q.off: vertex 2 has 1 of its 3 values"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0.5 zero 1\n3 0 1 2\n", "q.off: vertex 2: 'zero' is not a number"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n", "refers to vertex 5"),
         ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "fewer corners"),
     ]:
@@ -124,7 +125,7 @@ def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
     assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
     rows[5] = "0.1 zero 0.3 0 0 1"
     (tmp_path / "bad.ply").write_text(head + "\n".join(rows) + "\n" + faces)
-    with pytest.raises(meshlap.MeshError, match="bad.ply: bad vertex row .*'zero'"):
+    with pytest.raises(meshlap.MeshError, match="bad.ply: vertex 5: 'zero' is not a number"):
         io.read_mesh(tmp_path / "bad.ply")
     vertex = np.zeros(len(V), dtype=[("x", ">f8"), ("y", ">f8"), ("z", ">f8"), ("red", "u1")])
     vertex["x"], vertex["y"], vertex["z"] = V.T

@@ -28,6 +28,7 @@ __all__ = [
     "check_h",
     "check_k",
     "check_positive",
+    "check_rows",
     "check_tol",
     "check_function",
     "existing_file",
@@ -280,6 +281,31 @@ def check_function(f: Any, n: int, name: str = "f") -> np.ndarray:
         count, where = _first_nonfinite(a)
         raise MeshError(f"{name} has {count} NaN or infinite value(s), first at {name}{list(where)}")
     return a
+
+
+def check_rows(rows: Sequence[Sequence[str]], width: int, what: str) -> np.ndarray:
+    """The first ``width`` values of every row of a text file's words as a float64 array; a row
+    that is short or not numeric raises :class:`MeshError` naming it (``what`` is its name, e.g.
+    ``"mesh.off: vertex"``).
+
+    Examples
+    --------
+    >>> check_rows([["0", "1", "2", "7"], ["3", "4", "5"]], 3, "t.xyz: point").tolist()
+    [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]]
+    """
+    short = next((i for i, r in enumerate(rows) if len(r) < width), None)
+    if short is not None:
+        raise MeshError(f"{what} {short} has {len(rows[short])} of its {width} values")
+    try:
+        return np.array([r[:width] for r in rows], dtype=np.float64).reshape(len(rows), width)
+    except ValueError:
+        for i, r in enumerate(rows):  # the first value that is not a number, found only on failure
+            for value in r[:width]:
+                try:
+                    float(value)
+                except ValueError:
+                    raise MeshError(f"{what} {i}: {value!r} is not a number") from None
+        raise
 
 
 def existing_file(path: str | os.PathLike, what: str) -> Path:
