@@ -10,7 +10,8 @@ ways, and prints the spectrum error of each (bench_real.py's measure and cached 
 
 - ``same-sheet neighbours``: every star is built from the nearest points that are less than
   ``--detour`` times farther along the mesh's edges than through space (the first 16 such among
-  the 48 nearest; where fewer are, the nearest others fill the list);
+  the ``--pool`` × 16 nearest; where fewer are, the nearest others fill the list, and they are
+  counted);
 - ``cross triangles cut``: the default's stars without the triangles two of whose corners are
   that far apart along the mesh; a point left in no triangle keeps its star (else it would be a
   part of its own), and those points are counted (a group of points the cut leaves loose
@@ -106,6 +107,7 @@ def main() -> None:
     ap.add_argument("name", nargs="?", default="cow", help="a mesh of benchmarks/corpus.toml")
     ap.add_argument("--corpus", default=None)
     ap.add_argument("--detour", type=float, default=4.0)
+    ap.add_argument("--pool", type=int, default=10, help="same-sheet neighbours among pool × 16 nearest")
     args = ap.parse_args()
     folder = rc.corpus_dir(args.corpus)
     entry = next(e for e in rc.manifest() if e["name"] == args.name)
@@ -116,7 +118,7 @@ def main() -> None:
     cache = json.loads((folder / "reference-cache.json").read_text())
     ref = np.array(cache[f"{entry['sha256']}:k{k}:v{REF_VERSION}"]["ref"])
     D = mesh_distances(V, C, 60 * rc.mean_edge(V, C))
-    show = lambda label, r: print(f"{label:30s} {100 * r[0]:6.1f}%   λ1..λ9: "  # noqa: E731
+    show = lambda label, r: print(f"{label:34s} {100 * r[0]:6.1f}%   λ1..λ9: "  # noqa: E731
                                   + " ".join(f"{100 * x:+.1f}" for x in r[1]))
     warnings.simplefilter("ignore")
     print(other_sheet_nearer(V, D, args.detour))
@@ -130,17 +132,20 @@ def main() -> None:
 
     # 1. stars from same-sheet neighbours
     plain = pointcloud._neighbours
+    short = []
 
     def same_sheet(tree, Q, K):
-        dist, idx = plain(tree, Q, 3 * K)
+        dist, idx = plain(tree, Q, args.pool * K)
         other = D[idx[:, :1], idx] >= args.detour * np.maximum(dist, 1e-300)
         other[:, 0] = False
+        short.append(int(((~other).sum(axis=1) <= K).sum()))
         order = np.argsort(other, axis=1, kind="stable")[:, :K + 1]
         return np.take_along_axis(dist, order, 1), np.take_along_axis(idx, order, 1)
 
     pointcloud._neighbours = same_sheet
     try:
-        show("same-sheet neighbours", pencil_error(meshlap.geometry.point_cloud_geometry(V), k, ref, n_parts))
+        same = meshlap.geometry.point_cloud_geometry(V)
+        show(f"same-sheet neighbours ({max(short)} filled)", pencil_error(same, k, ref, n_parts))
     finally:
         pointcloud._neighbours = plain
 
@@ -167,18 +172,21 @@ def main() -> None:
     geo._cache["fem_cells"] = (stars, weight)
     S, m = fem.fem_pencil(geo)
     print("  default:         ", matched(-S, sp.diags(m), ref, U, 7))
-    print(between_sheets(-S, m, U, cot, D, V, args.detour))
+    print(between_sheets(-S, m, U, cot, D, V, args.detour, "the default's pencil"))
+    S, m = fem.fem_pencil(same)
+    print(between_sheets(-S, m, U, cot, D, V, args.detour / 2, "the same-sheet pencil"))
 
 
 def between_sheets(K: sp.spmatrix, m: np.ndarray, U: np.ndarray, cot: np.ndarray, D: np.ndarray,
-                   V: np.ndarray, detour: float) -> str:
+                   V: np.ndarray, detour: float, name: str) -> str:
     """The mesh's first modes in the cloud pencil (K, m): each one's Rayleigh quotient, the share
-    of its energy on the pencil's edges between sheets, and its quotient without them."""
+    of its energy on the pencil's edges between sheets (mesh detour ≥ ``detour`` × their length),
+    and its quotient without them."""
     A = sp.triu(K, 1).tocoo()
     w = -A.data
     cross = D[A.row, A.col] >= detour * np.linalg.norm(V[A.row] - V[A.col], axis=1)
-    out = [f"the mesh's modes in the default's pencil ({int(cross.sum())} of its {len(w)} edges between "
-           "sheets):"]
+    out = [f"the mesh's modes in {name} ({int(cross.sum())} of its {len(w)} edges with a detour "
+           f"≥ {detour:g}):"]
     for j in (1, 2, 3):
         u = U[:, j]
         energy = w * (u[A.row] - u[A.col]) ** 2
