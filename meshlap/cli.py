@@ -9,6 +9,7 @@ errors in the input, 2 for command-line usage errors.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 from collections.abc import Sequence
@@ -50,10 +51,6 @@ def _read(args: argparse.Namespace) -> tuple[np.ndarray, Any, int | None]:
     return read_input(args.input)
 
 
-def _is_cloud(cells: Any) -> bool:
-    return cells is None
-
-
 def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -> Any:
     from .builders import laplacian, point_cloud_laplacian
 
@@ -63,7 +60,7 @@ def _build(args: argparse.Namespace, V: np.ndarray, F: Any, k: int | None = 2) -
                "progress": getattr(args, "progress", False) or None}
     if getattr(args, "denoise", None) is not None:  # distance --denoise / --no-denoise
         options["denoise"] = args.denoise
-    if _is_cloud(F):
+    if F is None:
         return point_cloud_laplacian(V, k=args.dim, **options)
     return laplacian(V, F, k=k, **options)
 
@@ -144,8 +141,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     geo, decision = op.geometry, op.decision
     bbox = V.max(axis=0) - V.min(axis=0)
     kind, measure = _KINDS[geo.dim]
-    rows = [("file", str(args.input)), ("points" if _is_cloud(cells) else "vertices", f"{len(V):,}")]
-    rows.append(("kind", f"point cloud (k={geo.dim}, --dim)") if _is_cloud(cells) else
+    rows = [("file", str(args.input)), ("points" if cells is None else "vertices", f"{len(V):,}")]
+    rows.append(("kind", f"point cloud (k={geo.dim}, --dim)") if cells is None else
                 ("faces", _face_summary(cells, len(V))) if k == 2 else
                 ("cells", f"{len(cells):,} {'tetrahedra' if k == 3 else 'edges'} ({kind})"))
     rows += [
@@ -164,7 +161,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         nnz, what = probe.estimate_nnz(), "nnz of S ≈"
     rows.append((what, f"{nnz:,} ({nnz / len(V):.1f} per row), {nnz * 12 / 2**20:.1f} MiB in float64"))
     print(_table(rows))
-    if k == 2 and not _is_cloud(cells):
+    if k == 2 and cells is not None:
         print(diagnose(V, cells))
     return 0
 
@@ -310,19 +307,19 @@ def cmd_curvature(args: argparse.Namespace) -> int:
     if args.output and Path(args.output).suffix.lower() not in (".npy", ".txt", ".csv"):
         raise MeshError(f"--output must end in .npy, .txt or .csv; got {args.output!r}")
     V, F, k = _read(args)
-    if k != 2 and not _is_cloud(F):
+    if k != 2 and F is not None:
         raise MeshError(f"curvature needs a surface or a point cloud sampled from one; this input is a "
                         f"{_KINDS[k][0]}")
     op = _build(args, V, F, k)
     # a cloud has no faces to orient normals by: the unsigned |H| = |L X| / 2
-    H = np.linalg.norm(mean_curvature_normal(op, V), axis=1) if _is_cloud(F) else mean_curvature(op, V, F)
+    H = np.linalg.norm(mean_curvature_normal(op, V), axis=1) if F is None else mean_curvature(op, V, F)
     rows = {"BSW": H}
     if args.compare_cot:
         from .baselines import cotangent
 
         _surface_only(F, k, "--compare-cot")
         rows["COT"] = mean_curvature(cotangent(V, F), V, F)
-    what = "|H| (unsigned: a point cloud has no orientation)" if _is_cloud(F) else "H"
+    what = "|H| (unsigned: a point cloud has no orientation)" if F is None else "H"
     print(f"mean curvature {what} (ΔX = -2H n; H = 1/R on a sphere of radius R), {len(V):,} points")
     print(f"{'':<6}{'min':>11}{'5%':>11}{'median':>11}{'95%':>11}{'max':>11}")
     for name, values in rows.items():
@@ -583,7 +580,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         try:
-            return int(args.func(args) or 0)
+            status = int(args.func(args) or 0)
+            sys.stdout.flush()  # a closed pipe shows here, not at exit
+            return status
+        except BrokenPipeError:  # the reader stopped (| head): stop quietly, as cat does
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 141
         except (MeshError, EigenError, OSError, ImportError, MemoryError) as exc:
             print(f"{PROG}: error: {exc}", file=sys.stderr)
             return 1

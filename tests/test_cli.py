@@ -67,6 +67,19 @@ def test_bad_input_exits_1_with_one_line(capsys, tmp_path):
           "-o", missing_dir)
 
 
+def test_a_reader_that_stops_early_is_no_error():
+    """``meshlap info x | head -1``: the pipe closed before the output ends, quietly (141, as cat)."""
+    import subprocess
+    import sys
+
+    p = subprocess.Popen([sys.executable, "-m", "meshlap.cli", "info", SPOT], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.close()  # before meshlap writes a line
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 141
+    assert err == ""
+
+
 def test_info_mesh(capsys):
     code, out, _ = run(capsys, "info", SPOT)
     assert code == 0
