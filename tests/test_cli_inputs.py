@@ -113,6 +113,8 @@ MALFORMED = {
                  "zero measure"),
     "lonely.node": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"}, "no such TetGen file"),
     "bad.vtk": (b"garbage", "meshio could not read it (Illegal VTK header)"),
+    **{f"empty.{suffix}": (b"", "the file is empty") for suffix in ("obj", "off", "ply", "stl", "xyz", "npy",
+                                                                   "vtk", "vtu", "vtp", "glb", "npz")},
 }
 
 
@@ -124,7 +126,7 @@ def test_malformed_clouds_and_volumes_end_in_one_line(capsys, tmp_path, name):
         for suffix, text in content.items():
             path.with_suffix("." + suffix).write_text(text)
     else:
-        if name.endswith(".vtk"):
+        if name == "bad.vtk":
             pytest.importorskip("meshio")
         path.write_bytes(content)
     for command in ("info", "eigs"):

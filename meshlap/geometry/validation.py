@@ -309,7 +309,8 @@ def check_rows(rows: Sequence[Sequence[str]], width: int, what: str) -> np.ndarr
 
 
 def existing_file(path: str | os.PathLike, what: str) -> Path:
-    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file.
+    """Return ``path`` as a Path, or raise FileNotFoundError naming the kind of file (MeshError
+    if the file is empty).
 
     Examples
     --------
@@ -321,4 +322,6 @@ def existing_file(path: str | os.PathLike, what: str) -> Path:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such {what} file: {path}")
+    if path.stat().st_size == 0:
+        raise MeshError(f"{path}: the file is empty")
     return path
