@@ -55,6 +55,10 @@ class LumpedLaplacian:
         """Stored entries of ``L_sym``."""
         return int(self.L_sym.nnz)
 
+    def dot(self, f: Any) -> np.ndarray:
+        """``self @ f``, as scipy's sparse matrices and LinearOperator spell it."""
+        return self @ f
+
 
 class SparseLaplacian(LumpedLaplacian):
     """A Laplacian ``L`` with a diagonal mass ``M``: the common surface of every operator.

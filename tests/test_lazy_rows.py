@@ -52,6 +52,7 @@ def test_spectra_and_heat_flow_do_not_fit_the_rows(sphere, counted):
     assert len(counted) == 1 and not op._built.rows_pending
     assert op.pointwise_choice is not None and op.L.nnz < 0.1 * op.L_sym.nnz
     assert np.array_equal(op.matvec(f), Lf) and np.array_equal(op.as_linear_operator() @ f, Lf)
+    assert np.array_equal(op.dot(f), Lf)
     assert len(counted) == 1
 
 
