@@ -5,15 +5,13 @@ and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 200
 :class:`~meshlap.baselines.SparseLaplacian` such as the cotangent scheme. The problem is
 ``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite: λ ≥ 0, φ M-orthonormal.
 
-Why not ``scipy.sparse.linalg.eigsh`` with shift-invert: the heat-kernel operator keeps every
-pair of vertices closer than the cut-off radius, hundreds to thousands of entries per row,
-and a sparse LU of such a matrix fills in badly (94 s for 36 eigenpairs of a 16,000-vertex
-sphere at h = 0.0025). :func:`eigs` instead runs LOBPCG (Knyazev 2001) and never factors the
-operator. Its preconditioner comes from the same mesh's cotangent Laplacian, which is cheap to
-factor and agrees with the heat-kernel operator at low frequencies. At high frequencies the
-heat-kernel operator saturates: its symbol is (1 - exp(-hω²))/h ≤ 1/h, while the cotangent
-symbol keeps growing like ω². The first two terms of 1/g(x) = 1/x + h/2 + O(h²x), g the
-symbol as a function of the cotangent eigenvalue x, give the preconditioner
+On a sparse pencil :func:`eigs` factors it (shift-invert). The heat-kernel operator keeps
+hundreds to thousands of entries per row, whose LU fills in badly (94 s for 36 pairs of a
+16,000-vertex sphere at h = 0.0025); there it runs LOBPCG (Knyazev 2001), preconditioned by the
+same mesh's cotangent Laplacian, cheap to factor and equal to the kernel at low frequencies. At
+high frequencies the kernel's symbol saturates, (1 - exp(-hω²))/h ≤ 1/h, while the cotangent
+one grows like ω²; the first two terms of 1/g(x) = 1/x + h/2 + O(h²x), g the symbol as a
+function of the cotangent eigenvalue x, give the preconditioner
 
     T = (K + σM)⁻¹ + ½ D⁻¹,    K = -C (cotangent stiffness),  D = diag(-S) ≈ M/h,
 
@@ -154,6 +152,10 @@ def _check_mass(op: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _restricted_S(op: Any, P: np.ndarray) -> sp.csr_matrix:
+    if getattr(op, "matrix_free", False):  # solved densely (a small problem): S column by column
+        unit = np.zeros((op.n_vertices, len(P)))
+        unit[P, np.arange(len(P))] = 1.0
+        return sp.csr_matrix(op.mass[P, None] * apply_block(op, unit)[P])
     S = op.S if len(P) == op.n_vertices else op.S[P][:, P]
     return sp.csr_matrix(S, dtype=np.float64)
 

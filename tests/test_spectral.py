@@ -219,6 +219,12 @@ def test_matrix_free_operator_gives_the_same_spectrum():
     lam_free, phi_free = spectral.eigs(free, 9, tol=1e-12)  # auto: LOBPCG through op @ X
     assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
     assert np.abs(phi_free.T @ (stored.mass[:, None] * phi_free) - np.eye(9)).max() < 1e-9
+    # a problem small enough to solve densely: S from the products, as the stored operator's
+    V, F = shapes.sphere(300, seed=6)
+    stored = meshlap.laplacian(V, F, h=0.01, correction="none")
+    free = meshlap.laplacian(V, F, h=0.01, matrix_free=True, correction="none")
+    lam, lam_free = spectral.eigs(stored, 6)[0], spectral.eigs(free, 6)[0]
+    assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
 
 
 def test_default_operator_eigenvalues_to_the_tolerance_asked():
