@@ -145,7 +145,9 @@ class SavedLaplacian(LumpedLaplacian):
 
     def __repr__(self) -> str:
         h = "" if self.h is None else f", h={self.h:.6g}, tol={self.tol:.3g}"
-        return f"SavedLaplacian({self.name}, vertices={self.n_vertices:,}, nnz={self.nnz:,}{h})"
+        d = self.decision  # what the policy built, where it was asked
+        what = self.name if d is None else f"{d.operator} pencil, {d.rows} rows"
+        return f"SavedLaplacian({what}, vertices={self.n_vertices:,}, nnz={self.nnz:,}{h})"
 
 
 def _check_arguments(path: Any, op: Any) -> Path:
