@@ -365,8 +365,9 @@ class MeshLaplacian(LumpedLaplacian):
     # -- the matrices -------------------------------------------------------------------
     def _stored(self, M: sp.csr_matrix | None) -> sp.csr_matrix:
         if M is None:
-            raise MeshError("this operator is matrix-free (matrix_free=True): L is not stored; use op @ f "
-                            "or op.as_linear_operator()")
+            raise MeshError("this operator is matrix-free (matrix_free=True): its matrices are not stored. "
+                            "op @ f, eigs and implicit heat flow work without them; for op.L, op.S and what "
+                            "factors them (poisson, distances) build it without matrix_free")
         return M
 
     @property

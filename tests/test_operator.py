@@ -214,6 +214,8 @@ def test_matrix_free_and_float32_agree():
     assert np.allclose(free.as_linear_operator().matmat(f), ref, rtol=1e-10, atol=1e-10)
     with pytest.raises(meshlap.MeshError, match="matrix-free"):
         free.L  # noqa: B018
+    with pytest.raises(meshlap.MeshError, match="poisson, distances"):  # what needs a factor says so
+        meshlap.poisson(free, f[:, 0] - f[:, 0].mean())
     op32 = meshlap.laplacian(V, F, h=0.01, dtype=np.float32, correction="none")
     assert op32.L.dtype == np.float32
     assert np.abs(op32 @ f - ref).max() < 1e-5 * np.abs(ref).max()
