@@ -317,7 +317,7 @@ def test_read_points_all_formats(tmp_path):
     (tmp_path / "bad.csv").write_text("1,2,3\n4,five,6\n")
     with pytest.raises(meshlap.MeshError, match="not a number"):
         meshlap.io.read_points(tmp_path / "bad.csv")
-    (tmp_path / "p.bin").write_bytes(b"")
+    (tmp_path / "p.bin").write_bytes(b"\0\0\0\0")
     with pytest.raises(meshlap.MeshError, match="unknown point cloud format"):
         meshlap.io.read_points(tmp_path / "p.bin")
 
