@@ -52,3 +52,15 @@ def test_every_module_the_guides_name_is_there_after_import_meshlap():
             "assert not missing and not extra, (missing, extra)")
     assert {"inputs", "plot", "spectral"} <= named
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+def test_the_operator_guide_quotes_laplacians_signature():
+    import inspect
+
+    import meshlap
+
+    text = (DOCS / "operator.md").read_text()
+    quoted = re.search(r"`meshlap\.laplacian\((.*?)\)` returns", text, re.S).group(1)
+    names = [p.split("=")[0].strip(" *") for p in quoted.replace("\n", " ").split(",")]
+    params = inspect.signature(meshlap.laplacian).parameters
+    assert [n for n in names if n] == [n for n in params], quoted
