@@ -34,7 +34,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -213,11 +213,12 @@ def _yardstick(tol: float, floor: float) -> float:  # twice what verify lets a p
     return _TIE_CHECKS * max(tol, _EPS) * floor
 
 
-def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = False) -> int | None:
+def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = False,
+                report: Any = None) -> int | None:
     """Eigenvalues of ``A x = λ diag(m) x`` below ``sigma`` (A symmetric, m > 0), from the signs
     of the pivots of a symmetric sparse factorization of ``A - σM`` (module notes); densely up to
     3,000 rows where neither factorization gives them; None beyond, or where A - σM is singular.
-    ``supernodal``: :func:`meshlap._ldl.factor`'s.
+    ``supernodal``: :func:`meshlap._ldl.factor`'s; ``report(fraction, stage)``: progress.
 
     Examples
     --------
@@ -226,6 +227,8 @@ def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = 
     >>> count_below(A, np.ones(100), 0.5), int((exact < 0.5).sum())
     (23, 23)
     """
+    if report is not None:
+        report(0.85, "inertia count")
     B = sp.csc_matrix(A - sp.diags(sigma * np.asarray(m, dtype=np.float64)))
     try:
         negative = _ldl.factor(B, supernodal).negative

@@ -17,20 +17,25 @@ __all__ = ["shift_invert", "shift_operator"]
 _RESTARTS = 300
 
 
-def shift_operator(S: sp.csr_matrix, m: np.ndarray, sigma: float, supernodal: bool = False):
+def shift_operator(S: sp.csr_matrix, m: np.ndarray, sigma: float, supernodal: bool = False,
+                   report=None):
     """-S, σ and the solve with -S + σM: the shift -σ lies below the zero eigenvalues
-    (``supernodal``: :func:`meshlap._ldl.factor`'s)."""
+    (``supernodal``: :func:`meshlap._ldl.factor`'s; ``report(fraction, stage)``: progress)."""
+    if report is not None:
+        report(0.02, "shift-invert: factoring")
     A = sp.csc_matrix(-0.5 * (S + S.T))
     return A, sigma, factor(A + sp.diags(sigma * m), supernodal).solve
 
 
 def shift_invert(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, tol: float, seed: int,
-                 known: tuple[np.ndarray, np.ndarray] | None = None):
+                 known: tuple[np.ndarray, np.ndarray] | None = None, report=None):
     """The k + 1 eigenpairs nearest the shift (the last one: the gap above λ_k). ``known``:
     pairs of an earlier run, kept, and the Lanczos runs on their M-orthogonal complement
     (deflated), where it finds what that run skipped: Lanczos from one start vector sees one
     vector of an eigenspace, and a symmetric mesh has exactly equal eigenvalues."""
     n = len(m)
+    if report is not None:  # a deflated run finds what the first skipped: the count asked for it
+        report(0.3 if known is None else 0.6, "Lanczos" if known is None else "Lanczos, deflated")
     lam0, X0 = (np.zeros(0), np.zeros((n, 0))) if known is None else known
     want = min(k + 1, n - 1) - len(lam0) + 1 if len(lam0) else min(k + 1, n - 1)
     MX0 = m[:, None] * X0

@@ -385,12 +385,14 @@ def eigs(
 
     exact, volume = _eigcheck.Attempt("dense", dense, exact=True), _ldl.supernodal(op)
     # one factorization for every run: a retry asked for more pairs reuses it (3-D: most of the time)
-    inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m), volume))
+    inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m), volume,
+                                                                  report))
     runs: list = []
 
     def shift_invert(want: int):
         # a retry (the count found more below σ, or λ_k's ties go on) keeps the earlier pairs
-        lam, X, it = _shiftinvert.shift_invert(*inverse(), m, want, tol, seed, runs[-1] if runs else None)
+        lam, X, it = _shiftinvert.shift_invert(*inverse(), m, want, tol, seed, runs[-1] if runs else None,
+                                               report)
         runs.append((lam, X))
         return lam, X, it
 
@@ -408,7 +410,7 @@ def eigs(
     if method == "shift-invert" and n_p > _DENSE_FALLBACK and parts()[0] == 1:
         ladder.append(wider)
     counted = (sparse if count is None else count) and not matrix_free
-    counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume)) if counted else None
+    counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume, report)) if counted else None
 
     def apply_A(X: np.ndarray) -> np.ndarray:
         if spatial() is not None:  # the block's rows read from cache, as in LOBPCG
@@ -549,13 +551,8 @@ def sphere_eigenvalue(l: int, h: float) -> float:  # noqa: E741 - l is the harmo
 
 
 # -- heat kernel signature ----------------------------------------------------------------------
-def heat_kernel_signature(
-    op: Any | None = None,
-    t: Any = 1.0,
-    k: int = 100,
-    *,
-    eig: tuple[np.ndarray, np.ndarray] | None = None,
-) -> np.ndarray:
+def heat_kernel_signature(op: Any | None = None, t: Any = 1.0, k: int = 100, *,
+                          eig: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     r"""Heat kernel signature HKS(x, t) = Σ_i exp(-λ_i t) φ_i(x)² (Sun, Ovsjanikov, Guibas 2009).
 
     The diagonal of the heat kernel exp(tL), from the k smallest eigenpairs; accurate where

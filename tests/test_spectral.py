@@ -297,6 +297,12 @@ def test_eigs_progress_reports_stages_in_order():
     dense = []
     spectral.eigs(op, 4, method="dense", progress=lambda f, s: dense.append(s))
     assert dense == ["dense", "done"]
+    sparse = []  # a sparse pencil: the factorization, each Lanczos run, the inertia count
+    V, F = shapes.sphere(3000, seed=9)
+    spectral.eigs(meshlap.laplacian(V, F), 6, elements="linear", progress=lambda f, s: sparse.append((f, s)))
+    stages = [s for _, s in sparse]
+    assert stages[:3] == ["shift-invert", "shift-invert: factoring", "Lanczos"], stages
+    assert stages[-2:] == ["inertia count", "done"] and [f for f, _ in sparse] == sorted(f for f, _ in sparse)
 
 
 def test_spatial_order_is_the_same_problem_permuted(monkeypatch):
