@@ -34,7 +34,7 @@ def shift_invert(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, t
     (deflated), where it finds what that run skipped: Lanczos from one start vector sees one
     vector of an eigenspace, and a symmetric mesh has exactly equal eigenvalues."""
     n = len(m)
-    if report is not None:  # a deflated run finds what the first skipped: the count asked for it
+    if report is not None:  # a deflated run looks for pairs an earlier one skipped (count, ties)
         report(0.3 if known is None else 0.6, "Lanczos" if known is None else "Lanczos, deflated")
     lam0, X0 = (np.zeros(0), np.zeros((n, 0))) if known is None else known
     want = min(k + 1, n - 1) - len(lam0) + 1 if len(lam0) else min(k + 1, n - 1)
