@@ -21,7 +21,8 @@ ways, and prints the spectrum error of each (bench_real.py's measure and cached 
 
 Before them it counts the touching points (``real_corpus.touching``'s, at ``--detour``) whose
 nearest point of another sheet is nearer than their own sheet's 3rd and 6th nearest (a star
-needs about six); after them, the default's and robust-laplacian's eigenvalues matched to the
+needs about six), and the cloud's normals against the mesh's there and elsewhere; after them,
+the default's and robust-laplacian's eigenvalues matched to the
 mesh's own cotangent modes by eigenvector (M-overlap of at least 0.9), where index-by-index
 errors mislead: a pencil missing the reference's λ₂ is compared with its λ₃ from there on.
 Last, the mesh's first three modes read in the default's cloud pencil: each one's Rayleigh
@@ -72,9 +73,10 @@ def pencil_error(geo, k: int, ref: np.ndarray, n_parts: int) -> tuple[float, np.
     return float(np.abs(rel).max()), rel
 
 
-def other_sheet_nearer(V: np.ndarray, D: np.ndarray, detour: float, reach: int = 64) -> str:
-    """Among the points with another sheet's point in their 16 nearest: how many have one nearer
-    than their own sheet's 3rd and 6th nearest."""
+def other_sheet_nearer(V: np.ndarray, D: np.ndarray, detour: float, reach: int = 64
+                       ) -> tuple[str, np.ndarray]:
+    """Among the points with another sheet's point in their 16 nearest (returned): how many have
+    one nearer than their own sheet's 3rd and 6th nearest."""
     dist, idx = pointcloud._neighbours(pointcloud.KDTree(V), V, reach)
     other = D[idx[:, :1], idx] >= detour * np.maximum(dist, 1e-300)
     other[:, 0] = False
@@ -85,7 +87,17 @@ def other_sheet_nearer(V: np.ndarray, D: np.ndarray, detour: float, reach: int =
         firsts.append([dist[p][other[p]].min() < (own[r] if len(own) > r else np.inf) for r in (2, 5)])
     third, sixth = np.sum(firsts, axis=0) if firsts else (0, 0)
     return (f"{len(touch)} touching points; another sheet nearer than their own sheet's 6th nearest: "
-            f"{sixth}, than its 3rd: {third}")
+            f"{sixth}, than its 3rd: {third}"), touch
+
+
+def normal_angles(V: np.ndarray, C: np.ndarray, geo, touch: np.ndarray) -> str:
+    """The cloud's normals (the geometry's, from its 16 nearest) against the mesh's vertex
+    normals: the median angle at the touching points and at the others."""
+    cos = np.abs(np.einsum("ij,ij->i", geo.normals(), igl.per_vertex_normals(V, C)))
+    angle = np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
+    rest = np.setdiff1d(np.arange(len(V)), touch)
+    return (f"the cloud's normals against the mesh's: median {np.median(angle[touch]):.0f}° at the "
+            f"touching points, {np.median(angle[rest]):.0f}° at the others")
 
 
 def matched(K: sp.spmatrix, M: sp.spmatrix, ref: np.ndarray, U: np.ndarray, k: int) -> str:
@@ -121,13 +133,15 @@ def main() -> None:
     show = lambda label, r: print(f"{label:34s} {100 * r[0]:6.1f}%   λ1..λ9: "  # noqa: E731
                                   + " ".join(f"{100 * x:+.1f}" for x in r[1]))
     warnings.simplefilter("ignore")
-    print(other_sheet_nearer(V, D, args.detour))
+    counts, touch = other_sheet_nearer(V, D, args.detour)
+    print(counts)
     L, M = robust_laplacian.point_cloud_laplacian(V)
     lam = rc.pencil_eigs(L, M, k)
     rel = (lam[n_parts:n_parts + 9] - ref[n_parts:n_parts + 9]) / ref[n_parts:n_parts + 9]
     show("robust-laplacian", (float(np.abs(rel).max()), rel))
     geo = meshlap.geometry.point_cloud_geometry(V)
     show("default", pencil_error(geo, k, ref, n_parts))
+    print(normal_angles(V, C, geo, touch))
     stars, weight = geo._cache["fem_cells"]  # the default's star triangles, each a third
 
     # 1. stars from same-sheet neighbours

@@ -168,7 +168,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 def _chosen(op: Any) -> str:  # what the policy built, by the names laplacian's operator= takes
     d = getattr(op, "decision", None)
-    return op.name if d is None else f"{d.operator} pencil, {d.rows} rows (op.decision)"
+    return op.name if d is None else f"{d.built} (op.decision)"
 
 
 def cmd_build(args: argparse.Namespace) -> int:

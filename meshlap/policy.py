@@ -144,9 +144,14 @@ class Decision:
     denoise: bool = False
     elements: str = "linear"
 
+    @property
+    def built(self) -> str:
+        """What was built, in a few words (``"fem pencil, fitted rows"``): the repr's and the CLI's."""
+        return f"{self.operator} pencil, {self.rows} rows"
+
     def __str__(self) -> str:
         facts = ", ".join(f"{k}={v}" for k, v in self.measured.items())
-        return f"{self.operator} pencil, {self.rows} rows: {self.reason} ({facts})"
+        return f"{self.built}: {self.reason} ({facts})"
 
 
 def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict | None = None

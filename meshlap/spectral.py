@@ -276,7 +276,8 @@ def eigs(
     progress : bool or callable, optional
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)`` with the stage
         names "preconditioner", "cotangent start (iteration i)", "LOBPCG (iteration i)",
-        "shift-invert", "dense" and "done".
+        "shift-invert", "shift-invert: factoring", "Lanczos", "Lanczos, deflated", "inertia
+        count", "dense" and "done".
     count : bool, optional
         Prove that no eigenvalue below the k-th is missing by counting the eigenvalues below a
         shift σ just above it (Sylvester's inertia of a sparse LDLᵀ of ``-S - σM``). Default:

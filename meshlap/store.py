@@ -145,8 +145,7 @@ class SavedLaplacian(LumpedLaplacian):
 
     def __repr__(self) -> str:
         h = "" if self.h is None else f", h={self.h:.6g}, tol={self.tol:.3g}"
-        d = self.decision  # what the policy built, where it was asked
-        what = self.name if d is None else f"{d.operator} pencil, {d.rows} rows"
+        what = self.name if self.decision is None else self.decision.built
         return f"SavedLaplacian({what}, vertices={self.n_vertices:,}, nnz={self.nnz:,}{h})"
 
 
