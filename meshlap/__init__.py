@@ -39,6 +39,7 @@ from . import (
     tuned,
     widths,
 )
+from .assembly import truncation_bound
 from .builders import (
     laplacian,
     mesh_laplacian,
@@ -50,7 +51,7 @@ from .errors import EigenError, MeshError, MeshWarning, OperatorTooLargeError
 from .geodesics import HeatDistance, geodesic_distance
 from .geometry import Geometry, Polygons, topology, validation
 from .geometry.mass import face_areas, vertex_mass
-from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian, truncation_bound
+from .operator import CORRECTED_TOL, DEFAULT_TOL, MeshLaplacian
 from .solve import harmonic, poisson
 from .widths import default_h
 

@@ -72,7 +72,8 @@ def laplacian(
     tol : float, optional
         The kernel's tolerance: weights below it are dropped (default 1e-6, 1e-8 for "paper").
     matrix_free : bool, default False
-        Do not store the kernel (a large cloud): ``op @ f`` recomputes it (the kernel only).
+        Do not store the kernel (a large cloud): spectra and heat flow recompute it; ``op @ f``
+        applies the fitted rows, stored (the kernel's own with ``operator="paper"``).
     dtype : {"float64", "float32"}, default float64
         Value type of the stored matrices.
     progress : bool or callable, optional
@@ -120,7 +121,7 @@ def laplacian(
     named = {"fem": {"quadrature": "fem"}, "galerkin": {"quadrature": "galerkin"},
              "paper": {"correction": "none"}, "kernel": {}}[chosen.operator]
     if chosen.rows == "pencil" and not {"pointwise", "pointwise_degree"} & set(kernel_options) and \
-            not matrix_free and chosen.operator != "paper":
+            chosen.operator != "paper":
         named["pointwise"] = False  # too few points to fit rows on: op @ f applies the pencil
     op = MeshLaplacian(geo, None, h=h, tol=tol, matrix_free=matrix_free, dtype=dtype, progress=progress,
                        denoise=chosen.denoise, mass=mass, **{**kernel_options, **named})

@@ -303,7 +303,7 @@ class ImplicitHeat:
         if len(self.Z):
             ind = np.zeros(n)
             ind[self.Z] = 1.0
-            self._diag_Z = (op @ ind)[self.Z]
+            self._diag_Z = apply_block(op, ind)[self.Z]  # the pencil's, as the step's sums below
         self.iterations: list[int] = []
 
     # (M + τA) x with A = -S on the vertices with mass

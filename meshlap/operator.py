@@ -24,7 +24,7 @@ from scipy.sparse.linalg import LinearOperator
 
 from . import pipeline, policy
 from . import widths as widths_mod
-from .assembly import cutoff_radius, fmt_bytes, normalization
+from .assembly import cutoff_radius, fmt_bytes
 from .errors import MeshError, OperatorTooLargeError
 from .geometry import Geometry, from_mesh
 from .geometry.validation import check_function
@@ -44,7 +44,6 @@ __all__ = [
     "OperatorTooLargeError",
     "as_geometry",
     "default_h",
-    "truncation_bound",
 ]
 
 
@@ -131,8 +130,9 @@ class MeshLaplacian(LumpedLaplacian):
     dtype : {numpy.float64, numpy.float32}
         Value type of the stored matrix (float32 halves the memory of the values).
     matrix_free : bool, default False
-        Do not store L; ``op @ f`` and :meth:`as_linear_operator` recompute the kernel
-        on the fly, for meshes whose matrix does not fit in memory.
+        Do not store the kernel (a pencil too large for memory): spectra and heat flow recompute
+        it on the fly (:meth:`sym_product`); ``op @ f`` applies the fitted rows, which are
+        stored (about 50 entries a row), or with ``correction="none"`` the kernel recomputed.
     max_memory : int, optional
         Bytes the stored matrix may take; default 80% of the memory available now. A build
         that would exceed it raises :class:`OperatorTooLargeError` before allocating: at
@@ -306,8 +306,8 @@ class MeshLaplacian(LumpedLaplacian):
         (under a lock, whichever thread comes first), with the same bits a fit at build time
         gives. Spectra, heat flow and smoothing use the symmetric pencil (:meth:`assemble`) and
         never fit them. Rows on the kernel's own stencil (``pointwise=True``,
-        ``pointwise_degree``), the paper's operator (whose ``L`` is ``L_sym``) and a matrix-free
-        operator come with the pencil: for them this builds the pencil. Call this to pay for
+        ``pointwise_degree``) and the paper's operator (whose ``L`` is ``L_sym``) come with the
+        pencil: for them this builds the pencil. Call this to pay for
         the rows at a time of your choosing (e.g. before timing ``op @ f``, or before threads
         share the operator); it does nothing when they are held.
 
@@ -325,17 +325,14 @@ class MeshLaplacian(LumpedLaplacian):
         """Build the symmetric pencil now; returns the operator.
 
         The pencil (``L_sym``, ``S``: what spectra, heat flow and smoothing read; with it the
-        semidefiniteness check and its fallback, the moment scale, the Galerkin pencil) is
-        built on first use: the first
-        ``op.L_sym``, ``op.S``, :func:`~meshlap.spectral.eigs`, heat flow, smoothing, a fact of
-        the pencil (``op.correction``, ``op.fallback_reason``, ``op.psd_margin``,
-        ``op.quadrature``, ...) or saving builds it, once (under a lock, whichever thread comes
-        first), with the same bits as a build at construction; its warning (the fallback) comes
-        then. ``op @ f`` of the default
+        semidefiniteness check and its fallback, the moment scale, the Galerkin pencil) is built
+        on first use: the first ``op.L_sym``, ``op.S``, :func:`~meshlap.spectral.eigs`, heat flow,
+        smoothing, a fact of the pencil (``op.correction``, ``op.fallback_reason``, ...) or saving
+        builds it, once (under a lock, whichever thread comes first), with the same bits as a
+        build at construction; its warning (the fallback) comes then. ``op @ f`` of the default
         (the fitted rows, :meth:`fit_rows`) never builds it. Call this to pay for it at a time of
-        your choosing (e.g. before timing eigs, or to see the warnings at construction); it does
-        nothing when it is held. The memory guard still refuses at construction a pencil over
-        ``max_memory``.
+        your choosing (e.g. before timing eigs); it does nothing when it is held. The memory
+        guard still refuses at construction a pencil over ``max_memory``.
 
         Examples
         --------
@@ -394,8 +391,8 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L_sym and the point-wise values (0 when matrix-free):
-        the pencil once built (:meth:`assemble`), the fitted rows once fitted (:meth:`fit_rows`)."""
+        """Bytes held by the CSR arrays of L_sym and the point-wise values (a matrix-free pencil
+        holds none): the pencil once built (:meth:`assemble`), the rows once fitted (:meth:`fit_rows`)."""
         pencil, rows = self._built.held_pencil, self._built.held_rows
         L = None if pencil is None else pencil.L_sym
         P = None if rows is None else rows.L
@@ -429,9 +426,24 @@ class MeshLaplacian(LumpedLaplacian):
     # -- application --------------------------------------------------------------------
     def __matmul__(self, f: Any) -> np.ndarray:
         f = check_function(f, self.n_vertices)
+        rows = self._built.fit_rows().L
+        return self.sym_product(f) if rows is None else np.asarray(rows @ f)
+
+    def sym_product(self, f: Any) -> np.ndarray:
+        """``L_sym @ f`` (the symmetric pencil's L), also when matrix-free: the kernel recomputed.
+
+        Examples
+        --------
+        >>> import meshlap, numpy as np
+        >>> V, F = meshlap.shapes.sphere(300, seed=0)
+        >>> free = meshlap.laplacian(V, F, h=0.02, matrix_free=True)
+        >>> err = lambda y: np.linalg.norm(y + 2 * V[:, 0]) / np.linalg.norm(2 * V[:, 0])  # Δx = -2x
+        >>> bool(err(free.sym_product(V[:, 0])) < 0.4), bool(err(free @ V[:, 0]) < 0.002)  # pencil, rows
+        (True, True)
+        """
         if self.matrix_free:
-            return self._built.assemble().matrix_free(f)
-        return np.asarray(self.L @ f)
+            return self._built.assemble().matrix_free(np.asarray(f, dtype=np.float64))
+        return np.asarray(self.L_sym @ f)
 
     def matvec(self, f: Any) -> np.ndarray:
         """``L @ f`` for a vector or an (n, k) block of functions."""
@@ -451,8 +463,9 @@ class MeshLaplacian(LumpedLaplacian):
         >>> bool(np.allclose(A @ V[:, 2], -2 * V[:, 2], atol=0.02))   # Δz = -2z
         True
         """
-        if not self.matrix_free:
-            return sp.linalg.aslinearoperator(self.L)
+        rows = self._built.fit_rows().L
+        if rows is not None:
+            return sp.linalg.aslinearoperator(rows)
         free = self._built.assemble().matrix_free
         return LinearOperator(self.shape, matvec=lambda x: free(np.asarray(x, np.float64).reshape(-1)),
                               matmat=lambda X: free(np.asarray(X, np.float64)), dtype=np.float64)
@@ -580,19 +593,3 @@ def _named(opts: pipeline.Options) -> str:
     if opts.quadrature in ("fem", "galerkin"):
         return opts.quadrature
     return "paper" if opts.plain else "kernel"
-
-
-def truncation_bound(op: MeshLaplacian, f: np.ndarray) -> np.ndarray:
-    """Per-vertex bound on |L_exact f - L_tol f| = tol·A·max_p|f(p)-f(w)| / (h (4πh)^{k/2}).
-
-    Examples
-    --------
-    >>> import meshlap, numpy as np
-    >>> V, F = meshlap.shapes.sphere(300, seed=0)
-    >>> op = meshlap.laplacian(V, F, h=0.02, correction="none")
-    >>> bool(truncation_bound(op, V[:, 0]).max() < 1e-4)   # tol · area · spread / (4πh²) = 5e-5
-    True
-    """
-    f = check_function(f, op.n_vertices)
-    spread = np.maximum(np.abs(f.max(axis=0) - f), np.abs(f - f.min(axis=0)))
-    return op.tol * op.mass.sum() * spread * normalization(op.h, op.dim)

@@ -116,7 +116,8 @@ class Options:
             raise MeshError(f"pointwise must be True, False or 'fit'; got {pointwise!r}")
         # the default: rows whose width and degree follow the data (issue 20); True keeps the
         # degree-2 moment rows of the kernel's own stencil
-        pointwise = ("fit" if on else False) if pointwise is None else (
+        # the fitted rows read the points alone, so a matrix-free kernel keeps them
+        pointwise = ("fit" if correction != "none" else False) if pointwise is None else (
             "fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
         if curvature_limit is None:  # the kernel's widths; the FEM pencil reads none
@@ -124,10 +125,10 @@ class Options:
             curvature_limit = CURVATURE_LIMIT if kernel_widths else 0.0
         elif curvature_limit:
             check_positive(curvature_limit, "curvature_limit")
-        if matrix_free and (adaptive or arc_distance or pointwise or neumann or curvature_limit
+        if matrix_free and (adaptive or arc_distance or pointwise is True or neumann or curvature_limit
                             or np.ndim(h) == 1):
             raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: pass "
-                            "adaptive=False, arc_distance=False, pointwise=False, neumann=False, "
+                            "adaptive=False, arc_distance=False, pointwise='fit' or False, neumann=False, "
                             "curvature_limit=0")
         if matrix_free and geo.ambient_dim > 3:
             raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "

@@ -6,8 +6,8 @@
 :class:`Pencil`; :func:`meshlap.pipeline.build` calls it on the pencil's first use, not at
 construction, so an operator that only applies ``op @ f`` (the fitted rows, which read the
 points alone) never pays for it. Rows built on the kernel's own stencil (``pointwise=True``,
-``pointwise_degree``), the paper's operator (whose ``L`` is ``L_sym``) and a matrix-free
-operator come with the pencil. :func:`review` gives the warning of a fallback to the plain
+``pointwise_degree``) and the paper's operator (whose ``L`` is ``L_sym``) come with the pencil;
+a matrix-free pencil stores none. :func:`review` gives the warning of a fallback to the plain
 kernel, which comes when the pencil is built.
 """
 

@@ -231,7 +231,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
                         "(use operator='kernel' or 'auto')")
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
-        opts.get("pointwise_degree") is not None or bool(opts.get("matrix_free"))
+        opts.get("pointwise_degree") is not None
     if not pencil_rows and geo.n_points < fewest_points(geo.dim):
         pencil_rows = True
         reason += (f"; but {geo.n_points} points are too few to fit point-wise rows on "

@@ -71,7 +71,7 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
 
     scipy's sparse-times-dense product runs on one thread; this one splits rows over
     meshlap's threads and accepts CSR rows in any column order (the operator stores its
-    diagonal first). Matrix-free operators fall back to ``op @ X``.
+    diagonal first). A matrix-free pencil recomputes its kernel (``op.sym_product``).
 
     Examples
     --------
@@ -85,7 +85,10 @@ def apply_block(op: Any, X: np.ndarray) -> np.ndarray:
     vector = X.ndim == 1
     X2 = np.ascontiguousarray(X.reshape(len(X), -1))
     L = None if getattr(op, "matrix_free", False) else symmetric_L(op)
-    Y = np.asarray(op @ X2) if not sp.issparse(L) or L.format != "csr" else _lobpcg.csr_times(L, X2)
+    if sp.issparse(L) and L.format == "csr":
+        Y = _lobpcg.csr_times(L, X2)
+    else:  # a matrix-free pencil (its op @ f may apply the fitted rows), a LinearOperator
+        Y = np.asarray(op.sym_product(X2) if hasattr(op, "sym_product") else op @ X2)
     return Y.ravel() if vector else Y
 
 

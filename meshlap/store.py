@@ -17,7 +17,7 @@ those of the saved one. What is stored:
 * ``meshlap_format``, the layout's version: files of another version are refused with
   :class:`OperatorFormatError`.
 
-A matrix-free operator holds no matrix: its geometry and parameters are saved and the loaded
+A matrix-free operator holds no kernel: its geometry and parameters are saved and the loaded
 operator is rebuilt from them (matrix-free again). A distributed operator is gathered on
 rank 0 (:meth:`~meshlap.distributed.DistributedLaplacian.to_scipy`) and saved there.
 """
@@ -262,7 +262,8 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
         if getattr(op, "matrix_free", False):
             if not mesh:
                 raise MeshError("a matrix-free operator is rebuilt from its geometry: save it with mesh=True")
-            arrays.update(matrix_free=np.array(True), dtype=np.array(np.dtype(op.dtype).name))
+            arrays.update(matrix_free=np.array(True), dtype=np.array(np.dtype(op.dtype).name),
+                          pointwise=np.array(str(op.options.pointwise)))
         else:
             applied, sym = _applied(op), symmetric_L(op)
             arrays.update(_csr_arrays("", sp.csr_matrix(applied)))
@@ -317,7 +318,8 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
 def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:
     if geo is None:
         raise MeshError(f"{name}: a matrix-free operator saved without its geometry")
-    op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True,
+    rows = {"fit": "fit", "False": False}.get(params.get("pointwise", "False"), False)
+    op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True, pointwise=rows,
                        correction=params["correction"], dtype=np.dtype(params["dtype"]))
     op.widths = replace(op.widths, h_auto=bool(params["h_auto"]))  # as it was built
     return op
@@ -372,8 +374,8 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
                 f"reads version {FORMAT_VERSION}: build and save the operator again")
         mass = data["mass"]
         n = len(mass)
-        params = {k: data[k].item() for k in (*_PARAMS, "h_auto", "name", "correction", "dtype", "elements")
-                  if k in data}
+        keys = (*_PARAMS, "h_auto", "name", "correction", "dtype", "elements", "pointwise")
+        params = {k: data[k].item() for k in keys if k in data}
         if "h_vertex" in data:
             params["h_vertex"] = data["h_vertex"]
         # a "resolution" entry (the removed resolution report, as JSON) of older files is not read

@@ -133,6 +133,12 @@ def test_implicit_heat_with_zero_mass_vertices():
     assert np.abs(u[:10] / f[:10] - 1 / (1 + 0.05 * 2)).max() < 0.03
     u_cot = heat.implicit_heat(cotangent(V2, F2), f, 0.05)
     assert np.array_equal(u_cot[:10], f[:10])
+    # the corrected kernel: op @ f applies the fitted rows, the step the pencil's rows L_sym
+    with pytest.warns(UserWarning):
+        op = meshlap.laplacian(V2, F2, operator="kernel")
+    u = heat.implicit_heat(op, f, 0.01)
+    assert np.allclose(u[:10] - 0.01 * (op.L_sym[:10] @ u), f[:10], atol=1e-10)
+    assert np.abs(u[:10] / f[:10] - math.exp(-0.02)).max() < 0.01  # 0.40 / 0.98 before
 
 
 def test_smoothing_a_noisy_function(sphere_op):

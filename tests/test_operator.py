@@ -221,6 +221,28 @@ def test_matrix_free_and_float32_agree():
     assert np.abs(op32 @ f - ref).max() < 1e-5 * np.abs(ref).max()
 
 
+def test_matrix_free_applies_the_fitted_rows():
+    # the rows read the points alone: without the kernel stored, op @ f is the default's
+    V, F = shapes.sphere(1500, seed=0)
+    x = V[:, 0]
+    err = lambda y: np.linalg.norm(y + 2 * x) / np.linalg.norm(2 * x)  # noqa: E731  Δx = -2x
+    free = meshlap.laplacian(V, F, matrix_free=True)
+    assert np.array_equal(free @ V, meshlap.laplacian(V, F) @ V) and free.decision.rows == "fitted"
+    assert err(free @ x) < 2e-5 and free._built.pencil_pending  # 7.6e-6; the kernel's rows: 0.037
+    assert np.array_equal(free.as_linear_operator() @ x, free @ x)
+    assert 40 * len(V) < free.L.nnz < 60 * len(V) and free.nbytes >= free.L.data.nbytes  # the rows, stored
+    # spectra and heat flow read the kernel, recomputed: the stored kernel with the same options
+    kernel = meshlap.laplacian(V, F, operator="kernel", h=free.h, arc_distance=False, neumann=False,
+                               curvature_limit=0)
+    assert np.abs(free.sym_product(V) - kernel.L_sym @ V).max() < 1e-10
+    assert err(free.sym_product(x)) > 0.01
+    assert np.allclose(meshlap.spectral.eigs(free, 5)[0], meshlap.spectral.eigs(kernel, 5)[0], atol=1e-9)
+    plain = meshlap.laplacian(V, F, matrix_free=True, pointwise=False)  # the kernel's own rows, asked for
+    assert plain.decision.rows == "pencil" and np.array_equal(plain @ x, plain.sym_product(x))
+    with pytest.raises(meshlap.MeshError, match="pointwise='fit' or False"):
+        meshlap.laplacian(V, F, matrix_free=True, pointwise=True)
+
+
 def test_deterministic_whatever_thread_count():
     import numba
 

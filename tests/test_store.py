@@ -76,7 +76,10 @@ def test_matrix_free_operator_is_rebuilt(tmp_path):
     op = meshlap.laplacian(V, F, h=0.02, matrix_free=True)
     back = io.load_operator(io.save_operator(tmp_path / "free", op))
     assert back.matrix_free and back.moment_scale == op.moment_scale
-    assert np.array_equal(back @ V, op @ V)
+    assert np.array_equal(back @ V, op @ V) and back.options.pointwise == "fit"  # the fitted rows
+    plain = meshlap.laplacian(V, F, h=0.02, matrix_free=True, pointwise=False)  # the kernel's rows
+    again = io.load_operator(io.save_operator(tmp_path / "plain", plain))
+    assert again.options.pointwise is False and np.array_equal(again @ V, plain @ V)
     assert np.array_equal(eigs(back, 4)[0], eigs(op, 4)[0])
     with pytest.raises(meshlap.MeshError, match="mesh=True"):
         io.save_operator(tmp_path / "free2", op, mesh=False)

@@ -28,10 +28,11 @@ import scipy.sparse as sp
 from ..errors import OperatorTooLargeError, user_stacklevel
 from ..widths import Widths
 from . import grid, pairs, variable
-from .grid import cutoff_radius, normalization
+from .grid import cutoff_radius, normalization, truncation_bound
 
 __all__ = ["Kernel", "MatrixFree", "MemoryGuard", "assemble", "available_memory", "csr", "cutoff_radius",
-           "fmt_bytes", "grid", "normalization", "pairs", "refuse_early", "reweigh", "variable"]
+           "fmt_bytes", "grid", "normalization", "pairs", "refuse_early", "reweigh", "truncation_bound",
+           "variable"]
 
 _INT32_MAX = np.iinfo(np.int32).max
 
