@@ -307,9 +307,9 @@ class MeshLaplacian(LumpedLaplacian):
         gives. Spectra, heat flow and smoothing use the symmetric pencil (:meth:`assemble`) and
         never fit them. Rows on the kernel's own stencil (``pointwise=True``,
         ``pointwise_degree``) and the paper's operator (whose ``L`` is ``L_sym``) come with the
-        pencil: for them this builds the pencil. Call this to pay for
-        the rows at a time of your choosing (e.g. before timing ``op @ f``, or before threads
-        share the operator); it does nothing when they are held.
+        pencil: for them this builds the pencil. Call this to pay for the rows at a time of your
+        choosing (e.g. before timing ``op @ f``, or before threads share the operator); it does
+        nothing when they are held.
 
         Examples
         --------
@@ -441,6 +441,7 @@ class MeshLaplacian(LumpedLaplacian):
         >>> bool(err(free.sym_product(V[:, 0])) < 0.4), bool(err(free @ V[:, 0]) < 0.002)  # pencil, rows
         (True, True)
         """
+        f = check_function(f, self.n_vertices)
         if self.matrix_free:
             return self._built.assemble().matrix_free(np.asarray(f, dtype=np.float64))
         return np.asarray(self.L_sym @ f)

@@ -114,9 +114,9 @@ class Options:
             pointwise = True
         if pointwise is not None and pointwise not in POINTWISE:
             raise MeshError(f"pointwise must be True, False or 'fit'; got {pointwise!r}")
-        # the default: rows whose width and degree follow the data (issue 20); True keeps the
-        # degree-2 moment rows of the kernel's own stencil
-        # the fitted rows read the points alone, so a matrix-free kernel keeps them
+        # the default: rows whose width and degree follow the data, read from the points alone
+        # (so a matrix-free kernel has them too); True keeps the degree-2 moment rows of the
+        # kernel's own stencil
         pointwise = ("fit" if correction != "none" else False) if pointwise is None else (
             "fit" if pointwise == "fit" else bool(pointwise))
         neumann = on if neumann is None else bool(neumann)
