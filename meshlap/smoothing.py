@@ -22,7 +22,7 @@ import numpy as np
 
 from .errors import MeshError
 from .geometry.frames import vertex_normals
-from .geometry.mass import _mean_edge_length
+from .geometry.mass import _mean_edge_length, paper_width
 from .geometry.validation import check_faces, check_vertices
 from .heat import ImplicitHeat
 from .policy import decide
@@ -235,7 +235,7 @@ def mean_curvature_flow(
 def _default_laplacian(X: np.ndarray, faces: Any, h: float | None, denoise: bool) -> tuple[Callable, float]:
     from .builders import laplacian as bsw
 
-    h0 = (2.0 * _mean_edge_length(X, faces)) ** 2  # the paper's default width, meshlap.default_h
+    h0 = paper_width(_mean_edge_length(X, faces))  # meshlap.default_h without building a Geometry
     if not denoise:
         h = h0 if h is None else h
         return (lambda P, Q: bsw(P, Q, h=h)), h

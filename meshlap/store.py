@@ -318,7 +318,7 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
 def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:
     if geo is None:
         raise MeshError(f"{name}: a matrix-free operator saved without its geometry")
-    rows = {"fit": "fit", "False": False}.get(params.get("pointwise", "False"), False)
+    rows = "fit" if params.get("pointwise") == "fit" else False  # older files: the kernel's rows
     op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True, pointwise=rows,
                        correction=params["correction"], dtype=np.dtype(params["dtype"]))
     op.widths = replace(op.widths, h_auto=bool(params["h_auto"]))  # as it was built

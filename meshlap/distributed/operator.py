@@ -526,14 +526,14 @@ def laplacian(
             mass = _scattered_mass(comm, V, F)
         F = None
     if F is not None:
-        from ..geometry.mass import _face_areas, _mean_edge_length, _vertex_mass
+        from ..geometry.mass import _face_areas, _mean_edge_length, _vertex_mass, paper_width
 
         faces = check_faces(F, len(V))
         whole = (V, faces.triangles())
         if mass is None:
             mass = _vertex_mass(V, faces, _face_areas(V, faces))
         if h is None:
-            h = (2.0 * _mean_edge_length(V, faces)) ** 2
+            h = paper_width(_mean_edge_length(V, faces))
     if mass is None:
         raise MeshError("pass F (faces) or mass (one mass per point)")
     if h is None:

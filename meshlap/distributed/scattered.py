@@ -25,7 +25,7 @@ import numpy as np
 from .. import assembly
 from ..errors import MeshError
 from ..geometry import Polygons, frames
-from ..geometry.mass import _face_areas
+from ..geometry.mass import _face_areas, paper_width
 from ..geometry.validation import check_faces, check_h
 from ..pipeline import Options
 from ..widths import DEFAULT_H_SCALE
@@ -110,7 +110,7 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     count = comm.allreduce(len(e), op=MPI.SUM)
     spacing = _sum(comm, np.sqrt(d2).sum()) / max(count, 1)
     h0 = check_h(h) if h is not None else check_h(
-        (2.0 * spacing) ** 2 if opts.plain else DEFAULT_H_SCALE * spacing**2, "the automatic h")
+        paper_width(spacing) if opts.plain else DEFAULT_H_SCALE * spacing**2, "the automatic h")
     hv = np.full(len(V), h0)
     gi = need[e] if len(e) else np.zeros((0, 2), np.int64)
     if opts.curvature_limit:

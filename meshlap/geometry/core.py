@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import MeshError, MeshWarning
 from . import frames
-from .mass import _face_areas, _mean_edge_length, _vertex_mass
+from .mass import _face_areas, _mean_edge_length, _vertex_mass, paper_width
 from .polygons import Polygons
 from .topology import warn_if_messy
 from .validation import _as_real_array, check_faces, check_vertices
@@ -214,8 +214,8 @@ class Geometry:
 
     @property
     def default_h(self) -> float:
-        """The automatic kernel width h = (2·spacing)²."""
-        return (2.0 * self.spacing) ** 2
+        """The automatic kernel width h = (2·spacing)² (:func:`~meshlap.geometry.mass.paper_width`)."""
+        return paper_width(self.spacing)
 
 
 def check_points(P: Any, name: str = "P") -> np.ndarray:

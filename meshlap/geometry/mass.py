@@ -11,7 +11,7 @@ from .._jit import jit
 from .polygons import Polygons
 from .validation import check_faces, check_vertices
 
-__all__ = ["face_areas", "vertex_mass"]
+__all__ = ["face_areas", "paper_width", "vertex_mass"]
 
 
 def _face_areas(V: np.ndarray, faces: Polygons) -> np.ndarray:
@@ -56,6 +56,17 @@ def face_areas(V: Any, F: Any) -> np.ndarray:
     """
     V = check_vertices(V)
     return _face_areas(V, check_faces(F, len(V)))
+
+
+def paper_width(spacing: float) -> float:
+    """The paper's automatic kernel width h = (2a)², a the spacing (a mesh's mean edge length).
+
+    Examples
+    --------
+    >>> paper_width(0.25)
+    0.25
+    """
+    return (2.0 * spacing) ** 2
 
 
 def _mean_edge_length(V: np.ndarray, faces: Polygons) -> float:
