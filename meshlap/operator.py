@@ -16,7 +16,7 @@ computes nothing itself.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import scipy.sparse as sp
@@ -97,8 +97,8 @@ class MeshLaplacian(LumpedLaplacian):
     adaptive : bool, default False
         Per-vertex widths 4ℓ_w² from the local edge lengths.
     arc_distance, neumann : bool, optional
-        Default True with the correction (False when matrix-free; ``arc_distance`` only
-        where normals exist, codimension 1): distances scaled by the arc/chord ratio of the
+        Default True with the correction (``arc_distance`` only where normals exist,
+        codimension 1, and not matrix-free): distances scaled by the arc/chord ratio of the
         normals; mirror images at the boundary (Neumann spectra) for curves, surfaces,
         volumes and clouds.
     pointwise : {"fit", True, False}, optional
@@ -131,8 +131,9 @@ class MeshLaplacian(LumpedLaplacian):
         Value type of the stored matrix (float32 halves the memory of the values).
     matrix_free : bool, default False
         Do not store the kernel (a pencil too large for memory): spectra and heat flow recompute
-        it on the fly (:meth:`sym_product`); ``op @ f`` applies the fitted rows, which are
-        stored (about 50 entries a row), or with ``correction="none"`` the kernel recomputed.
+        it on the fly (:meth:`sym_product`), adding a boundary band's mirror images, stored;
+        ``op @ f`` applies the fitted rows, stored (about 50 entries a row), or with
+        ``correction="none"`` the kernel recomputed.
     max_memory : int, optional
         Bytes the stored matrix may take; default 80% of the memory available now. A build
         that would exceed it raises :class:`OperatorTooLargeError` before allocating: at
@@ -213,19 +214,19 @@ class MeshLaplacian(LumpedLaplacian):
         matrix_free: bool = False,
         max_memory: int | None = None,
         progress: ProgressLike = None,
-        correction: str | None = None,
+        correction: Literal["richardson", "none"] | None = None,
         adaptive: bool = False,
         arc_distance: bool | None = None,
-        pointwise: bool | None = None,
+        pointwise: bool | Literal["fit"] | None = None,
         neumann: bool | None = None,
         curvature_limit: float | None = None,
         check_psd: bool = True,
         k: int | None = None,
         pointwise_degree: int | None = None,
-        quadrature: str | None = None,
+        quadrature: Literal["vertex", "galerkin", "fem"] | None = None,
         feature_width: bool | None = None,
         denoise: bool = False,
-        mass: str = "lumped",
+        mass: Literal["lumped", "blend", "consistent"] = "lumped",
     ) -> None:
         self.geometry = as_geometry(V, F, k)
         self.options = pipeline.Options.resolve(
@@ -391,10 +392,12 @@ class MeshLaplacian(LumpedLaplacian):
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the CSR arrays of L_sym and the point-wise values (a matrix-free pencil
-        holds none): the pencil once built (:meth:`assemble`), the rows once fitted (:meth:`fit_rows`)."""
+        """Bytes held by L_sym's CSR arrays (matrix-free: the boundary's mirror images) and the point-
+        wise values: the pencil once built (:meth:`assemble`), the rows once fitted (:meth:`fit_rows`)."""
         pencil, rows = self._built.held_pencil, self._built.held_rows
         L = None if pencil is None else pencil.L_sym
+        if L is None and pencil is not None and pencil.matrix_free is not None:
+            L = pencil.matrix_free.images
         P = None if rows is None else rows.L
         total = 0 if L is None else L.data.nbytes + L.indices.nbytes + L.indptr.nbytes
         if P is not None and P is not L:

@@ -81,7 +81,7 @@ class Options:
 
     @classmethod
     def resolve(cls, geo: Geometry, h: Any, *, correction: str | None = None, adaptive: bool = False,
-                arc_distance: bool | None = None, pointwise: bool | None = None,
+                arc_distance: bool | None = None, pointwise: bool | str | None = None,
                 neumann: bool | None = None, curvature_limit: float | None = None,
                 check_psd: bool = True, matrix_free: bool = False, tol: float | None = None,
                 exact: bool = False, dtype: Any = np.float64, max_memory: int | None = None,
@@ -119,17 +119,16 @@ class Options:
         # kernel's own stencil
         pointwise = ("fit" if correction != "none" else False) if pointwise is None else (
             "fit" if pointwise == "fit" else bool(pointwise))
-        neumann = on if neumann is None else bool(neumann)
+        neumann = correction != "none" if neumann is None else bool(neumann)
         if curvature_limit is None:  # the kernel's widths; the FEM pencil reads none
             kernel_widths = on and h is None and has_normals and quadrature != "fem"
             curvature_limit = CURVATURE_LIMIT if kernel_widths else 0.0
         elif curvature_limit:
             check_positive(curvature_limit, "curvature_limit")
-        if matrix_free and (adaptive or arc_distance or pointwise is True or neumann or curvature_limit
+        if matrix_free and (adaptive or arc_distance or pointwise is True or curvature_limit
                             or np.ndim(h) == 1):
             raise MeshError("matrix_free=True supports a fixed h and Euclidean distances only: pass "
-                            "adaptive=False, arc_distance=False, pointwise='fit' or False, neumann=False, "
-                            "curvature_limit=0")
+                            "adaptive=False, arc_distance=False, pointwise='fit' or False, curvature_limit=0")
         if matrix_free and geo.ambient_dim > 3:
             raise MeshError(f"matrix_free=True needs points in at most 3 dimensions; these have "
                             f"{geo.ambient_dim}")

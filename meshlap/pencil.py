@@ -215,7 +215,11 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern)
         if dog:
             apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
-        return Pencil(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply)
+        if opts.neumann:
+            apply.images = corrections.images.band_images(geo.points, frames, geo.mass, widths.h, radius,
+                                                          dog, geo.dim, opts.tol)
+        return Pencil(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply,
+                      boundary_rows=0 if frames is None or not opts.neumann else len(band))
     guard = guard_for(geo, opts, widths.h, opts.neumann and frames is not None)
     hv = widths.per_point(geo.n_points)
 

@@ -263,7 +263,7 @@ def save_operator(path: str | os.PathLike, op: Any, *, mesh: bool = True,
             if not mesh:
                 raise MeshError("a matrix-free operator is rebuilt from its geometry: save it with mesh=True")
             arrays.update(matrix_free=np.array(True), dtype=np.array(np.dtype(op.dtype).name),
-                          pointwise=np.array(str(op.options.pointwise)))
+                          pointwise=np.array(str(op.options.pointwise)), neumann=np.array(op.options.neumann))
         else:
             applied, sym = _applied(op), symmetric_L(op)
             arrays.update(_csr_arrays("", sp.csr_matrix(applied)))
@@ -318,9 +318,11 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
 def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:
     if geo is None:
         raise MeshError(f"{name}: a matrix-free operator saved without its geometry")
-    rows = "fit" if params.get("pointwise") == "fit" else False  # older files: the kernel's rows
+    # older files: the kernel's rows, no mirror images
+    rows = "fit" if params.get("pointwise") == "fit" else False
     op = MeshLaplacian(geo, h=params["h"], tol=params["tol"], matrix_free=True, pointwise=rows,
-                       correction=params["correction"], dtype=np.dtype(params["dtype"]))
+                       neumann=bool(params.get("neumann", False)), correction=params["correction"],
+                       dtype=np.dtype(params["dtype"]))
     op.widths = replace(op.widths, h_auto=bool(params["h_auto"]))  # as it was built
     return op
 
@@ -374,7 +376,7 @@ def load_operator(path: str | os.PathLike) -> SavedLaplacian | MeshLaplacian:
                 f"reads version {FORMAT_VERSION}: build and save the operator again")
         mass = data["mass"]
         n = len(mass)
-        keys = (*_PARAMS, "h_auto", "name", "correction", "dtype", "elements", "pointwise")
+        keys = (*_PARAMS, "h_auto", "name", "correction", "dtype", "elements", "pointwise", "neumann")
         params = {k: data[k].item() for k in keys if k in data}
         if "h_vertex" in data:
             params["h_vertex"] = data["h_vertex"]

@@ -83,6 +83,10 @@ def test_matrix_free_operator_is_rebuilt(tmp_path):
     assert np.array_equal(eigs(back, 4)[0], eigs(op, 4)[0])
     with pytest.raises(meshlap.MeshError, match="mesh=True"):
         io.save_operator(tmp_path / "free2", op, mesh=False)
+    square = meshlap.point_cloud_laplacian(np.random.default_rng(1).random((300, 2)), matrix_free=True)
+    back = io.load_operator(io.save_operator(tmp_path / "square", square))  # with its mirror images
+    assert back.neumann and back.boundary_rows == square.boundary_rows > 0
+    assert np.array_equal(eigs(back, 3)[0], eigs(square, 3)[0])
 
 
 def test_wrong_arguments_and_versions(tmp_path):

@@ -345,7 +345,8 @@ def reweigh(L: sp.csr_matrix, points: np.ndarray, mass: np.ndarray, widths: Widt
 class MatrixFree:
     """The kernel operator applied without storing it: the grid is built once, each product
     recomputes the weights (one h; the Richardson kernel as 2 L_{h/2} − L_h, both cut at
-    r(h), the pairs of the assembled operator)."""
+    r(h), the pairs of the assembled operator), plus ``images``, the stored mirror images of
+    the boundary band (:func:`meshlap.corrections.images.band_images`) where there are any."""
 
     points: np.ndarray
     grid: grid.Grid
@@ -353,6 +354,7 @@ class MatrixFree:
     dim: int
     dog: bool
     scale: float = 1.0
+    images: sp.csr_matrix | None = None
 
     @classmethod
     def build(cls, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel) -> MatrixFree:
@@ -364,8 +366,12 @@ class MatrixFree:
     def __call__(self, f: np.ndarray) -> np.ndarray:
         P, g, h = self.points, self.grid, self.h
         if not self.dog:
-            return grid.apply(P, g, h, f, self.dim)
-        return self.scale * (2.0 * grid.apply(P, g, 0.5 * h, f, self.dim) - grid.apply(P, g, h, f, self.dim))
+            out = grid.apply(P, g, h, f, self.dim)
+        else:
+            out = 2.0 * grid.apply(P, g, 0.5 * h, f, self.dim) - grid.apply(P, g, h, f, self.dim)
+        if self.images is not None:
+            out += self.images @ f
+        return self.scale * out if self.dog else out
 
     def count_entries(self, sample: int = 512, seed: int = 0) -> float:
         """Estimated entries of the operator it does not store (:func:`sample_counts`)."""
