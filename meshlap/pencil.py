@@ -177,14 +177,20 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
                   area_scale=scale)
 
 
-def _apart(geo: Geometry, out: Pencil) -> None:
+def _part_labels(geo: Geometry, correction: str, quadrature: str) -> np.ndarray | None:
     # the kernel reaches across the air between the parts of a mesh: no pairs between parts, so
     # that each part keeps its own zero eigenvalue (the paper's operator, eq. 1, is left as it is)
     parts = fem.part_labels(geo)
-    if parts is None or parts[0] < 2 or out.correction == "none" and out.quadrature == "vertex":
+    paper = correction == "none" and quadrature == "vertex"
+    return None if parts is None or parts[0] < 2 or paper else parts[1]
+
+
+def _apart(geo: Geometry, out: Pencil) -> None:
+    label = _part_labels(geo, out.correction, out.quadrature)
+    if label is None:
         return
     same = out.L is out.L_sym
-    out.L_sym = fem.separate_parts(out.L_sym, parts[1])
+    out.L_sym = fem.separate_parts(out.L_sym, label)
     if same:
         out.L = out.L_sym
 
@@ -212,12 +218,14 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
     band = None if frames is None else frames[0]
     if opts.matrix_free:
-        apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern)
+        label = _part_labels(geo, opts.correction, opts.quadrature)
+        apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern, label)
         if dog:
             apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
         if opts.neumann:
-            apply.images = corrections.images.band_images(geo.points, frames, geo.mass, widths.h, radius,
-                                                          dog, geo.dim, opts.tol)
+            images = corrections.images.band_images(geo.points, frames, geo.mass, widths.h, radius, dog,
+                                                    geo.dim, opts.tol)
+            apply.images = images if images is None or label is None else fem.separate_parts(images, label)
         return Pencil(None, None, opts.correction, moment_scale=apply.scale, matrix_free=apply,
                       boundary_rows=0 if frames is None or not opts.neumann else len(band))
     guard = guard_for(geo, opts, widths.h, opts.neumann and frames is not None)
@@ -273,9 +281,12 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     if out.correction != "none":
         if report is not None:
             report(0.8, "moment scale")
+        # the moments of the rows the pencil keeps: a mesh's parts pair only within themselves
+        label = _part_labels(geo, out.correction, out.quadrature)
+        kept = free if label is None else fem.separate_parts(free, label)
         out.moment_scale = corrections.second_moment_scale(
-            lambda X: free @ X, geo.points, geo.mass, band, geo.dim,
-            None if moments[0] is None else moments[0][:, :1 + geo.points.shape[1]])
+            lambda X: kept @ X, geo.points, geo.mass, band, geo.dim,
+            None if moments[0] is None or kept is not free else moments[0][:, :1 + geo.points.shape[1]])
         L.data *= out.moment_scale
     if opts.pointwise is True:
         if report is not None:

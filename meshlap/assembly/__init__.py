@@ -346,10 +346,11 @@ class MatrixFree:
     """The kernel operator applied without storing it: the grid is built once, each product
     recomputes the weights (one h; the Richardson kernel as 2 L_{h/2} − L_h, both cut at
     r(h), the pairs of the assembled operator), plus ``images``, the stored mirror images of
-    the boundary band (:func:`meshlap.corrections.images.band_images`) where there are any."""
+    the boundary band (:func:`meshlap.corrections.images.band_images`) where there are any.
+    ``pieces``: (indices, points, grid) of each part of a mesh (indices None: one part, all
+    the points), which pairs only within itself; a part of one point has a zero row."""
 
-    points: np.ndarray
-    grid: grid.Grid
+    pieces: list[tuple[np.ndarray | None, np.ndarray, grid.Grid]]
     h: float
     dim: int
     dog: bool
@@ -357,25 +358,38 @@ class MatrixFree:
     images: sp.csr_matrix | None = None
 
     @classmethod
-    def build(cls, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel) -> MatrixFree:
-        """Bin the points for the cut-off of ``widths.h``."""
-        P = pad3(points)
-        return cls(P, grid.build_grid(P, mass, cutoff_radius(widths.h, kernel.tol)), widths.h, kernel.dim,
-                   kernel.dog)
+    def build(cls, points: np.ndarray, mass: np.ndarray, widths: Widths, kernel: Kernel,
+              label: np.ndarray | None = None) -> MatrixFree:
+        """Bin the points for the cut-off of ``widths.h``; with ``label`` (a part per point),
+        each part of two points or more on its own grid."""
+        P, r = pad3(points), cutoff_radius(widths.h, kernel.tol)
+        if label is None:
+            pieces = [(None, P, grid.build_grid(P, mass, r))]
+        else:
+            order = np.argsort(label, kind="stable")
+            groups = np.split(order, np.flatnonzero(np.diff(label[order])) + 1)
+            pieces = [(idx, P[idx], grid.build_grid(P[idx], mass[idx], r)) for idx in groups if len(idx) > 1]
+        return cls(pieces, widths.h, kernel.dim, kernel.dog)
+
+    def _kernel(self, P: np.ndarray, g: grid.Grid, f: np.ndarray) -> np.ndarray:
+        if not self.dog:
+            return grid.apply(P, g, self.h, f, self.dim)
+        return 2.0 * grid.apply(P, g, 0.5 * self.h, f, self.dim) - grid.apply(P, g, self.h, f, self.dim)
 
     def __call__(self, f: np.ndarray) -> np.ndarray:
-        P, g, h = self.points, self.grid, self.h
-        if not self.dog:
-            out = grid.apply(P, g, h, f, self.dim)
+        if len(self.pieces) == 1 and self.pieces[0][0] is None:
+            out = self._kernel(self.pieces[0][1], self.pieces[0][2], f)
         else:
-            out = 2.0 * grid.apply(P, g, 0.5 * h, f, self.dim) - grid.apply(P, g, h, f, self.dim)
+            out = np.zeros(f.shape)
+            for idx, P, g in self.pieces:
+                out[idx] = self._kernel(P, g, np.ascontiguousarray(f[idx]))
         if self.images is not None:
             out += self.images @ f
         return self.scale * out if self.dog else out
 
     def count_entries(self, sample: int = 512, seed: int = 0) -> float:
         """Estimated entries of the operator it does not store (:func:`sample_counts`)."""
-        return sample_counts(self.points, self.grid, sample, seed)[0]
+        return float(sum(sample_counts(P, g, sample, seed)[0] for _, P, g in self.pieces))
 
 
 def _warn_lonely(counts: np.ndarray, mass: np.ndarray, radius: float, h: float) -> None:
