@@ -29,7 +29,7 @@ from .options import Options
 from .tuned import GALERKIN_H_SCALE, NOISE_ROUGHNESS
 from .widths import Widths
 
-__all__ = ["Pencil", "assemble", "guard_for", "review"]
+__all__ = ["Pencil", "assemble", "guard_for", "part_label", "review"]
 
 
 @dataclass
@@ -177,16 +177,29 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
                   area_scale=scale)
 
 
-def _part_labels(geo: Geometry, correction: str, quadrature: str) -> np.ndarray | None:
-    # the kernel reaches across the air between the parts of a mesh: no pairs between parts, so
-    # that each part keeps its own zero eigenvalue (the paper's operator, eq. 1, is left as it is)
+def part_label(geo: Geometry, opts: Options) -> np.ndarray | None:
+    """The part of each point where the pencil keeps a mesh's parts apart, else None.
+
+    The kernel reaches across the air between the parts of a mesh: the pencil has no pairs
+    between parts, so that each part keeps its own zero eigenvalue (a plain kernel after the
+    semidefinite check's fallback too); the paper's operator, eq. (1), is left as it is.
+
+    Examples
+    --------
+    >>> import meshlap, numpy as np
+    >>> V, F = meshlap.shapes.sphere(200, seed=0)
+    >>> g = meshlap.geometry.from_mesh(np.vstack([V, V + 3]), np.vstack([F, F + 200]))
+    >>> [None if (x := part_label(g, Options.resolve(g, None, correction=c))) is None else int(x.max())
+    ...  for c in ("richardson", "none")]
+    [1, None]
+    """
     parts = fem.part_labels(geo)
-    paper = correction == "none" and quadrature == "vertex"
+    paper = opts.correction == "none" and opts.quadrature == "vertex"
     return None if parts is None or parts[0] < 2 or paper else parts[1]
 
 
-def _apart(geo: Geometry, out: Pencil) -> None:
-    label = _part_labels(geo, out.correction, out.quadrature)
+def _apart(geo: Geometry, opts: Options, out: Pencil) -> None:
+    label = part_label(geo, opts)
     if label is None:
         return
     same = out.L is out.L_sym
@@ -218,7 +231,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
     frames = geo.boundary_frames(radius) if (opts.neumann or dog) else None
     band = None if frames is None else frames[0]
     if opts.matrix_free:
-        label = _part_labels(geo, opts.correction, opts.quadrature)
+        label = part_label(geo, opts)
         apply = assembly.MatrixFree.build(geo.points, geo.mass, widths, kern, label)
         if dog:
             apply.scale = corrections.second_moment_scale(apply, geo.points, geo.mass, band, geo.dim)
@@ -282,7 +295,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         if report is not None:
             report(0.8, "moment scale")
         # the moments of the rows the pencil keeps: a mesh's parts pair only within themselves
-        label = _part_labels(geo, out.correction, out.quadrature)
+        label = part_label(geo, opts)
         kept = free if label is None else fem.separate_parts(free, label)
         out.moment_scale = corrections.second_moment_scale(
             lambda X: kept @ X, geo.points, geo.mass, band, geo.dim,
@@ -294,7 +307,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         out.L, out.pointwise_unchanged = _stencil_rows(geo, free, hv, opts)
     if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
-    _apart(geo, out)
+    _apart(geo, opts, out)
     if report is not None:
         report(1.0, "done")
     return out

@@ -284,6 +284,26 @@ class Checks:
         # the ranks build the vertex pencil, the kernel builder's on a single machine
         self._corrected("corrected_plane", V, F, meshlap.laplacian(V, F, operator="kernel"))
 
+    def corrected_parts(self):
+        """Two unit spheres 0.02 apart: no pairs between the parts on the ranks either (the
+        single machine's L_sym), so one zero eigenvalue each."""
+        import meshlap
+        from meshlap import distributed, spectral
+
+        V, F = meshlap.shapes.sphere(800, seed=0)
+        V2, F2 = np.vstack([V, V + [2.02, 0, 0]]), np.vstack([F, F + len(V)])
+        op = distributed.laplacian(V2, F2, comm=self.comm)
+        B = op.to_scipy(symmetric=True)
+        lam, _ = distributed.eigs(op, 6, tol=1e-12)
+        if self.rank == 0:
+            serial = meshlap.laplacian(V2, F2, operator="kernel")
+            e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
+            lam0, _ = spectral.eigs(serial, 6, tol=1e-10)
+            err = float(np.abs(lam[2:] / lam0[2:] - 1).max())
+            assert e_S <= 1e-12 and np.abs(lam[:2]).max() < 1e-8 and err <= 1e-8, (e_S, lam, lam0)
+            self.report("corrected_parts", f"L_sym {e_S:.1e}; λ0, λ1 {lam[0]:.1e} {lam[1]:.1e}, "
+                        f"λ2..λ5 {err:.1e}")
+
     def corrected_scattered(self):
         """Scattered input (each rank a chunk of the points and a share of the faces, no rank the
         whole mesh): the same default from global reductions."""

@@ -154,6 +154,13 @@ def test_parts_are_parts():
     assert np.abs(lam[:2]).max() < 1e-8 and abs(lam[2] / one - 1) < 1e-6
     stored = meshlap.laplacian(V2, F2, operator="kernel", h=free.h, arc_distance=False, curvature_limit=0)
     assert np.abs(free.sym_product(V2) - stored.L_sym @ V2).max() < 1e-12 * np.abs(stored.L_sym @ V2).max()
+    # and after the semidefinite check's fallback to the plain kernel (h = 0.3 ē²: test_accuracy)
+    R, T = meshlap.shapes.sphere(2000, kind="random", seed=1)
+    h = 0.3 * meshlap.geometry.from_mesh(R, T).spacing ** 2
+    with pytest.warns(meshlap.MeshWarning, match="not negative semidefinite"):
+        op = meshlap.laplacian(np.vstack([R, R + [2.02, 0, 0]]), np.vstack([T, T + len(R)]), h=h)
+        lam = meshlap.spectral.eigs(op, 3)[0]
+    assert op.fallback_reason is not None and np.abs(lam[:2]).max() < 1e-8 and lam[2] > 1
     assert meshlap.laplacian(V2, F2).decision.measured["parts"] == 2
     # the paper's operator, bit for bit, reaches across the gap (docs/messy.md)
     assert meshlap.spectral.eigs(meshlap.laplacian(V2, F2, operator="paper"), 3)[0][1] > 0.1

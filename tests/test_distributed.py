@@ -61,8 +61,9 @@ def test_corrected_default_equals_serial(n):
     """The single machine's default (Richardson kernel, curvature-capped widths, arc distances,
     mirror images, moment scale, fitted point-wise rows) on n ranks: gathered matrices to 1e-12
     relative, eigenvalues to 1e-10, for a mesh with boundary and a point cloud; and from scattered
-    input (chunks of points, shares of the faces) by global reductions."""
-    mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered")
+    input (chunks of points, shares of the faces) by global reductions; a mesh of two parts with
+    no pairs between them."""
+    mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered", "corrected_parts")
 
 
 @needs_mpi

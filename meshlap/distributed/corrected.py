@@ -25,9 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .. import assembly, corrections
+from .. import assembly, corrections, fem
 from ..geometry import Geometry
 from ..options import Options
+from ..pencil import part_label
 from ..widths import Widths
 
 __all__ = ["PointAttributes", "attributes", "local_rows"]
@@ -36,7 +37,8 @@ __all__ = ["PointAttributes", "attributes", "local_rows"]
 @dataclass(frozen=True)
 class PointAttributes:
     """What the corrected kernel reads of each point besides position and mass, as columns
-    of one (n, 2 + 3d) array: h_w, the band flag, n_w (d), b_w (d), ν_w (d)."""
+    of one (n, 2 + 3d) array: h_w, the band flag, n_w (d), b_w (d), ν_w (d); then a denoised
+    cloud's input points (d, ``raw``) and the part of a mesh of several parts (1, ``parts``)."""
 
     table: np.ndarray
     dim: int  # intrinsic dimension k
@@ -50,10 +52,15 @@ class PointAttributes:
 
     raw: bool = False  # d more columns: a denoised cloud's input points, where f was sampled
     degree: int | None = None  # pointwise_degree: fitted rows of that degree on the kernel's stencil
+    parts: bool = False  # the last column: each point's part (no pairs between parts)
 
     @property
     def d(self) -> int:
-        return (self.table.shape[1] - 2) // (4 if self.raw else 3)
+        return (self.table.shape[1] - 2 - self.parts) // (4 if self.raw else 3)
+
+    def part(self, T: np.ndarray) -> np.ndarray | None:
+        """Each row's part (:func:`meshlap.pencil.part_label`), or None: pairs between all."""
+        return T[:, -1].astype(np.int64) if self.parts else None
 
     def columns(self, T: np.ndarray) -> tuple[np.ndarray, ...]:
         """(h, band, normals, b, ν) of a table with these columns (this one's rows or a halo's)."""
@@ -87,9 +94,12 @@ def attributes(geo: Geometry, widths: Widths, opts: Options) -> PointAttributes:
     raw = geo._cache.get("input_points") if opts.pointwise == "fit" else None
     if raw is not None:
         T = np.column_stack([T, assembly.pad3(raw)])
+    label = part_label(geo, opts)
+    if label is not None:
+        T = np.column_stack([T, label])
     return PointAttributes(T, geo.dim, not opts.plain, opts.arc_distance, opts.neumann,
                            opts.pointwise, opts.check_psd, opts.tol, d0, raw is not None,
-                           opts.pointwise_degree)
+                           opts.pointwise_degree, label is not None)
 
 
 def _rows_csr(P, mass, g, rows, hv, attrs: PointAttributes, normals, dog: bool) -> sp.csr_matrix:
@@ -154,9 +164,12 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
             info["correction"] = "none"
             tell(0.6, "plain kernel rows")
             free, L = stage(False)
+    label = attrs.part(table)
+    kept = free if label is None else fem.separate_parts(free, label)  # as the single machine's
+    L = L if label is None else fem.separate_parts(L, label)
     if info["correction"] != "none":
         tell(0.8, "moment scale")
-        Y = free @ np.column_stack([(P**2).sum(axis=1), P])
+        Y = kept @ np.column_stack([(P**2).sum(axis=1), P])
         mu = Y[:n_own, 0] - 2.0 * (P[:n_own] * Y[:n_own, 1:]).sum(axis=1)
         use = (mass[:n_own] > 0) & ~band[:n_own]
         num = comm.allreduce(float((mu[use] * mass[:n_own][use]).sum()), op=MPI.SUM)
