@@ -74,8 +74,9 @@ def laplacian(
     matrix_free : bool, default False
         The kernel's pencil (one h, Euclidean distances), not stored: spectra and heat flow
         recompute it (a boundary's mirror images stored); ``op @ f`` applies the fitted rows,
-        stored (the kernel's own with ``operator="paper"``). For a large cloud: a mesh's default
-        pencil, linear FEM, stores no kernel (about 7 entries a row) and is the more accurate.
+        stored (the kernel's own with ``operator="paper"``). Meant for large clouds: on a mesh
+        the default pencil, linear FEM, stores no kernel (7 entries a row on triangles) and is
+        the more accurate.
     dtype : {"float64", "float32"}, default float64
         Value type of the stored matrices.
     progress : bool or callable, optional
