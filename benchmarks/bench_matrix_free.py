@@ -2,6 +2,7 @@
 
     python benchmarks/bench_matrix_free.py            # a 200,000-vertex sphere
     python benchmarks/bench_matrix_free.py --n 50000 --square 5000
+    MESHLAP_CORPUS=/path/to/corpus python benchmarks/bench_matrix_free.py --real-only   # 6 min
 
 ``meshlap.laplacian(V, F, matrix_free=True)`` keeps no kernel; its ``op @ f`` applies the fitted
 point-wise rows, which read the points alone and are stored. ``pointwise=False`` applies the
@@ -18,6 +19,12 @@ boundary band, stored; this prints the largest relative error of λ1..λ9 and th
 build and 10 eigenpairs for the matrix-free default, the same without images
 (``neumann=False``, what ``matrix_free=True`` built before), the stored default, the paper's
 operator matrix-free and robust-laplacian's point-cloud Laplacian (the peer, same process).
+
+``--real`` (or ``--real-only``) runs the real meshes of bench_real.py's corpus that have a
+boundary (at most ``--max-n`` vertices): the spectrum error (bench_real.py's: λ1..λ9 against the
+refined-FEM reference, cached) of the default, robust-laplacian's mesh Laplacian (the peer),
+the matrix-free kernel pencil (``operator="kernel", matrix_free=True``) with and without the
+mirror images, and the paper's operator matrix-free.
 """
 
 from __future__ import annotations
@@ -46,7 +53,13 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=200_000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--square", type=int, default=20_000, help="points of the bounded case")
+    ap.add_argument("--real", action="store_true", help="also the corpus's meshes with a boundary")
+    ap.add_argument("--real-only", action="store_true", help="only the corpus's meshes with a boundary")
+    ap.add_argument("--max-n", type=int, default=12_000, help="largest corpus mesh (vertices)")
     args = ap.parse_args()
+    if args.real_only:
+        real(args.max_n)
+        return
     V, F = meshlap.shapes.sphere(args.n, seed=0)
     x = V[:, 0]
     f = np.ascontiguousarray(V)
@@ -68,7 +81,10 @@ def main() -> None:
     print(f"\n10 eigenpairs of the default's matrix-free pencil (the kernel rows' too): {ew:.1f} s "
           f"({ec:.1f}); λ1..λ3 {lam[1]:.4f} {lam[2]:.4f} {lam[3]:.4f} (exact 2)")
 
-    square(args.square)
+    if not args.real_only:
+        square(args.square)
+    if args.real or args.real_only:
+        real(args.max_n)
 
 
 def square(n: int) -> None:
@@ -100,6 +116,51 @@ def square(n: int) -> None:
         lam = np.sort(lam)
         print(f"| robust-laplacian point cloud (peer) | {w:.1f} ({c:.1f}) | — | {lam[1] / np.pi**2:.4f} | "
               f"{np.abs(lam[1:] / exact - 1).max():.2%} |")
+
+
+def real(max_n: int) -> None:
+    """The corpus's meshes with a boundary: the matrix-free kernel pencil against the default."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import real_corpus as rc
+    from bench_real import RefCache
+
+    warnings.simplefilter("ignore")
+    folder = rc.corpus_dir()
+    cache = RefCache(folder)
+    print("\nreal meshes with a boundary: largest relative error of λ1..λ9 against refined FEM")
+    print("| mesh | n | band | default | robust-laplacian | kernel, matrix-free | same, neumann=False "
+          "| paper's, matrix-free |")
+    print("|---|---|---|---|---|---|---|---|")
+    for entry in rc.manifest():
+        if entry["vertices"] > max_n or not (folder / entry["file"]).exists():
+            continue
+        mesh = rc.load(folder / entry["file"], entry["format"])
+        V, F, kw = mesh.Vw, mesh.Cw, ({"k": 3} if mesh.tet else {})
+        free = meshlap.laplacian(V, F, operator="kernel", matrix_free=True, **kw)
+        if free.boundary_rows == 0:
+            continue
+        parts = rc.parts(F, len(V))
+        ref = np.array(cache.get(entry["sha256"], mesh, 10 + parts)["ref"])
+
+        def err(op, ref=ref, parts=parts) -> str:
+            try:
+                return f"{rc.spectrum_error(meshlap.spectral.eigs(op, 10 + parts)[0], ref, parts):.2%}"
+            except meshlap.EigenError:  # refused: none of its solvers verified the pairs
+                return "EigenError"
+
+        peer = "—"
+        if robust_laplacian is not None and not mesh.tet:
+            L, M = robust_laplacian.mesh_laplacian(np.asarray(V, float), np.asarray(F))
+            peer = f"{rc.spectrum_error(rc.pencil_eigs(L, M, 10 + parts), ref, parts):.2%}"
+        bare = meshlap.laplacian(V, F, operator="kernel", matrix_free=True, neumann=False, **kw)
+        paper = meshlap.laplacian(V, F, operator="paper", matrix_free=True, **kw)
+        default = meshlap.laplacian(V, F, **kw)
+        print(f"| {entry['name']} ({parts} parts) | {len(V):,} | {free.boundary_rows:,} | {err(default)} "
+              f"| {peer} | {err(free)} | {err(bare)} | {err(paper)} |", flush=True)
 
 
 if __name__ == "__main__":

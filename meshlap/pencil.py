@@ -198,16 +198,6 @@ def part_label(geo: Geometry, opts: Options) -> np.ndarray | None:
     return None if parts is None or parts[0] < 2 or paper else parts[1]
 
 
-def _apart(geo: Geometry, opts: Options, out: Pencil) -> None:
-    label = part_label(geo, opts)
-    if label is None:
-        return
-    same = out.L is out.L_sym
-    out.L_sym = fem.separate_parts(out.L_sym, label)
-    if same:
-        out.L = out.L_sym
-
-
 def assemble(geo: Geometry, widths: Widths, opts: Options,
              report: Callable[[float, str], None] | None = None) -> Pencil:
     """The symmetric pencil of one geometry at its widths: kernel rows, the
@@ -291,12 +281,14 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
             out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
+    label = part_label(geo, opts)
+    kept = free if label is None else fem.separate_parts(free, label)  # the rows the pencil keeps
+    if label is not None:
+        L = kept if L is free else fem.separate_parts(L, label)
+        out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
     if out.correction != "none":
         if report is not None:
             report(0.8, "moment scale")
-        # the moments of the rows the pencil keeps: a mesh's parts pair only within themselves
-        label = part_label(geo, opts)
-        kept = free if label is None else fem.separate_parts(free, label)
         out.moment_scale = corrections.second_moment_scale(
             lambda X: kept @ X, geo.points, geo.mass, band, geo.dim,
             None if moments[0] is None or kept is not free else moments[0][:, :1 + geo.points.shape[1]])
@@ -307,7 +299,10 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         out.L, out.pointwise_unchanged = _stencil_rows(geo, free, hv, opts)
     if not opts.plain or opts.quadrature == "galerkin":
         _galerkin(geo, widths, opts, out, report)
-    _apart(geo, opts, out)
+    if label is not None and out.quadrature == "galerkin":  # its own pencil, over the cells
+        same = out.L is out.L_sym
+        out.L_sym = fem.separate_parts(out.L_sym, label)
+        out.L = out.L_sym if same else out.L
     if report is not None:
         report(1.0, "done")
     return out
