@@ -363,15 +363,7 @@ def welded(geo: Any) -> np.ndarray | None:
     >>> welded(meshlap.geometry.from_mesh(V, [[0, 1, 2], [3, 4, 2]])).tolist()
     [0, 1, 2, 1, 4]
     """
-    def make() -> np.ndarray | None:
-        from .geometry.topology import duplicate_vertices
-
-        if geo.ambient_dim > 3:
-            return None
-        rep = duplicate_vertices(geo.points)
-        return None if bool((rep == np.arange(len(rep))).all()) else rep
-
-    return geo._cached("weld", make)
+    return geo.copies()
 
 
 def welded_cells(cells: np.ndarray, rep: np.ndarray) -> np.ndarray:

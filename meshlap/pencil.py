@@ -29,7 +29,7 @@ from .options import Options
 from .tuned import GALERKIN_H_SCALE, NOISE_ROUGHNESS
 from .widths import Widths
 
-__all__ = ["Pencil", "assemble", "guard_for", "part_label", "review"]
+__all__ = ["Pencil", "assemble", "guard_for", "keeps_parts", "part_label", "review"]
 
 
 @dataclass
@@ -194,8 +194,21 @@ def part_label(geo: Geometry, opts: Options) -> np.ndarray | None:
     [1, None]
     """
     parts = fem.part_labels(geo)
-    paper = opts.correction == "none" and opts.quadrature == "vertex"
-    return None if parts is None or parts[0] < 2 or paper else parts[1]
+    return None if parts is None or parts[0] < 2 or not keeps_parts(opts) else parts[1]
+
+
+def keeps_parts(opts: Options) -> bool:
+    """Whether the pencil of these options keeps a mesh's parts apart: all but the paper's
+    operator, eq. (1), which is left as it is.
+
+    Examples
+    --------
+    >>> import meshlap
+    >>> g = meshlap.geometry.from_mesh(*meshlap.shapes.sphere(200, seed=0))
+    >>> [keeps_parts(Options.resolve(g, None, correction=c)) for c in ("richardson", "none")]
+    [True, False]
+    """
+    return not (opts.correction == "none" and opts.quadrature == "vertex")
 
 
 def assemble(geo: Geometry, widths: Widths, opts: Options,

@@ -105,12 +105,14 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     if geo.tiled:
         cells = geo.faces.triangles() if geo.faces is not None else geo.cells
         c = cells.shape[1]
+        rep = geo.copies()  # a seam between copies is no boundary
         if c == 2:  # a curve: its ends
-            return np.bincount(cells.ravel(), minlength=n) == 1
+            ends = np.bincount(cells.ravel(), minlength=n) == 1
+            return ends if rep is None else ends & (np.bincount(rep[cells].ravel(), minlength=n) == 1)[rep]
         sides = np.concatenate([np.delete(cells, j, axis=1) for j in range(c)])
-        key = np.sort(sides, axis=1)
+        key = np.sort(sides if rep is None else rep[sides], axis=1)
         _, inv, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-        once = key[counts[inv.ravel()] == 1]
+        once = sides[(counts[inv.ravel()] == 1) & np.all(key[:, 1:] != key[:, :-1], axis=1)]
         if not len(once):
             return np.zeros(n)
         share = np.repeat(simplex_volumes(P, once) / (c - 1), c - 1)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -288,21 +289,29 @@ class Checks:
         """Two unit spheres 0.02 apart: no pairs between the parts on the ranks either (the
         single machine's L_sym), so one zero eigenvalue each."""
         import meshlap
-        from meshlap import distributed, spectral
+        from meshlap import distributed
 
         V, F = meshlap.shapes.sphere(800, seed=0)
         V2, F2 = np.vstack([V, V + [2.02, 0, 0]]), np.vstack([F, F + len(V)])
-        op = distributed.laplacian(V2, F2, comm=self.comm)
+        self._two_parts("corrected_parts", distributed.laplacian(V2, F2, comm=self.comm),
+                        lambda: meshlap.laplacian(V2, F2, operator="kernel"))
+
+    def _two_parts(self, name, op, serial):
+        """op's L_sym is the single machine's (``serial()``, on rank 0) to 1e-12, with two zero
+        eigenvalues and the next four to 1e-8."""
+        from meshlap import distributed, spectral
+
         B = op.to_scipy(symmetric=True)
         lam, _ = distributed.eigs(op, 6, tol=1e-12)
         if self.rank == 0:
-            serial = meshlap.laplacian(V2, F2, operator="kernel")
+            serial = serial()
             e_S = abs(B - serial.L_sym).max() / abs(serial.L_sym).max()
             lam0, _ = spectral.eigs(serial, 6, tol=1e-10)
             err = float(np.abs(lam[2:] / lam0[2:] - 1).max())
             assert e_S <= 1e-12 and np.abs(lam[:2]).max() < 1e-8 and err <= 1e-8, (e_S, lam, lam0)
-            self.report("corrected_parts", f"L_sym {e_S:.1e}; λ0, λ1 {lam[0]:.1e} {lam[1]:.1e}, "
-                        f"λ2..λ5 {err:.1e}")
+            self.report(name, f"{op.n_vertices} points, L_sym {e_S:.1e}; λ0, λ1 {lam[0]:.1e} {lam[1]:.1e}, "
+                        f"λ2..λ5 {err:.1e} (single machine {lam0[2]:.4f}, boundary rows "
+                        f"{serial.boundary_rows})")
 
     def corrected_scattered(self):
         """Scattered input (each rank a chunk of the points and a share of the faces, no rank the
@@ -326,6 +335,32 @@ class Checks:
             assert A.nnz == serial.L.nnz and max(e_L, e_S) <= 1e-12, (A.nnz, serial.L.nnz, e_L, e_S)
             self.report("corrected_scattered", f"L {e_L:.1e}, L_sym {e_S:.1e} ({A.nnz} entries, widths "
                         f"{serial.h_vertex.min():.3g}-{serial.h_vertex.max():.3g})")
+
+    def scattered_parts(self):
+        """Two spheres 0.02 apart as a triangle soup (every face its own three corners), scattered:
+        the copies welded across the ranks (no seam is a boundary, the normals are the points'),
+        no pairs between the two parts: the single machine's L_sym, one zero eigenvalue each."""
+        import meshlap
+        from meshlap import distributed
+
+        V, F = meshlap.shapes.sphere(300, seed=0)
+        V2, F2 = np.vstack([V, V + [2.02, 0, 0]]), np.vstack([F, F + len(V)])
+        Vs, Fs = V2[F2].reshape(-1, 3), np.arange(3 * len(F2)).reshape(-1, 3)
+        cuts = np.linspace(0, len(Vs), self.size + 1).astype(int)
+        a, b = int(cuts[self.rank]), int(cuts[self.rank + 1])
+        share = np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum()
+        fc = np.round(len(Fs) * share).astype(int)
+        mine = Fs[fc[self.rank]:fc[self.rank + 1]]  # uneven shares, other than the points'
+        op = distributed.laplacian(Vs[a:b], mine, scattered=True, comm=self.comm)
+
+        def serial():
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", meshlap.MeshWarning)  # the soup's copies
+                welded = meshlap.laplacian(Vs, Fs, quadrature="vertex")
+            assert welded.boundary_rows == 0
+            return welded
+
+        self._two_parts("scattered_parts", op, serial)
 
     def corrected_cloud(self):
         import meshlap

@@ -62,8 +62,9 @@ def test_corrected_default_equals_serial(n):
     mirror images, moment scale, fitted point-wise rows) on n ranks: gathered matrices to 1e-12
     relative, eigenvalues to 1e-10, for a mesh with boundary and a point cloud; and from scattered
     input (chunks of points, shares of the faces) by global reductions; a mesh of two parts with
-    no pairs between them."""
-    mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered", "corrected_parts")
+    no pairs between them, whole and as a scattered triangle soup (copies welded across ranks)."""
+    mpirun(n, "corrected_plane", "corrected_cloud", "corrected_scattered", "corrected_parts",
+           "scattered_parts")
 
 
 @needs_mpi

@@ -374,6 +374,44 @@ def test_near_copies_by_sweep_as_by_the_tree(monkeypatch):
     assert found == [0, 800, 40, 50, 5, 592] and swept == [True, True, False, True, True, False]
 
 
+def _soup(V, C):
+    return V[C].reshape(-1, V.shape[1]), np.arange(C.size).reshape(C.shape)
+
+
+def test_a_seam_between_copies_is_no_boundary():
+    # a triangle soup (every cell its own corners) has the boundary of its welded mesh: a closed
+    # sphere none (before: every vertex, so mirror images everywhere and the corrected kernel's
+    # λ1 2.33 against 2.00), a disc its rim; its copies take their point's normal
+    V, F = shapes.sphere(400, seed=0)
+    W, G = _soup(V, F)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)
+        soup = meshlap.laplacian(W, G, operator="kernel", curvature_limit=0)
+    whole = meshlap.laplacian(V, F, operator="kernel", curvature_limit=0)
+    assert soup.boundary_rows == 0 and not soup.geometry.boundary.any()
+    assert np.allclose(soup.geometry.normals(), whole.geometry.normals()[F.reshape(-1)], atol=1e-12)
+    lam, lam0 = spectral.eigs(soup, 8)[0], spectral.eigs(whole, 8)[0]
+    assert np.allclose(lam, lam0, rtol=1e-6, atol=1e-9)  # the same points and masses, welded
+    P, T = shapes.disc(500, seed=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)
+        g = meshlap.geometry.from_mesh(*_soup(P, T))
+    rim = meshlap.geometry.from_mesh(P, T).boundary
+    assert np.array_equal(g.boundary, rim[T.reshape(-1)])
+    assert meshlap.solve.boundary_measure(g).sum() == pytest.approx(meshlap.solve.boundary_measure(
+        meshlap.geometry.from_mesh(P, T)).sum(), rel=1e-12)  # the rim's length
+    # a curve's ends and a tetrahedral cube's hull, from their soups
+    t = np.linspace(0, 1, 11)
+    C = np.column_stack([np.arange(10), np.arange(1, 11)])
+    curve = meshlap.geometry.polyline(*_soup(np.column_stack([t, t**2]), C))
+    assert np.flatnonzero(curve.boundary).tolist() == [0, 19]
+    assert meshlap.solve.boundary_measure(curve).sum() == 2
+    X, tets = meshlap.samples.cube_tetrahedra(3)
+    solid = meshlap.geometry.tetrahedra(*_soup(X, tets))
+    assert np.array_equal(solid.boundary, meshlap.geometry.tetrahedra(X, tets).boundary[tets.reshape(-1)])
+    assert meshlap.solve.boundary_measure(solid).sum() == pytest.approx(6.0, rel=1e-12)  # the cube's faces
+
+
 def test_boundary_mask_and_bias():
     # plane [-1, 1]²: the band is the set of vertices within width·√h of the square's sides
     V, F = shapes.plane(4000, seed=7)

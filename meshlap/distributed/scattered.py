@@ -12,7 +12,11 @@ faces each rank holds, in the same formulas as :mod:`meshlap.geometry` and
   ring averages over the sides, each pass one fetch and one scatter;
 * the boundary: every side goes to the owner of its smaller vertex, which finds the sides
   that occur once and samples them; the samples (a curve's worth) are shared with all ranks,
-  and each rank finds its points' nearest one.
+  and each rank finds its points' nearest one;
+* the parts: connected through the faces and through coincident copies (an unwelded seam, a
+  triangle soup; found in cells of the tolerance's size, each cell on one rank), as
+  :func:`meshlap.fem.part_labels`; each point's part is the smallest global index in it, from
+  hooking and pointer jumping over the owners.
 """
 
 from __future__ import annotations
@@ -26,13 +30,19 @@ from .. import assembly
 from ..errors import MeshError
 from ..geometry import Polygons, frames
 from ..geometry.mass import _face_areas, paper_width
+from ..geometry.topology import DUPLICATE_RTOL
 from ..geometry.validation import check_faces, check_h
+from ..pencil import keeps_parts
 from ..pipeline import Options
 from ..widths import DEFAULT_H_SCALE
-from .comm import _exchange
+from .comm import _box, _exchange, _reduce
 from .corrected import PointAttributes
 
 __all__ = ["scattered_attributes"]
+
+# cells of this many copy distances: a point's ball meets one cell, but within that distance of
+# a side (on average 1 + 3·2/64 cells a point)
+_COPY_CELL = 64.0
 
 
 class _Chunks:
@@ -102,6 +112,12 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     T = local.triangles() if faces.n_faces else np.zeros((0, 3), np.int64)
     fn = np.cross(Vn[T[:, 1]] - Vn[T[:, 0]], Vn[T[:, 2]] - Vn[T[:, 0]]) if len(T) else np.zeros((0, 3))
     N = ch.add(need[T.reshape(-1)], np.repeat(fn, 3, axis=0))
+    # copies weld where normals, the boundary or the parts are read (not in the paper's operator)
+    welds = opts.arc_distance or opts.curvature_limit or opts.neumann or not opts.plain or keeps_parts(opts)
+    copies = _copies(ch, V) if welds else (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    rep = _components(ch, *copies) if comm.allreduce(len(copies[0]), op=MPI.SUM) else None
+    if rep is not None:  # a copy's normal is its point's, from all the faces there
+        N = ch.fetch(rep, ch.add(rep, N))
     norm = np.linalg.norm(N, axis=1, keepdims=True)
     normals = np.divide(N, norm, out=np.zeros_like(N), where=norm > 0)
     # the width: ē over all face sides of all ranks
@@ -122,15 +138,87 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     if opts.arc_distance:
         table[:, 2:5] = normals
     if opts.neumann or not opts.plain:
-        band = _boundary(ch, faces, local, Vn, gi, V, radius, max(radius / 16, spacing / 4))
+        ends = gi if rep is None else ch.fetch(gi.reshape(-1), rep).reshape(gi.shape)
+        band = _boundary(ch, faces, local, Vn, ends, V, radius, max(radius / 16, spacing / 4))
         if band is not None:
             idx, b, nu = band
             table[idx, 1] = 1.0
             table[idx, 5:8] = b
             table[idx, 8:11] = nu
+    label = _part_labels(ch, faces, copies) if keeps_parts(opts) else None
+    if label is not None:
+        table = np.column_stack([table, label])
     attrs = PointAttributes(table, 2, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
-                            opts.check_psd, opts.tol, degree=opts.pointwise_degree)
+                            opts.check_psd, opts.tol, degree=opts.pointwise_degree, parts=label is not None)
     return mass, h0, attrs
+
+
+def _part_labels(ch: _Chunks, faces: Polygons, copies: tuple[np.ndarray, np.ndarray]) -> np.ndarray | None:
+    # each point's part where the mesh has two or more (points in no face: their own, uncounted)
+    from mpi4py import MPI
+
+    starts = faces.offsets[:-1]
+    u = np.repeat(faces.indices[starts], faces.sizes - 1)  # each corner tied to its face's first
+    v = np.delete(faces.indices, starts)
+    i, j = copies
+    label = _components(ch, np.r_[u, i].astype(np.int64), np.r_[v, j].astype(np.int64))
+    used = ch.add(faces.indices, np.ones(len(faces.indices))) > 0
+    counted = ch.add(label[used], np.ones(int(used.sum()))) > 0  # on each part's root
+    return label if ch.comm.allreduce(int(counted.sum()), op=MPI.SUM) >= 2 else None
+
+
+def _copies(ch: _Chunks, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of global indices of points within DUPLICATE_RTOL of the bounding box's diagonal of
+    each other (topology.duplicate_vertices' rule): each point goes to the ranks of the cells
+    that its ball of that radius meets (one cell, but near a cell's side), so both ends of a pair
+    meet in the cell of either."""
+    from mpi4py import MPI
+    from scipy.spatial import cKDTree
+
+    box = _reduce(ch.comm, _box(V) * np.r_[np.ones(3), -np.ones(3)], MPI.MIN)
+    lo, hi = box[:3], -box[3:]
+    atol = DUPLICATE_RTOL * float(np.linalg.norm(hi - lo)) * (1 + 1e-9)
+    cell = max(_COPY_CELL * atol, 1e-300)
+    below = np.floor((V - atol - lo) / cell).astype(np.int64)
+    above = np.floor((V + atol - lo) / cell).astype(np.int64)
+    keys, gids = [], []
+    for corner in np.ndindex(2, 2, 2):  # the distinct cells of the ball's eight corners
+        up = np.array(corner, dtype=bool)
+        on = np.all(above[:, up] != below[:, up], axis=1)
+        keys.append(np.where(up, above, below)[on])
+        gids.append(ch.start + np.flatnonzero(on))
+    key, gid = np.concatenate(keys), np.concatenate(gids)
+    # a hash of the cell (wrapping int64 products) picks its rank
+    mixed = key[:, 0] * 73856093 ^ key[:, 1] * 19349663 ^ key[:, 2] * 83492791
+    r_key, r_gid, r_pos = _exchange(ch.comm, mixed % ch.comm.Get_size(), key, gid, V[gid - ch.start])
+    if len(r_pos) < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    a, b = cKDTree(r_pos).query_pairs(atol, output_type="ndarray").T
+    keep = (r_gid[a] != r_gid[b]) & np.all(r_key[a] == r_key[b], axis=1)
+    return r_gid[a[keep]], r_gid[b[keep]]
+
+
+def _components(ch: _Chunks, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The smallest global index connected to each point of this chunk by the edges (u, v) any
+    rank holds: the roots hook onto the smaller across every edge that still joins two, and
+    pointer jumping brings every point to its root, until no edge joins two."""
+    from mpi4py import MPI
+
+    comm = ch.comm
+    label = ch.start + np.arange(ch.n_local, dtype=np.int64)
+    while True:
+        while True:
+            up = ch.fetch(label, label)
+            if not comm.allreduce(bool((up != label).any()), op=MPI.LOR):
+                break
+            label = up
+        lu, lv = ch.fetch(u, label), ch.fetch(v, label)
+        apart = lu != lv  # joined once, an edge stays joined: it is not asked again
+        if not comm.allreduce(bool(apart.any()), op=MPI.LOR):
+            return label
+        u, v, lu, lv = u[apart], v[apart], lu[apart], lv[apart]
+        ids, low = _exchange(comm, ch.owner(np.maximum(lu, lv)), np.maximum(lu, lv), np.minimum(lu, lv))
+        np.minimum.at(label, ids - ch.start, low)
 
 
 def _curvature_widths(ch: _Chunks, gi: np.ndarray, d2: np.ndarray, normals: np.ndarray, h0: float,
@@ -158,8 +246,9 @@ def _curvature_widths(ch: _Chunks, gi: np.ndarray, d2: np.ndarray, normals: np.n
 
 def _boundary(ch: _Chunks, faces: Polygons, local: Polygons, Vn: np.ndarray, gi: np.ndarray,
               V: np.ndarray, radius: float, step: float):
-    # each side, with its face's centroid, to the owner of its smaller vertex; the sides that
-    # occur once there are the boundary, sampled as frames.boundary_samples_surface does
+    # each side (gi: its ends' representatives among copies), with its face's centroid, to the
+    # owner of its smaller end; the sides that occur once there are the boundary (a seam
+    # between copies is none), sampled as frames.boundary_samples_surface does
     if faces.n_faces:
         face_of = np.repeat(np.arange(faces.n_faces), faces.sizes)
         cen = np.zeros((faces.n_faces, 3))
@@ -172,7 +261,7 @@ def _boundary(ch: _Chunks, faces: Polygons, local: Polygons, Vn: np.ndarray, gi:
     key = np.sort(gi, axis=1)
     lo, hi, inf = _exchange(ch.comm, ch.owner(key[:, 0]), key[:, 0], key[:, 1], info)
     _, inv, cnt = np.unique(lo * np.int64(ch.n) + hi, return_inverse=True, return_counts=True)
-    once = inf[cnt[inv.reshape(-1)] == 1]
+    once = inf[(cnt[inv.reshape(-1)] == 1) & (lo != hi)]
     a, t, c = once[:, :3], once[:, 3:6], once[:, 6:]
     tu = t / np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
     inward = c - a

@@ -36,7 +36,7 @@ from ..errors import MeshError, MeshWarning
 from . import frames
 from .mass import _face_areas, _mean_edge_length, _vertex_mass, paper_width
 from .polygons import Polygons
-from .topology import warn_if_messy
+from .topology import DUPLICATE_RTOL, _duplicate_rep, warn_if_messy
 from .validation import _as_real_array, check_faces, check_vertices
 
 __all__ = [
@@ -127,6 +127,20 @@ class Geometry:
             self._cache[key] = make()
         return self._cache[key]
 
+    def copies(self) -> np.ndarray | None:
+        """Each point's representative among coincident copies (an unwelded seam, a triangle
+        soup: :func:`~meshlap.geometry.topology.duplicate_vertices`), computed once; None where
+        there are none, and in more than three dimensions.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], float)
+        >>> surface(V, [[0, 1, 2], [3, 4, 2]]).copies().tolist()
+        [0, 1, 2, 1, 4]
+        """
+        return self._cached("weld", lambda: _copies(self.points))
+
     def _pca(self) -> tuple[np.ndarray, np.ndarray]:
         return self._cached("pca", lambda: frames.pca_frames(self.points, self.dim))
 
@@ -141,7 +155,11 @@ class Geometry:
 
         def make() -> np.ndarray:
             if self.faces is not None and self.ambient_dim == 3:
-                return frames.vertex_normals(self.points, self.faces)
+                rep = self.copies()  # a copy's normal is its point's, from all the faces there
+                if rep is None:
+                    return frames.vertex_normals(self.points, self.faces)
+                welded = Polygons(rep[self.faces.indices], self.faces.offsets)
+                return frames.vertex_normals(self.points, welded)[rep]
             T, idx = self._pca()
             return frames.orient_normals(np.ascontiguousarray(T[:, :, self.dim]), idx)
 
@@ -188,11 +206,12 @@ class Geometry:
             if self.boundary is None or not self.boundary.any():
                 return None
             if self.faces is not None:
-                return frames.boundary_samples_surface(P, self.faces, step)
+                return frames.boundary_samples_surface(P, self.faces, step, self.copies())
             if self.dim == 1 and self.cells is not None:
-                return frames.boundary_samples_curve(P, self.cells)
+                return frames.boundary_samples_curve(P, self.cells, self.copies())
             if self.dim == 3 and self.tiled:
-                return None if P.shape[1] > 3 else frames.boundary_samples_volume(P, self.cells, step)
+                return None if P.shape[1] > 3 else frames.boundary_samples_volume(P, self.cells, step,
+                                                                                  self.copies())
             T, idx = self._pca()
             return frames.boundary_samples_cloud(P, self.boundary, T, idx, self.dim)
 
@@ -295,6 +314,23 @@ def _mean_cell_edge(P: np.ndarray, cells: np.ndarray) -> float:
     return float(np.mean(lengths))
 
 
+def _copies(P: np.ndarray) -> np.ndarray | None:
+    if P.shape[1] > 3:
+        return None
+    rep = _duplicate_rep(np.pad(P, ((0, 0), (0, 3 - P.shape[1]))), DUPLICATE_RTOL)
+    return None if bool((rep == np.arange(len(rep))).all()) else rep
+
+
+def _welded(geo: Geometry, keys: np.ndarray) -> Geometry:
+    # the boundary on the welded sub-cells (rows of keys): a seam between copies is none; the
+    # copies are looked for only where the sub-cells as given leave a boundary
+    if geo.boundary.any() and (rep := geo.copies()) is not None:
+        k = np.sort(rep[keys], axis=1)
+        k = k[np.all(k[:, 1:] != k[:, :-1], axis=1)]  # those welding collapses
+        geo.boundary[:] = _once(k, geo.n_points)[rep]
+    return geo
+
+
 def _once(keys: np.ndarray, n: int) -> np.ndarray:
     # vertices of the sorted sub-cells (rows of keys) that occur exactly once
     srt = np.sort(keys, axis=1)
@@ -349,9 +385,8 @@ def polyline(V: Any, E: Any) -> Geometry:
     lengths = simplex_volumes(P, cells)
     mass = _lumped(len(P), cells, lengths)
     _nonempty(mass, "edge", P)
-    degree = np.bincount(cells.reshape(-1), minlength=len(P))
-    return Geometry(P, mass, 1, float(lengths.mean()), boundary=degree == 1, cells=cells,
-                    source="polyline")
+    return _welded(Geometry(P, mass, 1, float(lengths.mean()), boundary=_once(cells.reshape(-1, 1), len(P)),
+                            cells=cells, source="polyline"), cells.reshape(-1, 1))
 
 
 def tetrahedra(V: Any, T: Any) -> Geometry:
@@ -380,8 +415,8 @@ def tetrahedra(V: Any, T: Any) -> Geometry:
     mass = _lumped(len(P), cells, vol)
     _nonempty(mass, "tetrahedron", P)
     tris = cells[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]].reshape(-1, 3)
-    return Geometry(P, mass, 3, _mean_cell_edge(P, cells), boundary=_once(tris, len(P)),
-                    cells=cells, source="tetrahedra")
+    return _welded(Geometry(P, mass, 3, _mean_cell_edge(P, cells), boundary=_once(tris, len(P)),
+                            cells=cells, source="tetrahedra"), tris)
 
 
 def _ambient(V: Any) -> int:
@@ -426,7 +461,8 @@ def surface(V: Any, F: Any) -> Geometry:
         e = faces.edges()
         mean_edge = float(np.linalg.norm(P[e[:, 0]] - P[e[:, 1]], axis=1).mean())
     e = np.sort(faces.edges(), axis=1)
-    return Geometry(P, mass, 2, mean_edge, boundary=_once(e, len(P)), faces=faces, source="surface")
+    return _welded(Geometry(P, mass, 2, mean_edge, boundary=_once(e, len(P)), faces=faces,
+                            source="surface"), e)
 
 
 def _looks_solid(V: Any, F: np.ndarray) -> bool:

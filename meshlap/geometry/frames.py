@@ -229,10 +229,13 @@ def _sample_segments(a: np.ndarray, t: np.ndarray, step: float) -> tuple[np.ndar
     return a[seg] + frac[:, None] * t[seg], seg
 
 
-def boundary_samples_curve(P: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """End points of a polyline and the direction away from their edge (any dimension)."""
+def boundary_samples_curve(P: np.ndarray, edges: np.ndarray, rep: np.ndarray | None = None
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """End points of a polyline and the direction away from their edge (any dimension); ``rep``:
+    each point's representative among coincident copies, which join the edges they end."""
     degree = np.bincount(edges.reshape(-1), minlength=len(P))
-    ends = np.flatnonzero(degree == 1)
+    welded = degree if rep is None else np.bincount(rep[edges].reshape(-1), minlength=len(P))[rep]
+    ends = np.flatnonzero((degree == 1) & (welded == 1))
     if not len(ends):
         return np.zeros((0, P.shape[1])), np.zeros((0, P.shape[1]))
     other = np.empty(len(P), dtype=np.int64)
@@ -241,17 +244,18 @@ def boundary_samples_curve(P: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray
     return P[ends], _unit(P[ends] - P[other[ends]])
 
 
-def boundary_samples_surface(P: np.ndarray, faces: Polygons, step: float
+def boundary_samples_surface(P: np.ndarray, faces: Polygons, step: float, rep: np.ndarray | None = None
                              ) -> tuple[np.ndarray, np.ndarray]:
     """Points along the boundary edges, ``step`` apart, with the outward conormal in the plane
-    of the adjacent face (any ambient dimension)."""
+    of the adjacent face (any ambient dimension); ``rep``: each point's representative among
+    coincident copies (a seam between copies is no boundary)."""
     n = len(P)
     sides = faces.edges()
     face_of = np.repeat(np.arange(faces.n_faces), faces.sizes)
-    key = np.sort(sides, axis=1)
+    key = np.sort(sides if rep is None else rep[sides], axis=1)
     _, inv, cnt = np.unique(key[:, 0] * np.int64(n) + key[:, 1], return_inverse=True,
                             return_counts=True)
-    on = cnt[inv] == 1
+    on = (cnt[inv] == 1) & (key[:, 0] != key[:, 1])
     if not on.any():
         return np.zeros((0, P.shape[1])), np.zeros((0, P.shape[1]))
     e, fid = sides[on], face_of[on]
@@ -266,15 +270,16 @@ def boundary_samples_surface(P: np.ndarray, faces: Polygons, step: float
     return samples, nu[seg]
 
 
-def boundary_samples_volume(P: np.ndarray, tets: np.ndarray, step: float
+def boundary_samples_volume(P: np.ndarray, tets: np.ndarray, step: float, rep: np.ndarray | None = None
                             ) -> tuple[np.ndarray, np.ndarray]:
     """Points on the hull triangles of a tetrahedral mesh in R³, about ``step`` apart, with
-    the outward unit normal of their triangle."""
+    the outward unit normal of their triangle; ``rep``: each point's representative among
+    coincident copies."""
     opp = np.array([[1, 2, 3, 0], [0, 2, 3, 1], [0, 1, 3, 2], [0, 1, 2, 3]])
     tri = tets[:, opp].reshape(-1, 4)  # three corners, then the opposite one
-    key = np.sort(tri[:, :3], axis=1)
+    key = np.sort(tri[:, :3] if rep is None else rep[tri[:, :3]], axis=1)
     _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    hull = tri[cnt[inv.reshape(-1)] == 1]
+    hull = tri[(cnt[inv.reshape(-1)] == 1) & (key[:, 0] != key[:, 1]) & (key[:, 1] != key[:, 2])]
     if not len(hull):
         return np.zeros((0, 3)), np.zeros((0, 3))
     A, B, C, D = (P[hull[:, c], :3] for c in range(4))
