@@ -17,7 +17,8 @@ __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "C
            "QUADRATIC_MAX_UNKNOWNS",
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
-           "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW"]
+           "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW",
+           "STAR_NEIGHBORS", "STAR_SCATTER"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
@@ -82,6 +83,13 @@ ROW_EXCESS = 2.0
 ROW_FLOORS = (0.5, 0.25, 0.25)
 #: Degree > 2 predicted this much more accurate marks a point clean: E2 unchanged on bench_pointwise
 ROW_MARGIN = 10.0
+
+# -- a cloud's local Delaunay stars (meshlap.geometry.pointcloud, .stars; cloud_neighbors.py) -----
+#: Their first neighbourhood by dimension (doubled where a star stays open): surfaces' 16 the best of
+#: 8-45 on bench_real.py's 50 clouds (49 within 1.5× of robust-laplacian, median 0.82×); 1 and 3 not swept
+STAR_NEIGHBORS = {1: 8, 2: 16, 3: 32}
+#: Median heights above which a steep first neighbour is on another sheet: 49 of 50 for any of 1.5-6
+STAR_SCATTER = 3.0
 
 # -- noise (meshlap.geometry.pointcloud, meshlap.denoise) and welding (meshlap.fem) --------------
 #: A cloud's σ̂²/a² above which it is projected by default: clean < 1e-3, 1% noise 0.025-0.095 (pointclouds.md)

@@ -52,6 +52,7 @@ from ..errors import MeshError, MeshWarning
 from ..tuned import CLOUD_NOISY as NOISY
 from ..tuned import NOISE_SPREAD as SPREAD
 from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
+from ..tuned import STAR_NEIGHBORS
 from . import frames
 from .core import Geometry, check_points
 from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
@@ -65,9 +66,8 @@ _Z75 = 0.6744897501960817
 # noise_reading fits this many points' neighbourhoods
 _NOISE_SAMPLE = 2048
 
-# First neighbourhood size per intrinsic dimension; it doubles for the points whose star it
-# does not secure, up to _MAX_NEIGHBORS.
-_NEIGHBORS = {1: 8, 2: 16, 3: 32}
+# the first neighbourhood (STAR_NEIGHBORS) doubles for the points whose star it does not secure,
+# up to this
 _MAX_NEIGHBORS = 256
 
 # -- the driver ----------------------------------------------------------------------------------
@@ -159,7 +159,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     X = Q + 1e-9 * spacing0 * np.random.default_rng(0).uniform(-1.0, 1.0, Q.shape)
     nu = len(Q)
     tree = KDTree(Q)
-    K = min(neighbors or _NEIGHBORS.get(k, 20 * k), nu - 1)
+    K = min(neighbors or STAR_NEIGHBORS.get(k, 20 * k), nu - 1)
     # the tangent space comes from the first neighbourhood, however far the star search grows
     kt = K
     if K < k + 1:
@@ -340,7 +340,7 @@ def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.n
     True
     """
     P = check_points(P)
-    K = min(neighbors or _NEIGHBORS.get(k, 20 * k), len(P) - 1)
+    K = min(neighbors or STAR_NEIGHBORS.get(k, 20 * k), len(P) - 1)
     _, idx = KDTree(P).query(P, k=K + 1)
     out = np.empty_like(P)
     for a in range(0, len(P), 65536):  # blocks bound the (block, K+1, d) temporaries

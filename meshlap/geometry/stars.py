@@ -15,6 +15,7 @@ from scipy.spatial import Delaunay, QhullError
 
 from .._dense import sym_eigh
 from .._jit import jit
+from ..tuned import STAR_SCATTER
 
 __all__ = []
 
@@ -24,10 +25,6 @@ _FLAT = 1e-10
 #: tan of the steepest chord from a point to a neighbour on its own sheet (60°; a 90° crease
 #: tilts its chords 45° from the fitted plane)
 _STEEP = 3.0**0.5
-#: how far above the median height of the first neighbours a steep one among them must be to
-#: be on another sheet (Gaussian noise puts 4% of heights beyond 3 medians, 2 standard
-#: deviations; bench_real's clouds: the same 49 of 50 within 1.5x for any factor from 1.5 to 6)
-_SCATTER = 3.0
 # Triangles kept per star (a star in a Delaunay triangulation has 6 on average).
 _STAR_SLOTS = 24
 # status codes of one point's star
@@ -78,7 +75,8 @@ def _drop_steep(P, p, nbr, U, kt, z):
     # the star (U = 0 is skipped). A chord of length ρ on a surface of curvature κ leaves it at
     # about ρκ/2, so this sheet's own points stay well below that. Among the first kt (those the
     # plane comes from) noise also makes short chords steep, so there the height must also stand
-    # out from the neighbourhood's: beyond _SCATTER times its median. z: room for len(nbr) squared
+    # out from the neighbourhood's: beyond STAR_SCATTER times its median (Gaussian noise
+    # puts 4% of heights beyond 3 medians, 2 standard deviations). z: room for len(nbr) squared
     # heights
     steep_first = False
     for j in range(len(nbr)):
@@ -95,7 +93,7 @@ def _drop_steep(P, p, nbr, U, kt, z):
                 steep_first = True
     if not steep_first:
         return
-    scatter = _SCATTER * _SCATTER * np.median(z[:kt])
+    scatter = STAR_SCATTER * STAR_SCATTER * np.median(z[:kt])
     for j in range(kt):
         if z[j] > scatter and z[j] > _STEEP * _STEEP * (U[j, 0] ** 2 + U[j, 1] ** 2):
             U[j, 0] = 0.0
