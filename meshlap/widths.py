@@ -13,6 +13,7 @@ normals) and knows nothing of how it was made.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -182,10 +183,17 @@ def _curvature_sums(P, N, e, num, den):  # pragma: no cover - compiled
         den[v] += den1[v]
 
 
-def _neighbour_edges(geo: Geometry) -> np.ndarray:
+def _neighbour_edges(geo: Geometry) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
     # a mesh's face sides, each interior edge once per face (so twice), as the widths were
-    # measured with; the geometry's neighbour edges (cells, nearest neighbours) otherwise
-    return geo.faces.edges() if geo.faces is not None else geo.edges()
+    # measured with; the geometry's neighbour edges (cells, nearest neighbours) otherwise. On a
+    # mesh's welded cells, with what gives each copy its point's width: a seam is no edge of the
+    # widths, as it is none of the boundary
+    e = geo.faces.edges() if geo.faces is not None else geo.edges()
+    rep = geo.copies() if geo.tiled else None
+    if rep is None:
+        return e, lambda x: x
+    e = rep[e]
+    return e[e[:, 0] != e[:, 1]], lambda x: x[rep]
 
 
 def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
@@ -221,7 +229,8 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     else:
         h0 = check_h(h_scale(geo) * geo.spacing**2, f"the automatic h = {h_scale(geo):g}·(spacing)²")
     if adaptive:
-        h_vertex = local_h(geo.points, _neighbour_edges(geo), h_scale(geo))
+        edges, spread = _neighbour_edges(geo)
+        h_vertex = spread(local_h(geo.points, edges, h_scale(geo)))
         check_h(float(h_vertex.min()), "the smallest local h")
         check_h(float(h_vertex.max()), "the largest local h")
         h0 = float(np.median(h_vertex[geo.mass > 0])) if (geo.mass > 0).any() else h0
@@ -230,7 +239,8 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
     if normals is not None:
         beta = check_positive(curvature_limit, "curvature_limit")
         base = h0 if h_vertex is None else h_vertex
-        hv = curvature_h(geo.points, _neighbour_edges(geo), normals, base, beta)
+        edges, spread = _neighbour_edges(geo)
+        hv = spread(curvature_h(geo.points, edges, normals, base, beta))
         if not geo.tiled and geo.dim == 2:
             hv = np.maximum(hv, CLOUD_CAP_FLOOR * base)
         if (hv != base).any():

@@ -381,17 +381,18 @@ def _soup(V, C):
 def test_a_seam_between_copies_is_no_boundary():
     # a triangle soup (every cell its own corners) has the boundary of its welded mesh: a closed
     # sphere none (before: every vertex, so mirror images everywhere and the corrected kernel's
-    # λ1 2.33 against 2.00), a disc its rim; its copies take their point's normal
+    # λ1 2.33 against 2.00), a disc its rim; its copies take their point's normal and width
     V, F = shapes.sphere(400, seed=0)
     W, G = _soup(V, F)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshWarning)
-        soup = meshlap.laplacian(W, G, operator="kernel", curvature_limit=0)
-    whole = meshlap.laplacian(V, F, operator="kernel", curvature_limit=0)
+        soup = meshlap.laplacian(W, G, operator="kernel")
+    whole = meshlap.laplacian(V, F, operator="kernel")
     assert soup.boundary_rows == 0 and not soup.geometry.boundary.any()
     assert np.allclose(soup.geometry.normals(), whole.geometry.normals()[F.reshape(-1)], atol=1e-12)
+    assert np.allclose(soup.h_vertex, whole.h_vertex[F.reshape(-1)], rtol=1e-12)  # the curvature cap's
     lam, lam0 = spectral.eigs(soup, 8)[0], spectral.eigs(whole, 8)[0]
-    assert np.allclose(lam, lam0, rtol=1e-6, atol=1e-9)  # the same points and masses, welded
+    assert np.allclose(lam, lam0, rtol=1e-9, atol=1e-9)  # the same points and masses, welded
     P, T = shapes.disc(500, seed=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshWarning)

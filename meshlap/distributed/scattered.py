@@ -129,8 +129,12 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
         paper_width(spacing) if opts.plain else DEFAULT_H_SCALE * spacing**2, "the automatic h")
     hv = np.full(len(V), h0)
     gi = need[e] if len(e) else np.zeros((0, 2), np.int64)
+    ends = gi if rep is None else ch.fetch(gi.reshape(-1), rep).reshape(gi.shape)  # on the welded cells
     if opts.curvature_limit:
-        hv = _curvature_widths(ch, gi, d2, normals, h0, opts.curvature_limit)
+        side = ends[:, 0] != ends[:, 1]  # a seam is no edge of the widths
+        hv = _curvature_widths(ch, ends[side], d2[side], normals, h0, opts.curvature_limit)
+        if rep is not None:  # each copy its point's
+            hv = ch.fetch(rep, hv)
     widest = comm.allreduce(float(hv.max()) if len(hv) else 0.0, op=MPI.MAX)
     radius = assembly.cutoff_radius(widest, opts.tol)
     table = np.zeros((len(V), 11))
@@ -138,7 +142,6 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     if opts.arc_distance:
         table[:, 2:5] = normals
     if opts.neumann or not opts.plain:
-        ends = gi if rep is None else ch.fetch(gi.reshape(-1), rep).reshape(gi.shape)
         band = _boundary(ch, faces, local, Vn, ends, V, radius, max(radius / 16, spacing / 4))
         if band is not None:
             idx, b, nu = band
