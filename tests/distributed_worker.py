@@ -338,19 +338,19 @@ class Checks:
 
     def scattered_parts(self):
         """Two spheres 0.02 apart as a triangle soup (every face its own three corners), scattered:
-        the copies welded across the ranks (no seam is a boundary, the normals are the points'),
-        no pairs between the two parts: the single machine's L_sym, one zero eigenvalue each."""
+        the copies welded across the ranks (no seam is a boundary, the normals and widths are the
+        points'), no pairs between the two parts: the single machine's L_sym, one zero eigenvalue
+        each. The last rank holds no points, the ranks between the first and the last no faces."""
         import meshlap
         from meshlap import distributed
 
         V, F = meshlap.shapes.sphere(300, seed=0)
         V2, F2 = np.vstack([V, V + [2.02, 0, 0]]), np.vstack([F, F + len(V)])
         Vs, Fs = V2[F2].reshape(-1, 3), np.arange(3 * len(F2)).reshape(-1, 3)
-        cuts = np.linspace(0, len(Vs), self.size + 1).astype(int)
+        cuts = np.r_[np.linspace(0, len(Vs), self.size).astype(int), len(Vs)]
         a, b = int(cuts[self.rank]), int(cuts[self.rank + 1])
-        share = np.cumsum(np.arange(self.size + 1)) / np.arange(self.size + 1).sum()
-        fc = np.round(len(Fs) * share).astype(int)
-        mine = Fs[fc[self.rank]:fc[self.rank + 1]]  # uneven shares, other than the points'
+        half = len(Fs) // 3
+        mine = Fs[:half] if self.rank == 0 else Fs[half:] if self.rank == self.size - 1 else Fs[:0]
         op = distributed.laplacian(Vs[a:b], mine, scattered=True, comm=self.comm)
 
         def serial():

@@ -75,10 +75,13 @@ class _Chunks:
         """Σ of ``values`` by global id, on the owners: a per-point array of this chunk."""
         r_ids, r_vals = _exchange(self.comm, self.owner(ids), ids, values)
         local = r_ids - self.start
+        out = np.zeros((self.n_local, *r_vals.shape[1:]))  # (bincount of nothing is an int array)
         if r_vals.ndim == 1:
-            return np.bincount(local, weights=r_vals, minlength=self.n_local)
-        return np.stack([np.bincount(local, weights=r_vals[:, c], minlength=self.n_local)
-                         for c in range(r_vals.shape[1])], axis=1)
+            out += np.bincount(local, weights=r_vals, minlength=self.n_local)
+            return out
+        for c in range(r_vals.shape[1]):
+            out[:, c] += np.bincount(local, weights=r_vals[:, c], minlength=self.n_local)
+        return out
 
 
 def _sum(comm, x: float) -> float:
@@ -227,7 +230,7 @@ def _components(ch: _Chunks, u: np.ndarray, v: np.ndarray) -> np.ndarray:
 def _curvature_widths(ch: _Chunks, gi: np.ndarray, d2: np.ndarray, normals: np.ndarray, h0: float,
                       beta: float) -> np.ndarray:
     # κ_w² = Σ|n_p − n_w|² / Σ|p − w|² over the sides at w, as meshlap.widths.curvature_h
-    Nn = ch.fetch(gi.reshape(-1), normals).reshape(len(gi), 2, 3) if len(gi) else np.zeros((0, 2, 3))
+    Nn = ch.fetch(gi.reshape(-1), normals).reshape(len(gi), 2, 3)  # collective: also with no sides here
     dn2 = ((Nn[:, 0] - Nn[:, 1]) ** 2).sum(axis=1)
     num = ch.add(gi[:, 0], dn2) + ch.add(gi[:, 1], dn2)
     den = ch.add(gi[:, 0], d2) + ch.add(gi[:, 1], d2)
