@@ -496,8 +496,8 @@ def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
         problems.append(f"{len(zero):,} zero-area faces: they add nothing to the vertex masses")
     if len(dup):
         problems.append(
-            f"{len(dup):,} duplicate vertices (coincident with another vertex): the default's FEM "
-            "pencil welds them; the connectivity of the faces is split there"
+            f"{len(dup):,} duplicate vertices (coincident with another vertex): welded wherever "
+            "connectivity counts (boundary, normals, widths, parts, the FEM pencil), so a seam is no hole"
         )
     if len(nonman):
         problems.append(f"{len(nonman):,} non-manifold edges (shared by more than two faces)")
