@@ -54,7 +54,7 @@ _FLAT = 8.0 * float(np.finfo(np.float64).eps)
 
 __all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay",
            "lumped_pencil", "part_labels", "separate_parts", "simplicial_cells", "triangle_areas",
-           "voronoi_areas", "welded", "welded_cells"]
+           "voronoi_areas", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -352,23 +352,10 @@ def _weighted_cells(geo: Any) -> tuple[np.ndarray | None, float]:
     return (geo.faces.triangles() if geo.faces is not None else geo.cells), 1.0
 
 
-def welded(geo: Any) -> np.ndarray | None:
-    """Each vertex's representative among coincident copies (an unwelded seam, a triangle
-    soup), once per geometry; None where there are none.
-
-    Examples
-    --------
-    >>> import meshlap, numpy as np
-    >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], float)
-    >>> welded(meshlap.geometry.from_mesh(V, [[0, 1, 2], [3, 4, 2]])).tolist()
-    [0, 1, 2, 1, 4]
-    """
-    return geo.copies()
-
-
 def welded_cells(cells: np.ndarray, rep: np.ndarray) -> np.ndarray:
-    """``cells`` on the representatives ``rep`` of coincident copies (:func:`welded`), without
-    the cells that welding collapses (two corners on one representative).
+    """``cells`` on the representatives ``rep`` of coincident copies
+    (:meth:`~meshlap.geometry.Geometry.copies`), without the cells that welding collapses (two
+    corners on one representative).
 
     Examples
     --------
@@ -399,7 +386,7 @@ def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
         if cells is None or not geo.tiled:
             return None
         n = geo.n_points
-        rep = welded(geo)
+        rep = geo.copies()
         c = cells if rep is None else rep[cells]
         i, j = np.repeat(c[:, :1], c.shape[1] - 1, axis=1).ravel(), c[:, 1:].ravel()
         if rep is not None:
@@ -445,7 +432,7 @@ def lumped_pencil(geo: Any) -> tuple[sp.csr_matrix, np.ndarray]:
     >>> lumped_pencil(g)[0] is lumped_pencil(g)[0]
     True
     """
-    return geo._cached("lumped_pencil", lambda: fem_pencil(geo, weld=welded(geo)))
+    return geo._cached("lumped_pencil", lambda: fem_pencil(geo, weld=geo.copies()))
 
 
 def fem_pencil(geo: Any, *, mass: Literal["blend", "lumped", "consistent"] = "lumped",

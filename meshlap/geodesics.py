@@ -80,7 +80,6 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
-from .fem import welded
 from .gradients import Gradient, gradient_operator
 from .heat import ImplicitHeat
 from .lumped import SparseLaplacian
@@ -261,7 +260,7 @@ class HeatDistance:
         # a source in no element starts from a copy of it that is in one (a pole repeated per
         # segment, whose own faces collapse)
         self._stand_in = np.arange(self.n)
-        rep = welded(geo) if len(self._lonely) else None
+        rep = geo.copies() if len(self._lonely) else None
         if rep is not None:
             covered = np.flatnonzero(~lonely)
             first = np.full(self.n, -1)

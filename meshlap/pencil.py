@@ -106,7 +106,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         return
     if report is not None:
         report(0.95, "Galerkin pencil")
-    tri, weld = gal.simplices(geo), fem.welded(geo)
+    tri, weld = gal.simplices(geo), geo.copies()
     if weld is not None:  # copies of a vertex welded, as FEM's: a seam is no boundary
         tri = fem.welded_cells(tri, weld)
     h = GALERKIN_H_SCALE * geo.spacing**2 if widths.h_auto else widths.h
@@ -152,18 +152,18 @@ def _fem(geo: Geometry, opts: Options, report: Callable[[float, str], None] | No
     if report is not None:
         report(0.5, "FEM pencil")
     S, m = fem.lumped_pencil(geo) if opts.mass == "lumped" else \
-        fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass)
+        fem.fem_pencil(geo, weld=geo.copies(), mass=opts.mass)
     step = denoise.noise_step(geo) if opts.denoise else None
     points, scale = None, None
     if step is not None and step.sigma > 0:  # FEM on the positions after a step that takes the noise out
         if report is not None:
             report(0.7, "denoised positions")
         points = step.points
-        S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
+        S1, m1 = fem.fem_pencil(geo, weld=geo.copies(), mass=opts.mass, points=points)
         points, kept = denoise.kept_shapes(geo.points, points, m, m1, fem.part_labels(geo)[1],
                                            step.sigma / geo.spacing)
         if kept.any():  # parts the step shrank beyond the noise's share keep their positions
-            S1, m1 = fem.fem_pencil(geo, weld=fem.welded(geo), mass=opts.mass, points=points)
+            S1, m1 = fem.fem_pencil(geo, weld=geo.copies(), mass=opts.mass, points=points)
         # the noise the step left still inflates the metric (denoise.area_left), and with it the
         # masses: eigenvalues 1.2-1.9% low at 0.1 mean edges on four scans, all nine low; a part
         # that kept its positions keeps its masses

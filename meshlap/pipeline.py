@@ -25,7 +25,6 @@ import scipy.sparse as sp
 
 from . import assembly, corrections, pencil
 from .assembly import Kernel
-from .fem import welded
 from .geometry import Geometry
 from .options import CORRECTED_TOL, CORRECTIONS, DEFAULT_TOL, POINTWISE, QUADRATURES, Options, default_tol
 from .pencil import Pencil
@@ -149,7 +148,7 @@ def fitted_rows(geo: Geometry, opts: Options, report: Callable[[float, str], Non
     # rows: as many copies as a row's neighbours put its last one at distance 0, and no width.
     # The FEM pencil's welding finds them (copies in the input points stay copies when denoised)
     L, choice = corrections.copies.distinct_rows(
-        lambda d: corrections.rowchoice.choose_rows(P[d], k=geo.dim, progress=tick), welded(geo))
+        lambda d: corrections.rowchoice.choose_rows(P[d], k=geo.dim, progress=tick), geo.copies())
     if L.dtype != opts.dtype:
         L.data = L.data.astype(opts.dtype)
     return Rows(L, None, choice)
@@ -171,7 +170,7 @@ def wider_rows(geo: Geometry, choice: Any) -> sp.csr_matrix:
     P = geo._cache.get("input_points", geo.points)
     copies = corrections.copies
     return copies.distinct_rows(lambda d: (corrections.rowchoice.wider_rows(
-        P[d], copies.take(choice, d), k=geo.dim), None), welded(geo))[0]
+        P[d], copies.take(choice, d), k=geo.dim), None), geo.copies())[0]
 
 
 def _fit_later(geo: Geometry, opts: Options, report: Callable[[float, str], None] | None

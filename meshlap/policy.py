@@ -68,7 +68,7 @@ import numpy as np
 from .corrections.highorder import fewest_points
 from .denoise import noise_extent, surface_noise
 from .errors import MeshError
-from .fem import lumped_pencil, part_labels, welded
+from .fem import lumped_pencil, part_labels
 from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
 from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
@@ -206,7 +206,7 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         noise = surface_noise(geo) if denoise else 0.0
         if noise > 0:
             measured["normal noise / mean edge"] = round(noise / geo.spacing, 4)
-        weld = welded(geo)
+        weld = geo.copies()
         measured["welded copies"] = 0 if weld is None else int((weld != np.arange(len(weld))).sum())
     if operator == "auto":
         if opts.get("correction") == "none":

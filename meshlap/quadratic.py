@@ -112,7 +112,7 @@ def quadratic_pencil(geo: Any, points: np.ndarray | None = None,
                      area_scale: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The seven-node elements' pencil ``(S, m)`` on a triangle mesh's intrinsic Delaunay
     triangulation: the vertices' degrees of freedom first (in order), then one per edge and one
-    per triangle. Copies of a vertex (``meshlap.fem.welded``) are welded onto their
+    per triangle. Copies of a vertex (``Geometry.copies``) are welded onto their
     representative; the copies' own rows are empty and massless.
 
     Parameters
@@ -145,7 +145,7 @@ def quadratic_pencil(geo: Any, points: np.ndarray | None = None,
     if geo.faces is None or cells is None or cells.shape[1] != 3:
         raise MeshError(f"quadratic elements need a triangle or polygon mesh; this {geo.source} has none")
     n = geo.n_points
-    weld = fem.welded(geo)
+    weld = geo.copies()
     if weld is not None:
         cells = fem.welded_cells(cells, weld)
     tri, lengths = fem.intrinsic_delaunay(geo.points if points is None else points, cells)
@@ -199,7 +199,7 @@ def at_vertices(op: Any, X: np.ndarray) -> np.ndarray:
     True
     """
     n = op.n_vertices
-    weld = fem.welded(op.geometry)
+    weld = op.geometry.copies()
     phi = X[:n] if weld is None else X[weld]
     gram = phi.T @ (op.mass[:, None] * phi)
     vals, vecs = np.linalg.eigh(0.5 * (gram + gram.T))

@@ -35,7 +35,7 @@ from scipy.special import eval_legendre
 from . import _eigcheck, _ldl, _lobpcg, _parts, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
 from .errors import EigenError, MeshError
-from .fem import expand_copies, welded
+from .fem import expand_copies
 from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
 from .geometry.validation import check_faces, check_k, check_vertices
@@ -205,7 +205,7 @@ def _mesh_of(op: Any, mesh: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | N
         return V, check_faces(F, len(V), "mesh[1]").triangles(), None
     geo = getattr(op, "geometry", None)
     if hasattr(op, "V") and getattr(op, "faces", None) is not None:  # not for curves, volumes, clouds
-        rep = None if geo is None else welded(geo)  # (cached)
+        rep = None if geo is None else geo.copies()  # (cached)
         return op.V, op.faces.triangles(), np.arange(len(op.V)) if geo is not None and rep is None else rep
     # a point cloud's local Delaunay triangles (meshlap.geometry.pointcloud; its copies are merged)
     cells = getattr(geo, "cells", None)

@@ -116,7 +116,7 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     fn = np.cross(Vn[T[:, 1]] - Vn[T[:, 0]], Vn[T[:, 2]] - Vn[T[:, 0]]) if len(T) else np.zeros((0, 3))
     N = ch.add(need[T.reshape(-1)], np.repeat(fn, 3, axis=0))
     # copies weld where normals, the boundary or the parts are read (not in the paper's operator)
-    welds = opts.arc_distance or opts.curvature_limit or opts.neumann or not opts.plain or keeps_parts(opts)
+    welds = keeps_parts(opts) or opts.neumann or opts.arc_distance or opts.curvature_limit
     copies = _copies(ch, V) if welds else (np.zeros(0, np.int64), np.zeros(0, np.int64))
     rep = _components(ch, *copies) if comm.allreduce(len(copies[0]), op=MPI.SUM) else None
     if rep is not None:  # a copy's normal is its point's, from all the faces there
@@ -151,7 +151,7 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
             table[idx, 1] = 1.0
             table[idx, 5:8] = b
             table[idx, 8:11] = nu
-    label = _part_labels(ch, faces, copies) if keeps_parts(opts) else None
+    label = _part_labels(ch, faces, rep) if keeps_parts(opts) else None
     if label is not None:
         table = np.column_stack([table, label])
     attrs = PointAttributes(table, 2, not opts.plain, opts.arc_distance, opts.neumann, opts.pointwise,
@@ -159,15 +159,15 @@ def scattered_attributes(comm, V: np.ndarray, F: Any, h: Any, tol: float, correc
     return mass, h0, attrs
 
 
-def _part_labels(ch: _Chunks, faces: Polygons, copies: tuple[np.ndarray, np.ndarray]) -> np.ndarray | None:
-    # each point's part where the mesh has two or more (points in no face: their own, uncounted)
+def _part_labels(ch: _Chunks, faces: Polygons, rep: np.ndarray | None) -> np.ndarray | None:
+    # each point's part where the mesh has two or more (points in no face: their own, uncounted),
+    # from the copies' representatives (rep) on
     from mpi4py import MPI
 
     starts = faces.offsets[:-1]
-    u = np.repeat(faces.indices[starts], faces.sizes - 1)  # each corner tied to its face's first
-    v = np.delete(faces.indices, starts)
-    i, j = copies
-    label = _components(ch, np.r_[u, i].astype(np.int64), np.r_[v, j].astype(np.int64))
+    u = np.repeat(faces.indices[starts], faces.sizes - 1).astype(np.int64)  # each corner to its face's first
+    v = np.delete(faces.indices, starts).astype(np.int64)
+    label = _components(ch, u, v, rep)
     used = ch.add(faces.indices, np.ones(len(faces.indices))) > 0
     counted = ch.add(label[used], np.ones(int(used.sum()))) > 0  # on each part's root
     return label if ch.comm.allreduce(int(counted.sum()), op=MPI.SUM) >= 2 else None
@@ -204,14 +204,15 @@ def _copies(ch: _Chunks, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r_gid[a[keep]], r_gid[b[keep]]
 
 
-def _components(ch: _Chunks, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+def _components(ch: _Chunks, u: np.ndarray, v: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:
     """The smallest global index connected to each point of this chunk by the edges (u, v) any
-    rank holds: the roots hook onto the smaller across every edge that still joins two, and
-    pointer jumping brings every point to its root, until no edge joins two."""
+    rank holds, from ``start`` on (each point's smallest so far; None: itself): the roots hook
+    onto the smaller across every edge that still joins two, and pointer jumping brings every
+    point to its root, until no edge joins two."""
     from mpi4py import MPI
 
     comm = ch.comm
-    label = ch.start + np.arange(ch.n_local, dtype=np.int64)
+    label = ch.start + np.arange(ch.n_local, dtype=np.int64) if start is None else start.copy()
     while True:
         while True:
             up = ch.fetch(label, label)
