@@ -490,21 +490,22 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
         K = sp.csc_matrix(K[order][:, order])
     T = _lobpcg.CotPreconditioner(K, m, diag, sigma)
     rng = np.random.default_rng(seed)
-    X0 = rng.standard_normal((n_p, _lobpcg.start_width(k, nb, n_p) if adapt and K is not None else nb))[order]
+
+    def random(c: int) -> np.ndarray:
+        return rng.standard_normal((n_p, c))[order]
     with one_blas_thread():
-        if K is not None:
+        if K is None:
+            X0 = random(nb)
+        else:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
-            # (the same factorization, without ½ D⁻¹), to a residual of _START_TOL
-            cb = _lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2)
+            # (the same factorization, without ½ D⁻¹), to a residual of _START_TOL; the start's
+            # first step of inverse iteration saves 1-3 of its iterations (k = 20, 36, 50 on the
+            # 16k sphere, spot, fandisk and the bunny)
             Kr = sp.csr_matrix(K)
-            # one step of inverse iteration first: it damps the random block's high frequencies
-            # by their eigenvalue before the first Rayleigh–Ritz step (k = 20, 36, 50 on the 16k
-            # sphere, spot, fandisk and the bunny: 1-3 fewer start iterations, the same LOBPCG
-            # iterations but for 3 of 15 cases, one more)
-            X0 = T.lu.solve(m[:, None] * X0)
-            start = _lobpcg.lobpcg(lambda Y: _lobpcg.csr_times(Kr, Y), m, T.lu.solve, X0, k, _START_TOL, 10,
-                                   on_values=False, report=cb, cheap=True)
-            X0 = start.X[:, :_lobpcg.block_size(start.lam, k, nb) if adapt else nb]
+            X0, _ = _lobpcg.cotangent_start(lambda Y: _lobpcg.csr_times(Kr, Y), m, T.lu.solve, random, k, nb,
+                                            n_p, _START_TOL, 10, adapt=adapt, cheap=True,
+                                            report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05,
+                                                                           0.2))
         out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, least=0.01 * sigma,
                              report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
     X = out.X  # the whole block: the values past k give the check the gap above λ_k

@@ -415,3 +415,28 @@ def test_combined_update_is_the_two_products_summed():
         assert np.allclose(out, A @ CA + B @ CB, rtol=0, atol=1e-13)
     assert all(np.array_equal(a, b) for pair, kept in zip(pairs, inputs, strict=True)
                for a, b in zip(pair, kept, strict=True))  # the inputs are read, not written
+
+
+def test_lobpcg_block_holds_a_cluster_that_outgrows_the_start():
+    """Two copies of a sphere double each multiplicity: for k = 10 the 6's cluster (2l + 1 = 5
+    per copy) ends at index 18, past a start k/4 wider than the block (16 columns). The start
+    widens until it sees the cluster end, and LOBPCG, carrying it whole, converges in a few
+    iterations (7 here; 9 when the block ended inside the cluster)."""
+    from meshlap import _lobpcg
+
+    V, F = shapes.sphere(1500, seed=3)
+    V2, F2 = np.vstack([V, V + [3.0, 0.0, 0.0]]), np.vstack([F, F + len(V)])
+    K = sp.csc_matrix(-igl.cotmatrix(V2, F2))
+    m = igl.massmatrix(V2, F2, igl.MASSMATRIX_TYPE_VORONOI).diagonal()
+    lu = sp.linalg.splu(K + sp.diags(m))
+    rng = np.random.default_rng(0)
+    X0, _ = _lobpcg.cotangent_start(lambda Y: K @ Y, m, lu.solve, lambda c: rng.standard_normal((len(m), c)),
+                                    10, 14, len(m), 0.1, 10)
+    theta = np.linalg.eigvalsh(X0.T @ (K @ X0))
+    assert X0.shape[1] >= 20 and theta[17] < 6.5 < theta[18]  # two zeros, six 2's, ten 6's, and more
+    op = meshlap.laplacian(V2, F2, operator="kernel")
+    info = {}
+    lam, _ = spectral.eigs(op, 10, method="lobpcg", info=info)
+    ref, _ = spectral.eigs(op, 10, method="dense", elements="linear")
+    assert np.abs(lam - ref).max() < 1e-8 * ref[-1]
+    assert info["iterations"] <= 8

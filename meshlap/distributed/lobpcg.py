@@ -419,21 +419,21 @@ def eigs(
             # past k, all that the count asked for converge (λ_k's ties, or values skipped)
             goal = max(k, min(want, n_p // 3 - (nb - k)))
             more = (nb - k) + (max(4, k // 2) if wide else 0)
-            width = _lobpcg.start_width(goal, goal + more, n_p) if adapt and not wide else goal + more
-            X0 = np.random.default_rng([seed + wide, rank]).standard_normal((len(P), min(width, n_p)))
-            start = None
+            rng = np.random.default_rng([seed + wide, rank])
+
+            def random(c: int) -> np.ndarray:
+                return rng.standard_normal((len(P), min(c, n_p)))
+            start = 0
             with one_blas_thread():
-                if Kg is not None:
+                if Kg is None:
+                    X0 = random(goal + more)
+                else:
                     # start from the cotangent eigenvectors, (K + σM)⁻¹ (global or per rank) as
-                    # preconditioner, after one step of inverse iteration on the random block, as on
-                    # the single machine
-                    X0 = local(m[:, None] * X0)
-                    start = _lobpcg.lobpcg(lambda Y: _matmat(Kg, Y), m, local, X0, goal, spectral._START_TOL,
-                                           _START_ITERATIONS, allsum, on_values=False,
-                                           report=_lobpcg.lobpcg_progress(report, "cotangent start",
-                                                                          0.05, 0.2))
-                    X0 = start.X[:, :_lobpcg.block_size(start.lam, goal, goal + more) if adapt and not wide
-                                 else goal + more]
+                    # preconditioner, as on the single machine
+                    X0, start = _lobpcg.cotangent_start(
+                        lambda Y: _matmat(Kg, Y), m, local, random, goal, goal + more, n_p,
+                        spectral._START_TOL, _START_ITERATIONS, allsum, adapt=adapt and not wide,
+                        report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2))
                 out = _lobpcg.lobpcg(apply_A, m, T, X0, goal, tol, 2 * maxiter if wide else maxiter, allsum,
                                      least=0.01 * sigma,
                                      report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
@@ -441,7 +441,7 @@ def eigs(
             scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
             facts.update(iterations=out.iterations, residuals=out.residuals[:k] / scale,
                          error_bounds=out.ratio[:k], block=X0.shape[1],
-                         start_iterations=0 if start is None else start.iterations)
+                         start_iterations=start)
             return out.lam, out.X, out.iterations
         return run
 
