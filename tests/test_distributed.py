@@ -219,6 +219,12 @@ def test_clear_errors():
         distributed.laplacian(V, mass=np.zeros(100), correction="none", h=0.01, comm=MPI.COMM_SELF)
     with pytest.raises(meshlap.MeshError, match="partition"):
         distributed.laplacian(V, F, correction="none", h=0.01, comm=MPI.COMM_SELF, partition=np.full(100, 3))
+    # meshlap.laplacian's names: "paper" is correction="none", the single-machine pencils are named
+    paper = distributed.laplacian(V, F, operator="paper", h=0.01, comm=MPI.COMM_SELF).to_scipy()
+    none = distributed.laplacian(V, F, correction="none", h=0.01, comm=MPI.COMM_SELF).to_scipy()
+    assert (paper != none).nnz == 0
+    with pytest.raises(meshlap.MeshError, match="single-machine"):
+        distributed.laplacian(V, F, operator="fem", comm=MPI.COMM_SELF)
 
 
 def test_rest_of_meshlap_never_imports_it():

@@ -477,6 +477,9 @@ def laplacian(
         A PETSc shell that recomputes rows in each product (no MPIAIJ matrix).
     partition : (n,) array_like of int, optional
         Owner rank of each passed point, instead of the k-d split.
+    correction : {"richardson", "none"}, optional
+        "none" (or ``operator="paper"``): the paper's operator, eq. (1); default the corrected
+        kernel, whose other options (``**options``) are :class:`~meshlap.MeshLaplacian`'s.
     progress : bool or callable, optional
         ``True``: a bar on rank 0's stderr; a callable gets ``(fraction, stage)`` on every rank.
 
@@ -503,12 +506,16 @@ def laplacian(
     MPI, PETSc = _mpi()
     comm = MPI.COMM_WORLD if comm is None else comm
     report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
+    operator = options.pop("operator", "kernel")
+    if operator not in ("kernel", "paper"):
+        raise MeshError(f"distributed.laplacian builds operator='kernel' or 'paper'; got {operator!r} "
+                        "(the FEM and Galerkin pencils are single-machine: meshlap.laplacian)")
+    correction = "none" if operator == "paper" else correction
     if correction != "none":
         if matrix_free or (F is None and not isinstance(V, Geometry)):
-            raise MeshError(
-                "the corrected default (correction='richardson') needs faces or a Geometry: pass V and F "
-                "(scattered or whole), or a Geometry such as meshlap.geometry.point_cloud_geometry(P), "
-                "without matrix_free=True; or pass correction='none' for the paper's operator")
+            raise MeshError("the corrected default (correction='richardson') needs faces or a Geometry: "
+                            "V and F (scattered or whole), or meshlap.geometry.point_cloud_geometry(P), "
+                            "without matrix_free=True; or pass correction='none' for the paper's operator")
         if scattered:
             return _scattered_corrected(comm, V, F, h, tol, partition, correction, options, report)
         return _corrected(comm, V, F, k, h, tol, partition, correction, options, report)
@@ -517,14 +524,9 @@ def laplacian(
         raise MeshError(f"correction='none' is the paper's operator: no {', '.join(sorted(options))}")
     tol = check_tol(DEFAULT_TOL if tol is None else tol)
     V = np.asarray(V, dtype=np.float64)
-    if len(V):
-        V = check_vertices(V)
-    else:
-        V = np.zeros((0, 3))
+    V = check_vertices(V) if len(V) else np.zeros((0, 3))
     if F is not None and scattered:
-        if mass is None:
-            mass = _scattered_mass(comm, V, F)
-        F = None
+        mass, F = (_scattered_mass(comm, V, F) if mass is None else mass), None
     if F is not None:
         from ..geometry.mass import _face_areas, _mean_edge_length, _vertex_mass, paper_width
 
