@@ -144,7 +144,7 @@ def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.n
            tol: float, floor: float, upper: float | None = None, allsum=_lobpcg._local) -> Verdict:
     """Check the pairs ``(lam[i], X[:, i])`` of ``A x = λ M x``, ``A = -S`` (module notes).
 
-    ``apply_A`` multiplies a block; ``upper`` is the next eigenvalue above ``lam[-1]`` as far as
+    ``apply_A`` multiplies a block; ``upper`` bounds the eigenvalues past ``lam`` from below as far as
     known (None: Bauer–Fike alone for the last cluster). The rows may be an MPI rank's share:
     ``allsum`` then adds the small Gram matrices over the ranks.
 
@@ -167,15 +167,7 @@ def verify(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, lam: np.n
     R = apply_A(X) - MX * lam
     gram = allsum(_lobpcg.inner(R, R / mc))
     res = np.sqrt(np.maximum(np.diag(gram), 0.0))
-    if upper is None:  # nothing known above: the last cluster keeps Bauer–Fike's bound
-        err = _lobpcg.eig_error(lam, res, gram)
-        last = np.abs(lam - lam[-1]) <= _lobpcg._WINDOW * max(abs(float(lam[-1])), 1e-300)
-        err[last] = res[last]
-    else:  # the value above joins as a Ritz value of zero residual: the last cluster's gap
-        theta = np.append(lam, float(upper))
-        big = np.zeros((k + 1, k + 1))
-        big[:k, :k] = gram
-        err = _lobpcg.eig_error(theta, np.append(res, 0.0), big)[:k]
+    err = _lobpcg.eig_error(lam, res, gram, upper)  # no upper: the last cluster keeps Bauer–Fike's
     return Verdict(res, err / (tol * scales(lam, floor)), ortho)
 
 
@@ -288,6 +280,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
         lam, X, iterations = attempt.run(want)
         count = shift = None
         upper = float(lam[k]) if len(lam) > k else None
+        proven = False
         j = k
         began = time.perf_counter()
         low = counter is not None and not attempt.exact and float(lam[k - 1]) <= _yardstick(tol, floor)
@@ -325,10 +318,22 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
                 queue.insert(0, attempt)
             below[attempt.name] = max(j, below.get(attempt.name, 0))
             if count == j:
-                upper = shift  # proven: λ_{j+1} ≥ σ
+                upper, proven = shift, True  # proven: λ_{j+1} ≥ σ
         complete = attempt.exact or (count is not None and count == j)
         j = max(j, k) if low else j
-        verdict = verify(apply_A, m, lam[:j], X[:, :j], tol, floor, upper, allsum)
+        e = j
+        if not (proven or low):
+            # unproven: the values computed within the window of λ_k join its cluster, with their
+            # residuals, and the gap above is to the first beyond it; where the cluster runs past
+            # every computed value, the solver runs again, asked for more, then Bauer–Fike
+            e = int(np.searchsorted(lam, lam[j - 1] + _lobpcg._WINDOW * abs(float(lam[j - 1])), side="right"))
+            if e >= len(lam) and not seen:  # once: a cluster may run on for hundreds of values
+                seen, want = len(lam), 2 * len(lam) - k + 1
+                queue.insert(0, attempt)
+                continue
+            upper = float(lam[e]) if e < len(lam) else None
+        verdict = verify(apply_A, m, lam[:e], X[:, :e], tol, floor, upper, allsum)
+        verdict = Verdict(verdict.residuals[:j], verdict.bounds[:j], verdict.orthogonality)
         spent += time.perf_counter() - began
         ok = bool(verdict.passed.all()) and (complete or not (must_count or count is not None))
         record = dict(method=attempt.name, tried=list(tried), iterations=iterations,

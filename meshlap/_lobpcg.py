@@ -373,34 +373,41 @@ def _restart(X: np.ndarray, m: np.ndarray, apply_A, allsum, nb: int):
     return matmul(Y, Q), matmul(AY, Q), lam
 
 
-def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None) -> np.ndarray:
+def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None,
+              ceiling: float | None = None) -> np.ndarray:
     """Bound on the distance from each Ritz value to the spectrum (module notes).
 
     ``res`` holds the residual norms; ``gram``, the residuals' Gram matrix ``R.T M⁻¹ R``
     (its diagonal ``res²``), gives each cluster's spectral norm. Without it the sum of the
     cluster's squared residuals stands in for the squared spectral norm (an upper bound on it).
+    The gap above a cluster is to the next Ritz value outside it, or, for the top one, to
+    ``ceiling`` (a bound below the eigenvalues past θ); else the top cluster keeps Bauer–Fike's
+    ‖r‖ (a block ending among 13 values within 1e-5 had certified 4e-7 errors as 2e-9).
 
     Examples
     --------
     >>> theta, res = np.array([1.0, 1.001, 2.0]), np.array([1e-4, 1e-4, 1e-3])
     >>> (eig_error(theta, res) * 1e8).round(1)     # the pair's residuals squared over its gap
-    array([  2. ,   2. , 100.1])
-    >>> (eig_error(theta, res, np.diag(res ** 2)) * 1e8).round(1)  # orthogonal residuals: half
+    array([2.e+00, 2.e+00, 1.e+05])
+    >>> (eig_error(theta, res, np.diag(res ** 2), ceiling=3.0) * 1e8).round(1)  # orthogonal: half
     array([  1. ,   1. , 100.1])
     """
     err = res.astype(np.float64)
     squares: dict[bytes, float] = {}  # a cluster's squared norm, once for all its members
     for i, t in enumerate(theta):
         near = np.abs(theta - t) <= _WINDOW * max(abs(t), 1e-300)
-        if not near.all():
-            gap = float(np.abs(theta[~near] - t).min())
-            key = near.tobytes()
-            if key not in squares:
-                if gram is None:
-                    squares[key] = float(np.sum(res[near] ** 2))
-                else:
-                    squares[key] = float(np.linalg.eigvalsh(gram[np.ix_(near, near)])[-1])
-            err[i] = min(err[i], squares[key] / gap)
+        above, below = theta[~near & (theta > t)], theta[~near & (theta < t)]
+        up = float(above.min()) if len(above) else ceiling  # None: the top cluster, nothing known above
+        gap = 0.0 if up is None else min(up - t, t - float(below.max()) if len(below) else np.inf)
+        if gap <= 0:
+            continue
+        key = near.tobytes()
+        if key not in squares:
+            if gram is None:
+                squares[key] = float(np.sum(res[near] ** 2))
+            else:
+                squares[key] = float(np.linalg.eigvalsh(gram[np.ix_(near, near)])[-1])
+        err[i] = min(err[i], squares[key] / gap)
     return err
 
 

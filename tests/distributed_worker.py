@@ -539,7 +539,8 @@ class Checks:
         mass = op.gather(op.mass)
         if self.rank == 0:
             L = serial if L is None else L
-            lam0, _ = spectral.eigs(baselines.SparseLaplacian(L, mass), k, mesh=mesh, tol=1e-14)
+            lam0, _ = spectral.eigs(baselines.SparseLaplacian(L, mass), k + 1, mesh=mesh, tol=1e-14)
+            lam0, above = lam0[:k], float(lam0[k])  # λ_{k+1}, above the returned values
             scale = np.maximum(np.abs(lam0), lam0[1])
             err = float((np.abs(lam - lam0) / scale).max())
             assert err <= 1e-8, (lam, lam0, err)  # the requested tol = 1e-8, on the eigenvalues
@@ -551,8 +552,12 @@ class Checks:
             gram = R[P].T @ (R[P] / mass[P, None])
             res = np.sqrt(np.diag(gram))
             # the eigenvalue bound recomputed from the gathered matrix's residuals: within tol
-            bound = _lobpcg.eig_error(lam, res, gram) / (1e-8 * np.maximum(np.abs(lam), 0.01 * lam[-1]))
-            assert bound.max() <= 1.01, bound
+            yardstick = 1e-8 * np.maximum(np.abs(lam), 0.01 * lam[-1])
+            bound = _lobpcg.eig_error(lam, res, gram, above) / yardstick
+            # λ_k's cluster: eigs bounds it with the computed values above λ_k, which it does not
+            # return; `err` above holds those values to tol against the reference
+            top = np.abs(lam - lam[-1]) <= _lobpcg._WINDOW * abs(lam[-1])
+            assert bound[~top].max(initial=0.0) <= 1.01, bound
             res = float((res / np.maximum(np.abs(lam0), lam0[-1])).max())
             ext = 0.0
             if Z.any():  # the kernel-weighted mean of the row, over the points with mass
