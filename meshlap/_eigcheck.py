@@ -271,13 +271,19 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     """
     from .errors import EigenError
 
-    want, tried, best, spent, seen, known = k, [], None, 0.0, 0, None
+    want, tried, best, spent, seen, known, again = k, [], None, 0.0, 0, None, None
     below: dict[str, int] = {}  # each solver's most values below the count's shift so far
     queue = list(attempts)
     while queue:
         attempt = queue.pop(0)
         tried.append(attempt.name)
-        lam, X, iterations = attempt.run(want)
+        try:
+            lam, X, iterations = attempt.run(want)
+        except EigenError:
+            if again is None or again[0] is not attempt:
+                raise
+            lam, X, iterations = again[1]  # the run asked for λ_k's cluster whole did not converge
+        again = None
         count = shift = None
         upper = float(lam[k]) if len(lam) > k else None
         proven = False
@@ -328,7 +334,7 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
             # every computed value, the solver runs again, asked for more, then Bauer–Fike
             e = int(np.searchsorted(lam, lam[j - 1] + _lobpcg._WINDOW * abs(float(lam[j - 1])), side="right"))
             if e >= len(lam) and not seen:  # once: a cluster may run on for hundreds of values
-                seen, want = len(lam), 2 * len(lam) - k + 1
+                seen, want, again = len(lam), 2 * len(lam) - k + 1, (attempt, (lam, X, iterations))
                 queue.insert(0, attempt)
                 continue
             upper = float(lam[e]) if e < len(lam) else None
