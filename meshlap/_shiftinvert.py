@@ -10,7 +10,7 @@ import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 from ._ldl import factor
 from .errors import EigenError
 
-__all__ = ["shift_invert", "shift_operator", "without_skips"]
+__all__ = ["shift_invert", "shift_operator", "until_none_new", "without_skips"]
 
 # ARPACK's restarts at most (its default, 10 n, is hours at 10⁵ unknowns): a solve that converges
 # takes a few; one that does not ends in EigenError rather than a hang
@@ -78,13 +78,31 @@ def without_skips(A: sp.csc_matrix, sigma: float, solve, m: np.ndarray, k: int, 
     >>> without_skips(A, s, solve, np.r_[mass, mass], 10, 1e-12, 0)[0][8:10].round(4).tolist()
     [5.7459, 5.7459]
     """
-    lam, X, it = shift_invert(A, sigma, solve, m, k, tol, seed, known, report)
-    top = float(lam[min(k, len(lam)) - 1])
-    while len(lam) < len(m) - 2:
-        more, Y, _ = shift_invert(A, sigma, solve, m, len(lam) + max(4, k // 10), tol, seed + len(lam),
-                                  (lam, X), report)
-        found = int((more <= top).sum()) > int((lam <= top).sum())
-        lam, X = more, Y
-        if not found:
+    lam, X = until_none_new(lambda: shift_invert(A, sigma, solve, m, k, tol, seed, known, report)[:2],
+                            lambda lam, X, extra: shift_invert(A, sigma, solve, m, len(lam) + extra, tol,
+                                                               seed + len(lam), (lam, X), report)[:2],
+                            k, len(m))
+    return lam, X, 0
+
+
+def until_none_new(first, more, k: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pairs of ``first()``, then of ``more(lam, X, extra)`` (those pairs and ``extra`` more
+    from a run deflated of them, at most n - 2 in all) until a run finds no value at or below the
+    k-th of the first: the serial shift-invert's and SLEPc's (:func:`meshlap.distributed.eigs`).
+
+    Examples
+    --------
+    >>> spectrum = np.r_[0.0, 1.0, 1.5, np.arange(2.0, 30.0)]
+    >>> first = lambda: (np.r_[0.0, 1.0, 2.0, 3.0, 4.0], None)    # 1.5 skipped
+    >>> more = lambda lam, X, extra: (np.sort(np.r_[lam, np.setdiff1d(spectrum, lam)[:extra]]), None)
+    >>> until_none_new(first, more, 4, len(spectrum))[0][:5].tolist()
+    [0.0, 1.0, 1.5, 2.0, 3.0]
+    """
+    lam, X = first()
+    top = float(np.sort(lam)[min(k, len(lam)) - 1])
+    while len(lam) < n - 2:
+        below = int((lam <= top).sum())
+        lam, X = more(lam, X, min(max(4, k // 10), n - 2 - len(lam)))
+        if int((lam <= top).sum()) == below:
             break
-    return lam, X, it
+    return lam, X

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .. import _eigcheck
+from .._shiftinvert import until_none_new
 from ..errors import MeshError
 from ..geometry.validation import check_k
 from .comm import _has_mumps, _mpi, _slepc
@@ -312,16 +313,14 @@ def eigs(op: DistributedLaplacian, k: int = 20, *, method: str = "lobpcg", mesh:
             vecs[:, i] = xr.getArray()
         return lam, vecs
 
+    def more(lam: np.ndarray, vecs: np.ndarray, extra: int) -> tuple[np.ndarray, np.ndarray]:
+        new, new_vecs = solve(extra, vecs)
+        return np.r_[lam, new], np.hstack([vecs, new_vecs])
+
     try:
-        lam, vecs = solve(k)
-        top = float(np.sort(lam)[k - 1])
-        while len(lam) < n_p - 2:
-            # no count shows that none is missing: a run deflated of the pairs found looks for
-            # values at or below λ_k that the first skipped (copies of a part: each value twice)
-            more, more_vecs = solve(min(max(4, k // 10), n_p - 2 - len(lam)), vecs)
-            lam, vecs = np.r_[lam, more], np.hstack([vecs, more_vecs])
-            if not (more <= top).any():
-                break
+        # no count shows that none is missing: runs deflated of the pairs found look for values
+        # at or below λ_k that the first skipped (copies of a part: each value twice)
+        lam, vecs = until_none_new(lambda: solve(k), more, k, n_p)
     finally:
         if blr is not None and solver == "mumps":
             for key in blr_keys:
