@@ -544,7 +544,7 @@ def render(folder: Path) -> None:
                 if key in ("n", "parts", "touching"):
                     row[key] = int(v) if v else 0
                 elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise", "sigma",
-                                                                 "extent"):
+                                                                 "extent", "uncertified"):
                     row[key] = float(v) if v else float("nan")
                 else:
                     row[key] = v
