@@ -86,3 +86,16 @@ def test_every_meshlap_name_a_script_uses_exists() -> None:
                     missing.append(f"{path.name}:{node.lineno}: {'.'.join(chain[:i + 1])}")
                     break
     assert not missing, "benchmarks use names meshlap does not have:\n" + "\n".join(missing)
+
+
+def test_the_smoke_run_knows_every_script() -> None:
+    """benchmarks/smoke.py runs each script once at a small size; a new script is added there."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("smoke", BENCHMARKS / "smoke.py")
+    smoke = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(smoke)
+    scripts = {p.name for p in BENCHMARKS.glob("*.py")}
+    assert scripts - set(smoke.RUNS) - smoke.NOT_RUN == set(), "scripts smoke.py does not run"
+    assert set(smoke.RUNS) | smoke.NOT_RUN <= scripts, "smoke.py names scripts that are gone"
+    assert smoke.CORPUS <= set(smoke.RUNS)
