@@ -381,7 +381,7 @@ def eigs(
             goal = max(k, min(want, n_p // 3 - extra))
             more = max(extra, k // 2) if wide else extra
             return _eigs_lobpcg(op, P, m, goal, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
-                                adapt and not wide, spatial(), report)
+                                adapt and not wide, spatial(), report, S_P if sparse else None)
         return run
 
     exact, volume = _eigcheck.Attempt("dense", dense, exact=True), _ldl.supernodal(op)
@@ -454,7 +454,7 @@ def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ�
     return 4.0 * math.pi / float(m.sum())
 
 
-def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None):
+def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None, own=None):
     n, n_p = op.n_vertices, len(P)
     nb = k + extra
     full = n_p == n
@@ -484,6 +484,8 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
     sigma = _scale_shift(m)
     geo = _mesh_of(op, mesh)
     K = None if geo is None else _cot_stiffness(geo[0], geo[1], P, geo[2])
+    if K is None and own is not None:  # no mesh (quadratic elements, a user's pencil) but sparse:
+        K = sp.csc_matrix(-own())     # its own stiffness, the exact preconditioner
     if K is not None and ordered is not None:
         K = sp.csc_matrix(K[order][:, order])
     T = _lobpcg.CotPreconditioner(K, m, diag, sigma)

@@ -504,3 +504,17 @@ def test_volumes_factor_by_supernodes_and_agree(monkeypatch):
     lam2, _ = spectral.eigs(op, 8)
     assert np.abs(lam - lam2).max() < 1e-10 * lam.max()
     assert abs(lam[1] / np.pi ** 2 - 1) < 0.05  # the Neumann cube's first nonzero value, π²
+
+
+def test_lobpcg_on_a_sparse_pencil_without_a_mesh_takes_its_own_stiffness():
+    """The default's quadratic elements have no mesh of their own to precondition LOBPCG with: it
+    takes the pencil's own stiffness (the exact preconditioner) and converges itself, where with
+    the diagonal alone it ran to its limit before shift-invert took over (16,000-vertex sphere,
+    k = 36: 92 s, now 8 s)."""
+    V, F = shapes.sphere(3000, kind="random", seed=0)
+    op = meshlap.laplacian(V, F)
+    info = {}
+    lam, _ = spectral.eigs(op, 16, method="lobpcg", info=info)
+    assert info["elements"] == "quadratic" and info["tried"] == ["lobpcg"] and info["iterations"] <= 20
+    ref, _ = spectral.eigs(op, 16, method="shift-invert")
+    assert np.abs(lam - ref).max() < 1e-8 * ref[-1]
