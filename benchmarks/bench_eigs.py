@@ -66,7 +66,7 @@ def reference(op, V, F, k, key, fresh, elements):
     path = CACHE / f"eigs_ref_{key}_k{k}.npy"
     if path.exists() and not fresh:
         return np.load(path)
-    if elements == "quadratic" or op.nnz < 20 * op.S.shape[0]:  # sparse: SuperLU fits
+    if elements == "quadratic" or op.nnz <= spectral._SPARSE_ROW_MAX * op.S.shape[0]:  # as eigs judges
         fine = quadratic.fine_pencil(op) if elements == "quadratic" else op
         lam = eigsh(sp.csc_matrix(-fine.S), k=k, M=sp.diags(fine.mass).tocsc(), sigma=-1e-3, which="LM",
                     return_eigenvectors=False)

@@ -518,3 +518,5 @@ def test_lobpcg_on_a_sparse_pencil_without_a_mesh_takes_its_own_stiffness():
     assert info["elements"] == "quadratic" and info["tried"] == ["lobpcg"] and info["iterations"] <= 20
     ref, _ = spectral.eigs(op, 16, method="shift-invert")
     assert np.abs(lam - ref).max() < 1e-8 * ref[-1]
+    exact = np.repeat([0.0, 2.0, 6.0, 12.0], [1, 3, 5, 7])  # l(l+1): the quadratic elements 0.19-0.22% off
+    assert abs(lam[0]) < 1e-8 and np.abs(lam[1:] / exact[1:] - 1).max() < 0.003
