@@ -43,8 +43,8 @@ import scipy.sparse as sp
 from . import _ldl, _lobpcg
 from .errors import MeshWarning, user_stacklevel
 
-__all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_shift", "first_verified", "uncertified",
-           "verify", "warn_roundoff"]
+__all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_ceiling", "count_shift",
+           "first_verified", "uncertified", "verify", "warn_roundoff"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
 _ORTHO = 1e-7
@@ -199,6 +199,23 @@ def count_shift(lam: np.ndarray, k: int, floor: float, tol: float) -> tuple[floa
     # every computed value ties (no value above to halve the gap to): σ stands _TIE of the floor
     # clear too, where an LDLᵀ pivot's sign is safe from roundoff next to a cluster of zeros
     return top + max(tie, _TIE * floor), len(lam)
+
+
+def count_ceiling(lam: np.ndarray, k: int, tol: float, floor: float) -> tuple[float, int] | None:
+    """What a count makes of the Ritz values ``lam``: the shift σ it proves the values past the
+    first j to lie above (:func:`count_shift`), the bound :func:`verify` then reads for the gap
+    above λ_j's cluster; None where λ_k lies within the check's yardstick of 0 (the count's
+    shift goes below 0 there) or every value ties.
+
+    Examples
+    --------
+    >>> count_ceiling(np.array([0.0, 16.0, 16.0, 25.0]), 3, 1e-8, 0.01)   # halfway to 25
+    (20.5, 3)
+    """
+    if float(lam[k - 1]) <= _yardstick(tol, floor):
+        return None
+    sigma, j = count_shift(lam, k, floor, tol)
+    return (sigma, j) if j < len(lam) else None
 
 
 def _yardstick(tol: float, floor: float) -> float:  # twice what verify lets a passing value be off

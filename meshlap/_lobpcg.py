@@ -1,50 +1,48 @@
 """The block eigensolver behind :func:`meshlap.spectral.eigs` and the distributed one.
 
 LOBPCG (Knyazev 2001) for ``A x = λ M x`` with ``M = diag(m) > 0``, in the basis selection of
-Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and
-M-orthogonal to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the
-identity and is never formed; of the operator's Gram matrix only the rows of W are products
-over the long dimension (X's own block is diag(θ); P is the basis times coefficients E
-orthogonal to the Ritz vectors' C, so P.T A X = 0 and P.T A P = E.T G E come from the last
-small problem), and P's update is found and orthonormalized in the small coefficient space; X
-and P are kept side by side in one array, so that each of these products is one BLAS call.
-What stays proportional to n per iteration is
-one product with A, one preconditioner application, the orthogonalization of W and the
-combinations that form the new X and P.
+Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and M-orthogonal
+to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the identity and is never
+formed; of the operator's Gram matrix only the rows of W are products over the long dimension (X's
+own block is diag(θ); P is the basis times coefficients E orthogonal to the Ritz vectors' C, so P.T
+A X = 0 and P.T A P = E.T G E come from the last small problem), and P's update is found and
+orthonormalized in the small coefficient space; X and P are kept side by side in one array, so that
+each of these products is one BLAS call. What stays proportional to n per iteration is one product
+with A, one preconditioner application, the orthogonalization of W and the combinations that form
+the new X and P.
 
-The convergence test is on the eigenvalues, not the residuals: a Ritz value θ_i whose
-residual is r_i = A x_i - θ_i M x_i lies within ``‖r_i‖`` of an eigenvalue (Bauer–Fike in
-the M⁻¹ norm) and, when the Ritz values within ``_WINDOW`` of it are the whole cluster that
-holds it, within ``‖R_c‖₂² / δ`` (Kato–Temple for the cluster: R_c the block of their
-residuals, ‖·‖₂ its spectral norm in the M⁻¹ inner product, δ the distance to the nearest Ritz
-value outside; Mathias 1998, Li and Li 2013). The spectral norm is the largest eigenvalue of the
-cluster's share of the residuals' Gram matrix: for a cluster of c near-orthogonal residuals of
-like size it is about 1/c of the sum of their squares, which ends the iteration on a sphere's
-(2l+1)-fold eigenvalues one iteration sooner. A relative eigenvalue accuracy ε so needs a
-residual of only about √(ε·θ·δ), not ε·θ: half the iterations for ε = 1e-8.
+The convergence test is on the eigenvalues, not the residuals: a Ritz value θ_i whose residual is
+r_i = A x_i - θ_i M x_i lies within ``‖r_i‖`` of an eigenvalue (Bauer–Fike in the M⁻¹ norm) and,
+when the Ritz values within ``_WINDOW`` of it are the whole cluster that holds it, within ``‖R_c‖₂²
+/ δ`` (Kato–Temple for the cluster: R_c the block of their residuals, ‖·‖₂ its spectral norm in the
+M⁻¹ inner product, δ the distance to the nearest Ritz value outside; Mathias 1998, Li and Li 2013).
+The spectral norm is the largest eigenvalue of the cluster's share of the residuals' Gram matrix:
+for a cluster of c near-orthogonal residuals of like size it is about 1/c of the sum of their
+squares, which ends the iteration on a sphere's (2l+1)-fold eigenvalues one iteration sooner. A
+relative eigenvalue accuracy ε so needs a residual of only about √(ε·θ·δ), not ε·θ: half the
+iterations for ε = 1e-8.
 
-The product with a stored operator (:func:`csr_times`) adds 16 entries of a row per pass over
-the row's accumulator, in the entries' order: the accumulator's load and store per entry, not
-the reading of the matrix, bounded the plain loop. Its rows are shared, in shares of equal
-entries, among meshlap's own threads (:func:`meshlap._jit.each_thread`'s pool), each running
-the compiled loop with one numba thread. numba's OpenMP workers, which a parallel loop on
-numba's threads would use, keep spinning for about 8 ms of CPU after each loop (GNU OpenMP's
-default wait policy): on two cores they took the second core from the dense steps that follow
-each product, and their CPU time counted against the solve. meshlap's threads sleep when idle,
-and the process's threading settings (``OMP_WAIT_POLICY``, numba's threading layer) stay the
-user's.
+The product with a stored operator (:func:`csr_times`) adds 16 entries of a row per pass over the
+row's accumulator, in the entries' order: the accumulator's load and store per entry, not the
+reading of the matrix, bounded the plain loop. Its rows are shared, in shares of equal entries,
+among meshlap's own threads (:func:`meshlap._jit.each_thread`'s pool), each running the compiled
+loop with one numba thread. numba's OpenMP workers, which a parallel loop on numba's threads would
+use, keep spinning for about 8 ms of CPU after each loop (GNU OpenMP's default wait policy): on two
+cores they took the second core from the dense steps that follow each product, and their CPU time
+counted against the solve. meshlap's threads sleep when idle, and the process's threading settings
+(``OMP_WAIT_POLICY``, numba's threading layer) stay the user's.
 
-The products over the long dimension (``A @ B`` with a small B, ``A.T @ B``) share their rows
-among the same threads (:func:`matmul`, :func:`inner`), BLAS staying on one thread each: a
-threaded BLAS here competed with the spinning OpenMP workers of the products (3-10× slower,
-measured when the products ran on numba's threads), where a share of the rows per thread
-does not. ``A.T @ B`` adds the products of fixed blocks of
-rows in a fixed order, so that the results do not depend on the number of threads.
+The products over the long dimension (``A @ B`` with a small B, ``A.T @ B``) share their rows among
+the same threads (:func:`matmul`, :func:`inner`), BLAS staying on one thread each: a threaded BLAS
+here competed with the spinning OpenMP workers of the products (3-10× slower, measured when the
+products ran on numba's threads), where a share of the rows per thread does not. ``A.T @ B`` adds
+the products of fixed blocks of rows in a fixed order, so that the results do not depend on the
+number of threads.
 
 The preconditioner factor is a sparse LDLᵀ (:mod:`meshlap._ldl`), applied to wide blocks with
-blocked triangular solves compiled here: one pass over each factor serves every column of the
-block, where the factorization's own solve treats the columns one after the other; in single precision,
-as a preconditioner needs no more (:class:`BlockFactor`).
+blocked triangular solves compiled here: one pass over each factor serves every column of the block,
+where the factorization's own solve treats the columns one after the other; in single precision, as
+a preconditioner needs no more (:class:`BlockFactor`).
 """
 
 from __future__ import annotations
@@ -455,20 +453,21 @@ class Ritz(NamedTuple):
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
            tol: float, maxiter: int, allsum=_local, *, on_values: bool = True,
            report: Callable[[int, float], None] | None = None, floor: float | None = None,
-           cheap: bool = False, least: float = 0.0) -> Ritz:
+           cheap: bool = False, least: float = 0.0, ceiling: Callable | None = None) -> Ritz:
     """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
 
-    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100, least)`` stop receiving new
-    directions (``least``: the scale of a block whose first k values are all zero, as on a mesh
-    of k parts or more); the iteration ends when the first k have. The measure is the eigenvalue
-    bound of :func:`eig_error` (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``.
-    The rows may be a share of the problem's (an MPI rank's): ``allsum`` then adds the small
-    Gram matrices and norms over the shares, so every share solves the same small problems.
-    ``report(iteration, worst ratio)`` is called once per iteration. With ``floor``, the
-    iteration also ends as soon as the smallest Ritz value is below it: a Ritz value bounds
-    an eigenvalue from above (Courant–Fischer), so that proves an eigenvalue below ``floor``.
-    ``cheap`` is for a rough answer with a sparse A (a start): one Gram–Schmidt pass instead
-    of two, and A X, A P recomputed by products rather than combined from the basis.
+    Columns whose error measure is below ``tol · max(|θ|, θ_k / 100, least)`` stop receiving new directions
+    (``least``: the scale of a block whose first k values are all zero, as on a mesh of k parts or
+    more); the iteration ends when the first k have. The measure is the eigenvalue bound of
+    :func:`eig_error` (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``. The rows may be a share
+    of the problem's (an MPI rank's): ``allsum`` then adds the small Gram matrices and norms over the
+    shares, so every share solves the same small problems. ``report(iteration, worst ratio)`` is called
+    once per iteration. With ``floor``, the iteration also ends as soon as the smallest Ritz value is
+    below it: a Ritz value bounds an eigenvalue from above (Courant–Fischer), so that proves an
+    eigenvalue below ``floor``. ``cheap`` is for a rough answer with a sparse A (a start): one
+    Gram–Schmidt pass instead of two, and A X, A P recomputed by products rather than combined from the
+    basis. ``ceiling(θ)``: a count's (σ, j) (:func:`meshlap._eigcheck.count_ceiling`); the first j then
+    converge against the gap up to σ, as the check will read it.
 
     Examples
     --------
@@ -492,18 +491,19 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
     for it in range(maxiter + 1):
         X, AX = XP[:, :nb], AXP[:, :nb]
         if it and it % _AUDIT == 0 and _drifted(X, mc, allsum):
-            # the basis is no longer what the small problems assume (issue 38: with a poor
-            # preconditioner, 200 iterations on a cotangent pencil collapsed the block onto the
-            # constant): restart from the Ritz vectors, made M-orthonormal again, refilled with
-            # random directions where some were lost, and their products recomputed
+            # the basis is no longer what the small problems assume (a poor preconditioner can
+            # collapse the block onto the constant): restart from the Ritz vectors (_restart)
             XP, AXP, lam = _restart(X, m, apply_A, allsum, nb)
-            PAP = np.zeros((0, 0))
-            X, AX = XP, AXP
-        R = AX - (mc * X) * lam
+            PAP, X, AX = np.zeros((0, 0)), XP, AXP
+        R, last = AX - (mc * X) * lam, k
         if on_values:
             gram = allsum(inner(R, R / mc))
             res = np.sqrt(np.maximum(np.diag(gram), 0.0))
             err = eig_error(lam, res, gram)
+            proven = None if ceiling is None else ceiling(lam)
+            if proven is not None:  # else a circle's 16s passed at 0.65 tol here, failed the check at 1.3
+                last = proven[1]
+                err[:last] = eig_error(lam[:last], res[:last], gram[:last, :last], proven[0])
         else:
             err = res = np.sqrt(allsum(np.sum(R * R / mc, axis=0)))
         scale = np.maximum(np.abs(lam), max(0.01 * abs(float(lam[k - 1])), least, 1e-300))
@@ -511,7 +511,7 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         if report is not None:
             report(it, float(ratio[:k].max()))
         active = ratio > 1.0
-        if not active[:k].any() or it == maxiter or (floor is not None and lam[0] < floor):
+        if not active[:max(k, last)].any() or it == maxiter or (floor is not None and lam[0] < floor):
             break
         W = precond(R[:, active])
         W = W[:, _orthogonalize(W, XP, mc, allsum, not cheap)]

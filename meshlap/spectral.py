@@ -380,8 +380,9 @@ def eigs(
             # past k, all that the count asked for converge (λ_k's ties, or values skipped)
             goal = max(k, min(want, n_p // 3 - extra))
             more = max(extra, k // 2) if wide else extra
+            ceiling = (lambda lam: _eigcheck.count_ceiling(lam, k, tol, floor)) if counted else None
             return _eigs_lobpcg(op, P, m, goal, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
-                                adapt and not wide, spatial(), report, S_P if sparse else None)
+                                adapt and not wide, spatial(), report, S_P if sparse else None, ceiling)
         return run
 
     exact, volume = _eigcheck.Attempt("dense", dense, exact=True), _ldl.supernodal(op)
@@ -454,17 +455,16 @@ def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ�
     return 4.0 * math.pi / float(m.sum())
 
 
-def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None, own=None):
+def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None, own=None,
+                 ceiling=None):
     n, n_p = op.n_vertices, len(P)
-    nb = k + extra
-    full = n_p == n
+    nb, full = k + extra, n_p == n
     if report is not None:
         report(0.0, "preconditioner")
     # the iteration runs in spatial order where L is stored: the same problem, permuted, whose
     # block products read the block from cache
     order = slice(None) if ordered is None else ordered[1]
-    m = m[order]
-    minus_m = -m
+    m, minus_m = m[order], -m[order]
 
     def apply_A(Xp: np.ndarray) -> np.ndarray:
         if ordered is not None:
@@ -506,7 +506,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
                                             n_p, _START_TOL, 10, adapt=adapt, cheap=True,
                                             report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05,
                                                                            0.2))
-        out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, least=0.01 * sigma,
+        out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, least=0.01 * sigma, ceiling=ceiling,
                              report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
     X = out.X  # the whole block: the values past k give the check the gap above λ_k
     if ordered is not None:

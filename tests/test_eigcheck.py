@@ -520,3 +520,19 @@ def test_lobpcg_on_a_sparse_pencil_without_a_mesh_takes_its_own_stiffness():
     assert np.abs(lam - ref).max() < 1e-8 * ref[-1]
     exact = np.repeat([0.0, 2.0, 6.0, 12.0], [1, 3, 5, 7])  # l(l+1): the quadratic elements 0.19-0.22% off
     assert abs(lam[0]) < 1e-8 and np.abs(lam[1:] / exact[1:] - 1).max() < 0.003
+
+
+@pytest.mark.parametrize("k", [9, 12])
+def test_lobpcg_stops_where_the_count_checked_answer_passes(k):
+    """Where a count checks the answer, it proves the gap above λ_k's cluster only up to its
+    shift, halfway to the next value: LOBPCG converges against that gap, not the wider one to
+    its next Ritz value. A 3,000-segment circle's pairs m², k = 9, stopped at 0.65 tol against
+    25 and were refused at 1.3 tol against σ = 20.5, so shift-invert answered instead."""
+    n = 3000
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    op = meshlap.laplacian(np.c_[np.cos(t), np.sin(t), 0 * t], np.c_[np.arange(n), (np.arange(n) + 1) % n])
+    info = {}
+    lam, _ = spectral.eigs(op, k, method="lobpcg", info=info)
+    assert info["tried"] == ["lobpcg"] and info["complete"] and info["count"] == k + 1 - k % 2  # whole pairs
+    exact = np.repeat(np.arange(k), 2)[1:k + 1] ** 2.0  # 0, 1, 1, 4, 4, ...
+    assert abs(lam[0]) < 1e-8 and np.abs(lam[1:] / exact[1:] - 1).max() < 1e-5

@@ -434,8 +434,9 @@ def eigs(
                         lambda Y: _matmat(Kg, Y), m, local, random, goal, goal + more, n_p,
                         spectral._START_TOL, _START_ITERATIONS, allsum, adapt=adapt and not wide,
                         report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05, 0.2))
+                ceiling = (lambda lam: _eigcheck.count_ceiling(lam, k, tol, floor)) if counted else None
                 out = _lobpcg.lobpcg(apply_A, m, T, X0, goal, tol, 2 * maxiter if wide else maxiter, allsum,
-                                     least=0.01 * sigma,
+                                     least=0.01 * sigma, ceiling=ceiling,
                                      report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
             lam = out.lam
             scale = np.maximum(np.abs(lam[:k]), abs(float(lam[k - 1])))
