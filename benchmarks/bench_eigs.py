@@ -39,7 +39,7 @@ from results_file import RESULTS, write_section
 from scipy.sparse.linalg import LinearOperator, eigsh, lobpcg, splu
 
 import meshlap
-from meshlap import quadratic, spectral
+from meshlap import quadratic, samples, spectral
 
 HERE = Path(__file__).parent
 CACHE = HERE / ".cache"
@@ -92,11 +92,6 @@ def rel_err(lam, ref):
     return max(float((np.abs(lam[1:] - ref[1:]) / ref[1:]).max()), abs(lam[0] - ref[0]) / ref[-1])
 
 
-def sphere_spectrum(k):
-    """The unit sphere's k smallest eigenvalues, l(l + 1) with multiplicity 2l + 1."""
-    return np.repeat([j * (j + 1.0) for j in range(k)], [2 * j + 1 for j in range(k)])[:k]
-
-
 OPERATORS = (("default", {}), ("kernel", {"operator": "kernel"}), ("paper's", {"operator": "paper"}))
 
 
@@ -113,7 +108,7 @@ def main(argv=None) -> None:
 
     load_before = os.getloadavg()[0]  # other jobs on the machine inflate the wall times
     V, F = meshlap.shapes.sphere(n, kind="random", seed=0)
-    exact = sphere_spectrum(k)
+    exact = samples.sphere_eigenvalues(k)
     built = {}
     for name, kw in OPERATORS:
         if name == "paper's":  # the paper's operator at the kernel's h

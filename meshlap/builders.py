@@ -232,8 +232,9 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     """The Laplacian of a point cloud, chosen as for a mesh by :mod:`meshlap.policy`.
 
     A surface's cloud gets linear FEM on every point's local Delaunay star (a third each) as its
-    symmetric pencil; a noisy one (or a curve's, a volume's) the heat-kernel Laplacian of
-    Belkin, Sun and Wang (SODA 2009; ``operator="kernel"`` asks for it):
+    symmetric pencil, a curve's on every point's segments to its nearest neighbours on either
+    side (a half each); a noisy one (or a volume's) the heat-kernel Laplacian of Belkin, Sun and
+    Wang (SODA 2009; ``operator="kernel"`` asks for it):
 
     L f(w) = Σ_p m_p exp(-|p-w|²/4h) (f(p) - f(w)) / (h (4πh)^{k/2}), with the masses m_p of
     :func:`~meshlap.geometry.point_masses`, corrected as for a mesh (the Richardson kernel,

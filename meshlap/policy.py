@@ -89,11 +89,11 @@ _REASONS = {
     "noisy surface": "the input has cells and normal noise that adds area and dominates what smoothing "
                      "takes out across most edges: linear FEM on the positions after a bi-Laplacian step "
                      "that takes it out, masses less the area the noise it left adds",
-    "stars": "a surface's point cloud: linear FEM on every point's local Delaunay star (a third "
-             "each), point-wise rows fitted by the kernel",
+    "stars": "a surface's or a curve's point cloud: linear FEM on every point's local Delaunay star "
+             "(a third or a half each), point-wise rows fitted by the kernel",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
              "heat kernel, whose width averages what the projection leaves",
-    "cloud": "a point cloud without local triangles (a curve or a volume): the corrected heat kernel "
+    "cloud": "a point cloud without local stars to integrate over (a volume): the corrected heat kernel "
              "on the points",
     "h": "a kernel width h was given: the corrected heat kernel at that width",
     "options": "options of the kernel were given ({}): the kernel they configure",

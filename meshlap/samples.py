@@ -29,6 +29,7 @@ __all__ = [
     "circle",
     "cube_tetrahedra",
     "flat_torus_points",
+    "sphere_eigenvalues",
     "sphere_points",
     "three_sphere_points",
     "torus_eigenvalues",
@@ -175,6 +176,19 @@ def torus_points(n: int, kind: str = "random", seed: int = 0, R: float = 1.0, r:
     normal = np.column_stack([np.cos(th) * np.cos(ph), np.cos(th) * np.sin(ph), np.sin(th)])
     centre = R * np.column_stack([np.cos(ph), np.sin(ph), np.zeros_like(ph)])
     return centre + normal * (r + noise * rng.standard_normal((len(th), 1)))
+
+
+def sphere_eigenvalues(k: int, copies: int = 1) -> np.ndarray:
+    """The k smallest eigenvalues of -Δ on ``copies`` disjoint unit spheres: l(l + 1), each
+    (2l + 1)·copies times.
+
+    Examples
+    --------
+    >>> sphere_eigenvalues(5).tolist(), sphere_eigenvalues(4, copies=2).tolist()
+    ([0.0, 2.0, 2.0, 2.0, 6.0], [0.0, 0.0, 2.0, 2.0])
+    """
+    degree = np.arange(math.isqrt(max(int(k), 1)) + 1)  # degrees below √k hold k values
+    return np.repeat(degree * (degree + 1.0), copies * (2 * degree + 1))[:k]
 
 
 def torus_eigenvalues(k: int = 10, R: float = 1.0, r: float = 0.4, cells: int = 800) -> np.ndarray:

@@ -66,7 +66,7 @@ def test_policy_decisions():
     assert noisy.decision.operator == "kernel" and noisy.decision.measured["normal noise / spacing²"] > 0.02
     arc = np.c_[np.cos(np.arange(200) * 0.0314), np.sin(np.arange(200) * 0.0314)]
     curve = meshlap.point_cloud_laplacian(arc, k=1)
-    assert curve.decision.operator == "kernel" and "curve" in curve.decision.reason
+    assert curve.decision.operator == "fem" and "curve" in curve.decision.reason
     segments = np.c_[np.arange(199), np.arange(1, 200)]
     assert meshlap.laplacian(arc, segments).decision.operator == "galerkin"
     assert "cloud" in meshlap.laplacian(meshlap.geometry.point_cloud_geometry(V)).decision.reason
@@ -74,8 +74,10 @@ def test_policy_decisions():
         meshlap.laplacian(V, F, operator="cot")
     with pytest.raises(MeshError, match="has none"):
         meshlap.laplacian(meshlap.geometry.point_cloud_geometry(V), operator="galerkin")
+    solid = np.random.default_rng(0).uniform(size=(500, 3))
+    assert "a volume" in meshlap.point_cloud_laplacian(solid, k=3).decision.reason
     with pytest.raises(MeshError, match="has none"):
-        meshlap.point_cloud_laplacian(arc, k=1, operator="fem")
+        meshlap.point_cloud_laplacian(solid, k=3, operator="fem")
     with pytest.raises(MeshError, match="FEM pencil"):
         meshlap.laplacian(V, F, operator="fem", pointwise=True)
 

@@ -129,7 +129,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         stay open, e.g. on the rim of an open surface), ``triangles`` (k = 2: the local
         Delaunay triangles, each once from its corner of smallest index; a triangle soup,
         not a manifold mesh, used to precondition eigensolvers), ``stars`` (k = 2: every
-        point's own star, its centre first: most triangles three times, once from each corner).
+        point's own star, its centre first: most triangles three times, once from each corner;
+        k = 1: every point's segments to its nearest neighbours on either side along its
+        tangent, most segments twice).
 
     Examples
     --------
@@ -171,6 +173,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     nn1 = np.zeros(nu)
     star_parts: list[tuple[int, np.ndarray]] = []
     last = np.zeros(nu, dtype=np.int64)
+    ends1 = np.full((nu, 2), -1, dtype=np.int64)  # k = 1: each point's neighbours on either side
     todo = np.arange(nu)
     for it in range(64):
         if not len(todo):
@@ -188,8 +191,10 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         counts = np.full(len(todo), K, dtype=np.int64)
         if k == 1:
             m, st, ends = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
-            in_blocks(_masses1, len(todo), X, nbr, counts, kt, todo, m, st, ends)
+            side = np.full((len(todo), 2), -1, dtype=np.int64)
+            in_blocks(_masses1, len(todo), X, nbr, counts, kt, todo, m, st, ends, side)
             open_cell[todo] = ends
+            ends1[todo] = np.where(side >= 0, np.take_along_axis(nbr, np.maximum(side, 0), axis=1), -1)
         elif k == 2:
             m, vor, st, flat = (np.zeros(len(todo)), np.zeros(len(todo)),
                                 np.zeros(len(todo), np.int64), np.zeros(len(todo)))
@@ -256,7 +261,11 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = uniq[_soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)]
-    triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])]  # each once
+    if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
+        centre = np.repeat(np.arange(nu), 2)
+        stars = uniq[np.column_stack([centre, ends1.ravel()])[(ends1.ravel() >= 0) & (mass[centre] > 0)]]
+    triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])] if k == 2 else \
+        np.zeros((0, 3), np.int64)  # each once
     full = mass[np.searchsorted(uniq, rep)] / share
     boundary = open_cell[np.searchsorted(uniq, rep)]
     positive = full[full > 0]
@@ -474,11 +483,11 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         P = project_to_tangent(P, k, kwargs.get("neighbors"))
         pca = None  # the points moved: their frames are computed anew when asked for
     mass, info = point_masses(P, k, **kwargs)
-    cells = info.get("triangles") if k == 2 else None
+    cells = {1: np.unique(np.sort(info["stars"], axis=1), axis=0), 2: info["triangles"]}.get(k)
     geo = Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
                    source="point cloud", notes=notes)
-    if k == 2:  # the FEM pencil's cells and their weight: each triangle is in its three corners' stars
-        geo._cache["fem_cells"] = (info["stars"], 1 / 3)
+    if k <= 2:  # the FEM pencil's cells and their weight: each simplex is in its k + 1 corners' stars
+        geo._cache["fem_cells"] = (info["stars"], 1 / (k + 1))
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there

@@ -204,9 +204,9 @@ def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, f
         out_star[r], out_vor[r], status[r] = _star2(U, K, tri[r])
 
 
-# -- k = 1: half the gap to the nearest neighbours on each side ---------------------------------
+# -- k = 1: half the gap to the nearest neighbours on each side (side: their columns in nbr, or -1)
 @jit()
-def _masses1(start, stop, P, nbr, counts, kt, rows, out, status, ends):
+def _masses1(start, stop, P, nbr, counts, kt, rows, out, status, ends, side):
     d = P.shape[1]
     for r in range(start, stop):
         p = rows[r]
@@ -219,14 +219,13 @@ def _masses1(start, stop, P, nbr, counts, kt, rows, out, status, ends):
         _project(P, p, nbr[r, :K], T, U)
         left = -math.inf
         right = math.inf
-        far = 0.0
+        side[r, 0] = side[r, 1] = -1
         for j in range(K):
             s = U[j, 0]
-            far = max(far, abs(s))
-            if s < 0.0:
-                left = max(left, s)
-            elif s > 0.0:
-                right = min(right, s)
+            if 0.0 > s > left:
+                left, side[r, 0] = s, j
+            elif 0.0 < s < right:
+                right, side[r, 1] = s, j
         one_side = not (math.isfinite(left) and math.isfinite(right))
         ends[r] = one_side
         gap = (0.0 if not math.isfinite(right) else right) - (0.0 if not math.isfinite(left) else left)
