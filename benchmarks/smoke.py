@@ -47,6 +47,7 @@ RUNS: dict[str, list[str]] = {
     "bench_grid_rows.py": ["--baseline", "{base}/meshlap/assembly/grid.py", "--n", "3000", "--repeat", "1"],
     "bench_kernel_rows.py": ["--n", "3000", "--repeat", "1"],
     "bench_loops.py": ["--no-write"],
+    "bench_narrow.py": ["--n", "1000", "--no-write"],
     "bench_matrix_free.py": ["--n", "5000", "--repeat", "1", "--max-n", "1000"],
     "bench_pipeline.py": ["--quick"],
     "bench_pointcloud.py": ["--accuracy", "--n", "2000", "--no-write"],
