@@ -4,8 +4,8 @@ LOBPCG (Knyazev 2001) for ``A x = λ M x`` with ``M = diag(m) > 0``, in the basi
 Hetmaniuk and Lehoucq (2006): the search directions W and P are kept M-orthonormal and M-orthogonal
 to the Ritz vectors X, so the mass Gram matrix of the basis [X, W, P] is the identity and is never
 formed; of the operator's Gram matrix only the rows of W are products over the long dimension (X's
-own block is diag(θ); P is the basis times coefficients E orthogonal to the Ritz vectors' C, so P.T
-A X = 0 and P.T A P = E.T G E come from the last small problem), and P's update is found and
+own block is diag(θ); P is the basis times coefficients E orthogonal to the Ritz vectors' C, so
+P.T A X = 0 and P.T A P = E.T G E come from the last small problem), and P's update is found and
 orthonormalized in the small coefficient space; X and P are kept side by side in one array, so that
 each of these products is one BLAS call. What stays proportional to n per iteration is one product
 with A, one preconditioner application, the orthogonalization of W and the combinations that form
@@ -13,13 +13,13 @@ the new X and P.
 
 The convergence test is on the eigenvalues, not the residuals: a Ritz value θ_i whose residual is
 r_i = A x_i - θ_i M x_i lies within ``‖r_i‖`` of an eigenvalue (Bauer–Fike in the M⁻¹ norm) and,
-when the Ritz values within ``_WINDOW`` of it are the whole cluster that holds it, within ``‖R_c‖₂²
-/ δ`` (Kato–Temple for the cluster: R_c the block of their residuals, ‖·‖₂ its spectral norm in the
-M⁻¹ inner product, δ the distance to the nearest Ritz value outside; Mathias 1998, Li and Li 2013).
-The spectral norm is the largest eigenvalue of the cluster's share of the residuals' Gram matrix:
-for a cluster of c near-orthogonal residuals of like size it is about 1/c of the sum of their
-squares, which ends the iteration on a sphere's (2l+1)-fold eigenvalues one iteration sooner. A
-relative eigenvalue accuracy ε so needs a residual of only about √(ε·θ·δ), not ε·θ: half the
+when the Ritz values within ``_WINDOW`` of it are the whole cluster that holds it, within
+``‖R_c‖₂² / δ`` (Kato–Temple for the cluster: R_c the block of their residuals, ‖·‖₂ its spectral
+norm in the M⁻¹ inner product, δ the distance to the nearest Ritz value outside; Mathias 1998, Li
+and Li 2013). The spectral norm is the largest eigenvalue of the cluster's share of the residuals'
+Gram matrix: for a cluster of c near-orthogonal residuals of like size it is about 1/c of the sum of
+their squares, which ends the iteration on a sphere's (2l+1)-fold eigenvalues one iteration sooner.
+A relative eigenvalue accuracy ε so needs a residual of only about √(ε·θ·δ), not ε·θ: half the
 iterations for ε = 1e-8.
 
 The product with a stored operator (:func:`csr_times`) adds 16 entries of a row per pass over the
