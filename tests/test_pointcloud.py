@@ -205,6 +205,23 @@ def test_a_curve_clouds_stars_end_at_its_ends_and_keep_its_parts_apart():
     assert np.abs(lam[:2]).max() < 1e-8 and np.abs(lam[2:] - 1).max() < 1e-4
 
 
+@pytest.mark.parametrize("shape", ["hook", "spiral", "half circle"])
+def test_a_curve_clouds_stars_do_not_close_its_opening(shape):
+    """An end point's search widens until it finds a neighbour on its open side: across a
+    hook's opening (220 spacings), to the next arm of a spiral (22) or nowhere. A gap that
+    i.i.d. sampling would leave with odds below 1e-3 is a hole, so the stars are the chain
+    through the points (2,999 segments) and the spectrum the polyline's."""
+    rng = np.random.default_rng(0)
+    t = np.sort(rng.uniform(*{"hook": (0, 1.9 * np.pi), "spiral": (2, 30), "half circle": (0, np.pi)}[shape],
+                            3000))
+    P = np.c_[t * np.cos(t), t * np.sin(t)] / 10 if shape == "spiral" else np.c_[np.cos(t), np.sin(t)]
+    op = meshlap.point_cloud_laplacian(P, k=1)
+    chain = np.c_[np.arange(2999), np.arange(1, 3000)]
+    assert np.array_equal(op.geometry.cells, chain)
+    lam, ref = spectral.eigs(op, 6)[0], spectral.eigs(meshlap.laplacian(P, chain), 6)[0]
+    assert np.abs(lam[1:] / ref[1:] - 1).max() < 1e-4
+
+
 # -- messy clouds --------------------------------------------------------------------------------
 def test_duplicates_share_the_mass():
     P = samples.sphere_points(2000, "random", seed=0)
