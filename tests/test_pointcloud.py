@@ -210,7 +210,8 @@ def test_a_curve_clouds_stars_do_not_close_its_opening(shape):
     """An end point's search widens until it finds a neighbour on its open side: across a
     hook's opening (220 spacings), to the next arm of a spiral (22) or nowhere. A gap that
     i.i.d. sampling would leave with odds below 1e-3 is a hole, so the stars are the chain
-    through the points (2,999 segments) and the spectrum the polyline's."""
+    through the points (2,999 segments), the spectrum the polyline's, and the ends' masses
+    half their one segment (a hook's had half its opening, 0.16, before)."""
     rng = np.random.default_rng(0)
     t = np.sort(rng.uniform(*{"hook": (0, 1.9 * np.pi), "spiral": (2, 30), "half circle": (0, np.pi)}[shape],
                             3000))
@@ -218,6 +219,9 @@ def test_a_curve_clouds_stars_do_not_close_its_opening(shape):
     op = meshlap.point_cloud_laplacian(P, k=1)
     chain = np.c_[np.arange(2999), np.arange(1, 3000)]
     assert np.array_equal(op.geometry.cells, chain)
+    length = np.linalg.norm(np.diff(P, axis=0), axis=1).sum()  # the ends' masses hold no hole
+    assert abs(op.geometry.mass.sum() / length - 1) < 1e-3
+    assert np.flatnonzero(op.geometry.boundary).tolist() == [0, 2999]
     lam, ref = spectral.eigs(op, 6)[0], spectral.eigs(meshlap.laplacian(P, chain), 6)[0]
     assert np.abs(lam[1:] / ref[1:] - 1).max() < 1e-4
 

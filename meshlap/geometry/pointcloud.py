@@ -274,7 +274,11 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         gap = np.linalg.norm(Q[seg[:, 0]] - Q[seg[:, 1]], axis=1)
         own = reach8 / np.where(first_open, 4.5, 2.5)
         spacing = np.maximum(own[seg[:, 0]], own[seg[:, 1]])
-        stars = uniq[seg[gap <= spacing * math.log(nu / HOLE_ODDS)]]
+        hole = gap > spacing * math.log(nu / HOLE_ODDS)
+        stars = uniq[seg[~hole]]
+        ends = seg[hole, 0]  # an end of the curve: half its one segment, as a polyline's
+        mass[ends] = 0.5 * np.bincount(seg[~hole, 0], gap[~hole], minlength=nu)[ends]
+        open_cell[ends] = True
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])] if k == 2 else \
         np.zeros((0, 3), np.int64)  # each once
     full = mass[np.searchsorted(uniq, rep)] / share
