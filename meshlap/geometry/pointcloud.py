@@ -498,7 +498,8 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
         P = project_to_tangent(P, k, kwargs.get("neighbors"))
         pca = None  # the points moved: their frames are computed anew when asked for
     mass, info = point_masses(P, k, **kwargs)
-    cells = {1: np.unique(np.sort(info["stars"], axis=1), axis=0), 2: info["triangles"]}.get(k)
+    cells = info["triangles"] if k == 2 else np.unique(np.sort(info["stars"], axis=1), axis=0) if k == 1 \
+        else None
     geo = Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
                    source="point cloud", notes=notes)
     if k <= 2:  # the FEM pencil's cells and their weight: each simplex is in its k + 1 corners' stars
