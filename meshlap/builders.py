@@ -60,10 +60,9 @@ def laplacian(
     F : (m, c) array_like or list of sequences
         Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
-        A kernel width (exp(-d²/4h)): asks for the heat kernel at that width. Below 1.5
-        spacing² the corrected kernel's narrow half h/2 falls between irregular samples and a
-        MeshWarning says so (``benchmarks/bench_narrow.py``); ``correction="none"`` is the
-        paper's operator at any h.
+        A kernel width (exp(-d²/4h)): asks for the heat kernel at that width. Near the
+        squared spacing the corrected kernel's narrow half h/2 can fall between the samples of
+        an i.i.d. random sampling (``benchmarks/bench_narrow.py``).
     operator : {"auto", "fem", "kernel", "galerkin", "paper"}, default "auto"
         The symmetric pencil: "fem" linear FEM on the cells; "kernel" the corrected heat kernel
         on the vertices; "galerkin" the kernel integrated over the cells; "paper" the paper's
@@ -255,7 +254,7 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
     h : float, optional
         Kernel width. Default 4a², a the neighbour distance of a regular lattice with the
         cloud's mean mass ((2a)² with ``correction="none"``, as on a mesh); ``op.h`` and
-        ``op.h_auto`` report it. Below 1.5a² the corrected kernel is warned of, as on a mesh.
+        ``op.h_auto`` report it.
     k : int, default 2
         Intrinsic dimension: 1 curve, 2 surface, 3 volume or 3-manifold.
     tol : float, optional

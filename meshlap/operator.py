@@ -236,8 +236,7 @@ class MeshLaplacian(LumpedLaplacian):
             pointwise_degree=pointwise_degree, quadrature=quadrature, feature_width=feature_width,
             denoise=denoise, mass=mass)
         self.widths = widths_mod.choose(self.geometry, h, plain=self.options.plain, adaptive=adaptive,
-                                        curvature_limit=self.options.curvature_limit,
-                                        sampled=self.options.quadrature == "vertex")
+                                        curvature_limit=self.options.curvature_limit)
         # the symmetric pencil and the fitted rows are made on first use, each once (assemble,
         # fit_rows); the pencil's warnings come then, pointed at the line that asked for it
         self._built = pipeline.build(self.geometry, self.widths, self.options, make_progress(progress),

@@ -12,20 +12,17 @@ from __future__ import annotations
 
 __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "CREASE_WIDTHS",
            "CURVATURE_LIMIT", "DENOISE_DT", "DENOISE_H", "DENOISE_STEPS", "FEATURE_FLOOR",
-           "FEATURE_THIN_WIDTHS", "FEM_TIE", "GALERKIN_H_SCALE", "H_SCALE", "NARROW_H", "NOISE_AREA",
-           "NOISE_FLOOR", "NOISE_QUANTILE", "NOISE_ROUGHNESS", "NOISE_SPREAD", "NOISE_STEP",
-           "NOISE_UNEXPLAINED", "PSD_RTOL", "PSD_STOP_TOL", "QUADRATIC_MAX_UNKNOWNS", "ROW_BETA",
-           "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS", "ROW_GAMMA", "ROW_K_NOISE",
-           "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY", "ROW_ROBUST", "ROW_ROUNDING",
-           "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW", "STAR_NEIGHBORS", "STAR_SCATTER"]
+           "FEATURE_THIN_WIDTHS", "FEM_TIE", "GALERKIN_H_SCALE", "H_SCALE", "NOISE_AREA", "NOISE_FLOOR",
+           "NOISE_QUANTILE", "NOISE_ROUGHNESS", "NOISE_SPREAD", "NOISE_STEP", "NOISE_UNEXPLAINED", "PSD_RTOL",
+           "QUADRATIC_MAX_UNKNOWNS",
+           "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
+           "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
+           "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW",
+           "STAR_NEIGHBORS", "STAR_SCATTER"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
 H_SCALE = {1: 8.0, 2: 4.0, 3: 4.0, "tetrahedra": 0.5}
-#: An explicit h of the corrected kernel below this times spacing² is warned of: its narrow half h/2
-#: falls between irregular samples (bench_narrow.py, against the plain kernel: random sphere cloud
-#: 13% / 4.5% at 1, 4.8% / 4.6% at 1.5, 2.5% / 5.5% at 2; random mesh 9.9% / 4.6% at 1, 4.0% / 5.1% at 1.5)
-NARROW_H = 1.5
 #: β of the cap h_w = min(h, β/κ_w²); docs/accuracy.md: spot 7.7% → 1.1%, fandisk 5.0% → 3.2%
 CURVATURE_LIMIT = 0.05
 #: A cloud's cap stops at this fraction of h: 1,000-point random torus 33% → 5.0% (bench_cloud_cap.py)

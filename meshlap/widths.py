@@ -13,7 +13,6 @@ normals) and knows nothing of how it was made.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -22,10 +21,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._jit import jit
-from .errors import MeshError, MeshWarning, user_stacklevel
+from .errors import MeshError
 from .geometry import Geometry, from_mesh
 from .geometry.validation import check_h, check_positive
-from .tuned import CLOUD_CAP_FLOOR, H_SCALE, NARROW_H
+from .tuned import CLOUD_CAP_FLOOR, H_SCALE
 
 __all__ = ["DEFAULT_H_SCALE", "Widths", "choose", "curvature_h", "default_h", "h_scale", "local_h"]
 
@@ -198,14 +197,11 @@ def _neighbour_edges(geo: Geometry) -> tuple[np.ndarray, Callable[[np.ndarray], 
 
 
 def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
-           curvature_limit: float = 0.0, sampled: bool = True) -> Widths:
+           curvature_limit: float = 0.0) -> Widths:
     """The widths of a build: an explicit ``h`` (a number or one per point) always wins;
     otherwise the paper's (2ē)² when ``plain``, else 4ē² (or ``adaptive`` local widths),
     capped by the curvature (``curvature_limit`` β > 0, where normals exist; on a surface's
     point cloud not below :data:`~meshlap.tuned.CLOUD_CAP_FLOOR` of the uncapped width).
-    An explicit number below :data:`~meshlap.tuned.NARROW_H` · spacing² for the corrected kernel
-    on the points (``sampled``, not integrated over cells) is warned of: the narrow half of its
-    Richardson pair falls between irregular samples (``benchmarks/bench_narrow.py``).
 
     Examples
     --------
@@ -228,13 +224,6 @@ def choose(geo: Geometry, h: Any, *, plain: bool, adaptive: bool = False,
         h0 = float(h_vertex.max())
     elif h is not None:
         h0 = check_h(h)
-        floor = NARROW_H * geo.spacing**2
-        if not plain and sampled and h0 < floor:
-            warnings.warn(f"h = {h0:.3g} is below {NARROW_H:g}·spacing² = {floor:.3g}: the corrected "
-                          "kernel's narrow half h/2 then falls between the samples, and on an irregular "
-                          "sampling it is further off than the paper's kernel (a random 3,000-point sphere "
-                          "cloud at spacing²: 13% against 4.5%); pass a larger h, or correction='none' for "
-                          "the paper's operator", MeshWarning, stacklevel=user_stacklevel())
     elif plain:
         h0 = check_h(geo.default_h, "the automatic h = (2·spacing)²")
     else:

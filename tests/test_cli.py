@@ -228,7 +228,7 @@ def test_eigs_errors(capsys, tmp_path, sphere_file):
     png, jpg = tmp_path / "x.png", tmp_path / "x.jpg"
     fails(capsys, "--png needs the mesh", "eigs", tmp_path / "bare.npz", "-k", "3", "--png", png)
     fails(capsys, "--png expects a file name ending in .png", "eigs", sphere_file, "--png", jpg)
-    fails(capsys, "k must lie in", "eigs", sphere_file, "--h", "0.06", "-k", "600")
+    fails(capsys, "k must lie in", "eigs", sphere_file, "--h", "0.02", "-k", "600")
 
 
 def test_smooth_makes_a_noisy_sphere_rounder(capsys, tmp_path):

@@ -572,7 +572,7 @@ def _corrected(comm, V: Any, F: Any, k: int | None, h: Any, tol: float, partitio
                         f"{geo.ambient_dim}")
     opts = Options.resolve(geo, h, correction=correction, tol=tol, **options)
     widths = widths_mod.choose(geo, h, plain=opts.plain, adaptive=opts.adaptive,
-                               curvature_limit=opts.curvature_limit, sampled=opts.quadrature == "vertex")
+                               curvature_limit=opts.curvature_limit)
     attrs = attributes(geo, widths, opts)
     P = assembly.pad3(geo.points)
     size, rank = comm.Get_size(), comm.Get_rank()
