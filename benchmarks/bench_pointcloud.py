@@ -4,6 +4,7 @@ robust-laplacian (and LaPy on the cube), and the build time for 1,000,000 points
     python benchmarks/bench_pointcloud.py --accuracy   # any time: errors only
     python benchmarks/bench_pointcloud.py --timing     # on a quiet machine: build times
     python benchmarks/bench_pointcloud.py --timing --n 20000 --no-write   # a small run, printed
+    MESHLAP_CORPUS=/path/to/corpus python benchmarks/bench_pointcloud.py --volume  # a volume's cloud
 
 Each part writes its own section of benchmarks/RESULTS.md (``--no-write``: prints it instead).
 The default (``meshlap.point_cloud_laplacian``, ``meshlap.laplacian``) is named as such, with
@@ -23,9 +24,11 @@ import warnings
 
 import numpy as np
 import scipy.sparse.linalg as sla
+from scipy.spatial import Delaunay
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+import real_corpus  # noqa: E402
 from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
@@ -220,10 +223,117 @@ def timing(n: int) -> None:
     write("Point clouds: build time", lines)
 
 
+def _cube_neumann(count: int) -> np.ndarray:
+    """The unit cube's first nonzero Neumann eigenvalues π²(a² + b² + c²)."""
+    r = range(6)
+    return np.sort([math.pi**2 * (a * a + b * b + c * c) for a in r for b in r for c in r])[1:count + 1]
+
+
+_BEFORE = """
+import sys, time, numpy as np
+from meshlap.geometry import pointcloud
+P = np.load(sys.argv[1])
+pointcloud.point_masses(np.random.default_rng(0).random((300, 3)), 3)  # compile or load the kernels
+t = time.perf_counter()
+m, _ = pointcloud.point_masses(P, 3)
+print(time.perf_counter() - t)
+np.save(sys.argv[2], m)
+"""
+
+
+def _masses_before(P: np.ndarray, before: str) -> tuple[float, np.ndarray]:
+    """Seconds of ``point_masses(P, 3)`` and the masses, by the checkout ``before`` in a subprocess."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        src, out = os.path.join(tmp, "P.npy"), os.path.join(tmp, "m.npy")
+        np.save(src, P)
+        env = {**os.environ, "PYTHONPATH": before}
+        # run in tmp: the working directory would come first on the path
+        run = subprocess.run([sys.executable, "-W", "ignore", "-c", _BEFORE, src, out], env=env,
+                             capture_output=True, text=True, cwd=tmp)
+        if run.returncode:
+            raise RuntimeError(f"{before}'s point_masses failed:\n{run.stderr}")
+        return float(run.stdout.split()[-1]), np.load(out)
+
+
+def _commit(path: str) -> str:
+    return subprocess.run(["git", "-C", path, "rev-parse", "--short", "HEAD"], capture_output=True,
+                          text=True).stdout.strip() or "?"
+
+
+def _volume_row(name: str, P: np.ndarray, ref: np.ndarray, lapy_err: str, before: str | None) -> str:
+    """Masses (now, and by the checkout ``before``), operator, eigs, error."""
+    t = time.perf_counter()
+    mass, _ = pointcloud.point_masses(P, 3)
+    t_mass = time.perf_counter() - t
+    was = "—"
+    if before:
+        t_before, m_before = _masses_before(P, before)
+        diff = np.abs(mass - m_before).max() / np.abs(m_before).max()
+        was = f"{t_before:.1f} (masses within {diff:.0e})"
+    t = time.perf_counter()
+    op = meshlap.point_cloud_laplacian(P, k=3)
+    op.S  # noqa: B018  (the matrix is built on first use)
+    t_op = time.perf_counter() - t
+    t = time.perf_counter()
+    lam = spectral.eigs(op, len(ref) + 1)[0][1:]
+    t_eig = time.perf_counter() - t
+    err = 100 * np.abs(lam / ref - 1).max()
+    # linear FEM on the points' own Delaunay tetrahedralization, the obvious alternative
+    K, M = real_corpus.p1_fem(P, Delaunay(P).simplices)
+    dl = real_corpus.pencil_eigs(K, M, len(ref) + 1)[1:]
+    return (f"| {name} | {len(P):,} | {t_mass:.1f} | {was} | {t_op:.1f} | {t_eig:.1f} | "
+            f"{op.S.nnz / len(P):.0f} | {err:.1f}% | {100 * np.abs(dl / ref - 1).max():.0f}% | {lapy_err} |")
+
+
+def volume(before: str | None) -> None:
+    """A volume's cloud (k = 3 in R³): the unit cube's i.i.d. points and the corpus's tetrahedral
+    meshes' vertices (with $MESHLAP_CORPUS); ``before``: a checkout whose masses to time beside."""
+    import bench_real
+    import lapy
+    import real_corpus
+
+    rng = np.random.default_rng(0)
+    meshlap.point_cloud_laplacian(rng.random((500, 3)), k=3)  # compile
+    rows = [_volume_row("unit cube, i.i.d. (seed 0)", rng.random((n, 3)), _cube_neumann(9), "—", before)
+            for n in (2000, 8000)]
+    folder = os.environ.get("MESHLAP_CORPUS")
+    if folder:
+        cache = bench_real.RefCache(real_corpus.corpus_dir(folder))
+        for entry in real_corpus.manifest():
+            path = real_corpus.corpus_dir(folder) / entry["file"]
+            if not path.exists() or not (mesh := real_corpus.load(path, entry["format"])).tet:
+                continue
+            ref = np.array(cache.get(entry["sha256"], mesh, 11)["ref"])[1:10]
+            own = lapy.Solver(lapy.TetMesh(mesh.Vw, mesh.Cw)).eigs(k=10)[0][1:10]
+            rows.append(_volume_row(f"{entry['name']}'s vertices", mesh.Vw, ref,
+                                    f"{100 * np.abs(own / ref - 1).max():.1f}%", before))
+    cmd = "MESHLAP_CORPUS=/path/to/corpus python benchmarks/bench_pointcloud.py --volume"
+    if before:
+        cmd = (f"git worktree add /tmp/before {_commit(before)} && {cmd} --before /tmp/before")
+    lines = [f"Command: `{cmd}` (load before: `{_uptime()}`).", "",
+             "`meshlap.point_cloud_laplacian(P, k=3)`: seconds of the masses (local Delaunay stars: the "
+             "stars the first 32 neighbours leave insecure taken from one Delaunay tetrahedralization "
+             "of the cloud where secure there, the rest searched by Qhull on threads), the same by the "
+             "commit before that change (each star searched by its compiled O(K⁴) star, K doubling from 32; "
+             "a subprocess, the same points), of the operator's matrix and of 10 eigenpairs; the "
+             "largest relative error of λ1..λ9 (the cube's Neumann spectrum; a mesh's refined-FEM "
+             "reference, bench_real.py's), beside linear FEM on the points' Delaunay tetrahedralization "
+             "(scipy's) and LaPy's on the tetrahedra the points came from:", "",
+             "| points | n | masses s | masses s before | operator s | eigs s | entries per row | "
+             "error | FEM on the points' Delaunay | LaPy on the mesh |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    write("Point clouds: a volume's cloud", lines + rows)
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--accuracy", action="store_true")
     ap.add_argument("--timing", action="store_true")
+    ap.add_argument("--volume", action="store_true", help="a volume's cloud: times and errors")
+    ap.add_argument("--before", default=None, help="with --volume: a checkout of an earlier commit whose "
+                    "masses to time beside")
     ap.add_argument("--n", type=int, default=1_000_000)
     ap.add_argument("--no-write", action="store_true", help="print the sections instead")
     args = ap.parse_args()
@@ -232,5 +342,7 @@ if __name__ == "__main__":
         accuracy()
     if args.timing:
         timing(args.n)
-    if not (args.accuracy or args.timing):
+    if args.volume:
+        volume(args.before)
+    if not (args.accuracy or args.timing or args.volume):
         ap.print_help()

@@ -17,9 +17,12 @@ For k = 2 the star comes from clipping p's Voronoi cell by the bisectors of its 
 neighbours (convex polygon clipping, O(K²) per point, compiled): two consecutive edges of the
 cell, cut by neighbours a and b, meet at the circumcentre of the Delaunay triangle (p, a, b).
 For k = 1 the star is the two nearest neighbours along the tangent line, so the mass is half
-the gap between them. For k ≥ 3 scipy's Delaunay triangulates each projected neighbourhood.
-A star is only trusted when no point outside the K neighbours can reach it: every Delaunay
-circumcircle must lie within half the distance of the farthest neighbour; otherwise K grows.
+the gap between them. For k = 3 the star comes from the cell's Voronoi vertices, for k ≥ 4
+from scipy's Delaunay of each projected neighbourhood. A star is only trusted when no point
+outside the K neighbours can reach it: every Delaunay circumcircle must lie within half the
+distance of the farthest neighbour; otherwise K grows. A trusted star is the one in the whole
+cloud's Delaunay triangulation, so a volume in R³ takes the stars the first neighbourhood does
+not secure from one tetrahedralization of all its points, and searches only the rest.
 
 On 16,000 i.i.d. random points of the unit sphere these masses are within a few percent of
 the barycentric masses of the points' true triangulation (their convex hull), which is what
@@ -55,7 +58,17 @@ from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
 from ..tuned import STAR_NEIGHBORS
 from . import frames
 from .core import Geometry, check_points
-from .stars import _DEGENERATE, _INSECURE, _STAR_SLOTS, _masses1, _masses2, _masses3, _masses_k
+from .stars import (
+    _DEGENERATE,
+    _INSECURE,
+    _OK,
+    _STAR_SLOTS,
+    _global_stars3,
+    _masses1,
+    _masses2,
+    _masses3,
+    _masses_k,
+)
 
 __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
            "project_to_tangent"]
@@ -212,22 +225,33 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
             last[todo] = it
             star = np.column_stack([todo[r], nbr[r, tri[r, slot, 0]], nbr[r, tri[r, slot, 1]]])
             star_parts.append((it, star))
-        elif k == 3:
+        elif k == 3 and it == 0:
             m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
             in_blocks(_masses3, len(todo), X, nbr, counts, kt, todo, m, st, hull)
             # cospherical neighbours: Qhull (with its joggle) decides the star
             tie = np.flatnonzero(st == _DEGENERATE)
             if len(tie):
-                m[tie], st[tie], hull[tie] = _masses_k(X, nbr[tie], counts[tie], kt, todo[tie], k)
+                mt, st_t, hull_t = np.zeros(len(tie)), np.zeros(len(tie), np.int64), np.zeros(len(tie), bool)
+                in_blocks(_masses_k, len(tie), X, nbr[tie], counts[tie], kt, todo[tie], k, mt, st_t, hull_t)
+                m[tie], st[tie], hull[tie] = mt, st_t, hull_t
             open_cell[todo] = hull
         else:
-            m, st, hull = _masses_k(X, nbr, counts, kt, todo, k)
+            m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
+            in_blocks(_masses_k, len(todo), X, nbr, counts, kt, todo, k, m, st, hull)
             open_cell[todo] = hull
         mass[todo], status[todo] = m, st
         if K >= min(_MAX_NEIGHBORS, nu - 1):
             break
         todo = todo[st == _INSECURE]
         K = min(2 * K, _MAX_NEIGHBORS, nu - 1)
+        if k == 3 and d == 3 and it == 0 and len(todo):
+            # a star secure at any K up to the last is the whole cloud's Delaunay star; the others
+            # stay insecure up to the last K, so only that one is searched
+            K = min(_MAX_NEIGHBORS, nu - 1)
+            far = _neighbours(tree, Q[todo], K)[0][:, -1]
+            m, secure = _global_stars3(X, todo, far)
+            mass[todo[secure]], status[todo[secure]], open_cell[todo[secure]] = m[secure], _OK, False
+            todo = todo[~secure]
     # outliers: isolated far beyond the spacing usual around them
     _, idx = _neighbours(tree, Q, min(8, nu - 1))
     local = np.median(reach8[idx[:, 1:]], axis=1)

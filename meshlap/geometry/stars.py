@@ -321,35 +321,61 @@ def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
         return 0.0, _DEGENERATE, False
     E = X[around[:, 1:]] - X[around[:, :1]]
     vol = np.abs(np.linalg.det(E)) / math.factorial(k)
-    # circumcentres c of the simplices around the origin: 2 c·(x_i) = |x_i|², relative to x_0 = 0
+    # circumcentres c of the simplices around the origin: 2 c·(x_i - x_0) = |x_i|² - |x_0|²
     hull = bool(np.isin(0, tri.convex_hull))
-    reach = 0.0
-    for s in around:
-        A = X[s]
-        B = 2.0 * (A[1:] - A[0])
-        rhs = (A[1:] ** 2).sum(axis=1) - (A[0] ** 2).sum()
-        try:
-            c = np.linalg.solve(B, rhs)
-        except np.linalg.LinAlgError:
-            continue
-        reach = max(reach, float(np.linalg.norm(c)))
+    A = X[around]
+    B = 2.0 * (A[:, 1:] - A[:, :1])
+    rhs = (A[:, 1:] ** 2).sum(axis=2) - (A[:, :1] ** 2).sum(axis=2)
+    solvable = np.abs(np.linalg.det(B)) > 0.0
+    c = np.linalg.solve(B[solvable], rhs[solvable][..., None])[..., 0]
+    reach = float(np.linalg.norm(c, axis=1).max()) if len(c) else 0.0
     far = float(np.linalg.norm(U, axis=1).max())
     status = _OK if (not hull and 2.0 * reach < far) else _INSECURE
     return float(vol.sum()) / (k + 1), status, hull
 
 
-def _masses_k(P: np.ndarray, nbr: np.ndarray, counts: np.ndarray, kt: int, rows: np.ndarray, k: int):
-    n = len(rows)
-    out = np.zeros(n)
-    status = np.zeros(n, dtype=np.int64)
-    hull = np.zeros(n, dtype=bool)
+def _masses_k(start, stop, P, nbr, counts, kt, rows, k, out, status, hull):
+    # Qhull releases the GIL, so in_blocks overlaps these calls on threads
     T = np.empty((k, P.shape[1]))
-    for r, p in enumerate(rows):
-        K = counts[r]
-        nb = nbr[r, :K]
+    for r in range(start, stop):
+        p = rows[r]
+        nb = nbr[r, :counts[r]]
         if _tangent(P, p, nb[:kt], k, T) < _FLAT:
             status[r] = _DEGENERATE
             continue
         U = (P[nb] - P[p]) @ T.T
         out[r], status[r], hull[r] = _star_k(U, k)
-    return out, status, hull
+
+
+def _global_stars3(X: np.ndarray, rows: np.ndarray, far: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Stars of ``rows`` from one Delaunay tetrahedralization of all the points (d = k = 3).
+
+    A local star is secure when every circumsphere of its tetrahedra lies within half the
+    distance ``far`` of the farthest neighbour searched; it then equals the star in the whole
+    cloud's Delaunay tetrahedralization. So the global star with all circumradii below far/2
+    (and off the convex hull) is the star the neighbourhood search would find, at Qhull's cost
+    for all points instead of one call per point. Returns (Σ volumes / 4, secure mask).
+    """
+    mass = np.zeros(len(rows))
+    try:
+        tri = Delaunay(X)
+    except QhullError:
+        return mass, np.zeros(len(rows), dtype=bool)
+    S = tri.simplices
+    A = X[S[:, 0]]
+    E = X[S[:, 1:]] - A[:, None, :]
+    det = np.linalg.det(E)
+    ok = np.abs(det) > 1e-12 * np.einsum("tij,tij->t", E, E) ** 1.5
+    # circumcentre c - A solves 2 E (c - A) = |E|² row-wise
+    c = np.full((len(S), 3), np.inf)
+    c[ok] = np.linalg.solve(2.0 * E[ok], np.einsum("tij,tij->ti", E[ok], E[ok])[..., None])[..., 0]
+    radius = np.linalg.norm(c, axis=1)
+    n = len(X)
+    reach = np.zeros(n)
+    np.maximum.at(reach, S.ravel(), np.repeat(radius, 4))
+    vol = np.bincount(S.ravel(), np.repeat(np.abs(det) / 6.0, 4), minlength=n)
+    hull = np.zeros(n, dtype=bool)
+    hull[tri.convex_hull.ravel()] = True
+    secure = (2.0 * reach[rows] < far) & ~hull[rows]
+    mass[secure] = vol[rows[secure]] / 4.0
+    return mass, secure
