@@ -223,12 +223,6 @@ def timing(n: int) -> None:
     write("Point clouds: build time", lines)
 
 
-def _cube_neumann(count: int) -> np.ndarray:
-    """The unit cube's first nonzero Neumann eigenvalues π²(a² + b² + c²)."""
-    r = range(6)
-    return np.sort([math.pi**2 * (a * a + b * b + c * c) for a in r for b in r for c in r])[1:count + 1]
-
-
 _BEFORE = """
 import sys, time, numpy as np
 from meshlap.geometry import pointcloud
@@ -275,7 +269,7 @@ def _volume_row(name: str, P: np.ndarray, ref: np.ndarray, lapy_err: str, before
     t = time.perf_counter()
     op = meshlap.point_cloud_laplacian(P, k=3)
     op.S  # noqa: B018  (the matrix is built on first use)
-    t_op = time.perf_counter() - t
+    t_build = time.perf_counter() - t
     t = time.perf_counter()
     lam = spectral.eigs(op, len(ref) + 1)[0][1:]
     t_eig = time.perf_counter() - t
@@ -283,7 +277,7 @@ def _volume_row(name: str, P: np.ndarray, ref: np.ndarray, lapy_err: str, before
     # linear FEM on the points' own Delaunay tetrahedralization, the obvious alternative
     K, M = real_corpus.p1_fem(P, Delaunay(P).simplices)
     dl = real_corpus.pencil_eigs(K, M, len(ref) + 1)[1:]
-    return (f"| {name} | {len(P):,} | {t_mass:.1f} | {was} | {t_op:.1f} | {t_eig:.1f} | "
+    return (f"| {name} | {len(P):,} | {t_mass:.1f} | {was} | {t_build:.1f} | {t_eig:.1f} | "
             f"{op.S.nnz / len(P):.0f} | {err:.1f}% | {100 * np.abs(dl / ref - 1).max():.0f}% | {lapy_err} |")
 
 
@@ -292,11 +286,11 @@ def volume(before: str | None) -> None:
     meshes' vertices (with $MESHLAP_CORPUS); ``before``: a checkout whose masses to time beside."""
     import bench_real
     import lapy
-    import real_corpus
 
     rng = np.random.default_rng(0)
     meshlap.point_cloud_laplacian(rng.random((500, 3)), k=3)  # compile
-    rows = [_volume_row("unit cube, i.i.d. (seed 0)", rng.random((n, 3)), _cube_neumann(9), "—", before)
+    cube = samples.cube_eigenvalues(10)[1:]
+    rows = [_volume_row("unit cube, i.i.d. (seed 0)", rng.random((n, 3)), cube, "—", before)
             for n in (2000, 8000)]
     folder = os.environ.get("MESHLAP_CORPUS")
     if folder:
@@ -317,11 +311,12 @@ def volume(before: str | None) -> None:
              "stars the first 32 neighbours leave insecure taken from one Delaunay tetrahedralization "
              "of the cloud where secure there, the rest searched by Qhull on threads), the same by the "
              "commit before that change (each star searched by its compiled O(K⁴) star, K doubling from 32; "
-             "a subprocess, the same points), of the operator's matrix and of 10 eigenpairs; the "
+             "a subprocess, the same points), of the build (`point_cloud_laplacian` and its matrix, the "
+             "masses included) and of 10 eigenpairs; the "
              "largest relative error of λ1..λ9 (the cube's Neumann spectrum; a mesh's refined-FEM "
              "reference, bench_real.py's), beside linear FEM on the points' Delaunay tetrahedralization "
              "(scipy's) and LaPy's on the tetrahedra the points came from:", "",
-             "| points | n | masses s | masses s before | operator s | eigs s | entries per row | "
+             "| points | n | masses s | masses s before | build s | eigs s | entries per row | "
              "error | FEM on the points' Delaunay | LaPy on the mesh |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     write("Point clouds: a volume's cloud", lines + rows)

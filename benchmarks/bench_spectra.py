@@ -147,8 +147,7 @@ def _ball(side, seed=0):
 
 
 def _cube_exact():
-    lam = sorted(math.pi**2 * (a * a + b * b + c * c) for a in range(3) for b in range(3) for c in range(3))
-    return np.array(lam[:K])
+    return samples.cube_eigenvalues(K)
 
 
 def _disc(n, seed=0):

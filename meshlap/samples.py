@@ -27,6 +27,7 @@ from .shapes import _check_count, fibonacci_sphere, torus, torus_angles
 __all__ = [
     "CLOUD_KINDS",
     "circle",
+    "cube_eigenvalues",
     "cube_tetrahedra",
     "flat_torus_points",
     "sphere_eigenvalues",
@@ -189,6 +190,19 @@ def sphere_eigenvalues(k: int, copies: int = 1) -> np.ndarray:
     """
     degree = np.arange(math.isqrt(max(int(k), 1)) + 1)  # degrees below √k hold k values
     return np.repeat(degree * (degree + 1.0), copies * (2 * degree + 1))[:k]
+
+
+def cube_eigenvalues(k: int) -> np.ndarray:
+    """The k smallest Neumann eigenvalues of -Δ on the unit cube: π²(a² + b² + c²), a, b, c ≥ 0.
+
+    Examples
+    --------
+    >>> (cube_eigenvalues(5) / np.pi**2).round(6).tolist()
+    [0.0, 1.0, 1.0, 1.0, 2.0]
+    """
+    r = np.arange(math.isqrt(max(int(k), 1)) + 1)  # a² + b² + c² below k needs each below √k
+    a, b, c = np.meshgrid(r, r, r, indexing="ij")
+    return np.sort(math.pi**2 * (a * a + b * b + c * c).ravel().astype(float))[:k]
 
 
 def torus_eigenvalues(k: int = 10, R: float = 1.0, r: float = 0.4, cells: int = 800) -> np.ndarray:

@@ -321,17 +321,24 @@ def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
         return 0.0, _DEGENERATE, False
     E = X[around[:, 1:]] - X[around[:, :1]]
     vol = np.abs(np.linalg.det(E)) / math.factorial(k)
-    # circumcentres c of the simplices around the origin: 2 c·(x_i - x_0) = |x_i|² - |x_0|²
     hull = bool(np.isin(0, tri.convex_hull))
-    A = X[around]
-    B = 2.0 * (A[:, 1:] - A[:, :1])
-    rhs = (A[:, 1:] ** 2).sum(axis=2) - (A[:, :1] ** 2).sum(axis=2)
-    solvable = np.abs(np.linalg.det(B)) > 0.0
-    c = np.linalg.solve(B[solvable], rhs[solvable][..., None])[..., 0]
-    reach = float(np.linalg.norm(c, axis=1).max()) if len(c) else 0.0
+    radius = _circumradii(X[around])  # the origin is a corner of each: its circumcentres' distance
+    reach = float(radius[np.isfinite(radius)].max(initial=0.0))
     far = float(np.linalg.norm(U, axis=1).max())
     status = _OK if (not hull and 2.0 * reach < far) else _INSECURE
     return float(vol.sum()) / (k + 1), status, hull
+
+
+def _circumradii(A: np.ndarray) -> np.ndarray:
+    """Circumradii of the simplices ``A`` (m, k + 1, k); inf for a flat one. The circumcentre c
+    solves 2 (x_i - x_0)·c = |x_i|² - |x_0|², i = 1..k."""
+    B = 2.0 * (A[:, 1:] - A[:, :1])
+    rhs = (A[:, 1:] ** 2).sum(axis=2) - (A[:, :1] ** 2).sum(axis=2)
+    radius = np.full(len(A), np.inf)
+    solvable = np.linalg.det(B) != 0.0
+    c = np.linalg.solve(B[solvable], rhs[solvable][..., None])[..., 0]
+    radius[solvable] = np.linalg.norm(c - A[solvable, 0], axis=1)
+    return radius
 
 
 def _masses_k(start, stop, P, nbr, counts, kt, rows, k, out, status, hull):
@@ -362,17 +369,10 @@ def _global_stars3(X: np.ndarray, rows: np.ndarray, far: np.ndarray) -> tuple[np
     except QhullError:
         return mass, np.zeros(len(rows), dtype=bool)
     S = tri.simplices
-    A = X[S[:, 0]]
-    E = X[S[:, 1:]] - A[:, None, :]
-    det = np.linalg.det(E)
-    ok = np.abs(det) > 1e-12 * np.einsum("tij,tij->t", E, E) ** 1.5
-    # circumcentre c - A solves 2 E (c - A) = |E|² row-wise
-    c = np.full((len(S), 3), np.inf)
-    c[ok] = np.linalg.solve(2.0 * E[ok], np.einsum("tij,tij->ti", E[ok], E[ok])[..., None])[..., 0]
-    radius = np.linalg.norm(c, axis=1)
     n = len(X)
     reach = np.zeros(n)
-    np.maximum.at(reach, S.ravel(), np.repeat(radius, 4))
+    np.maximum.at(reach, S.ravel(), np.repeat(_circumradii(X[S]), 4))
+    det = np.linalg.det(X[S[:, 1:]] - X[S[:, :1]])
     vol = np.bincount(S.ravel(), np.repeat(np.abs(det) / 6.0, 4), minlength=n)
     hull = np.zeros(n, dtype=bool)
     hull[tri.convex_hull.ravel()] = True
