@@ -315,7 +315,7 @@ def eigs(
     is M-orthonormal and each eigenvalue's error bound from its residual (Kato–Temple over its
     cluster, Bauer–Fike where no gap is known) is within ``tol · max(λ, λ_k / 100, 1% of
     4π/area, roundoff's floor)``. Pairs that fail are recomputed (LOBPCG wider, shift-invert,
-    dense up to 4,000 vertices), else :class:`meshlap.EigenError`. See docs/spectral.md.
+    dense up to 4,000 vertices, matrix-free too), else :class:`meshlap.EigenError` (docs/spectral.md).
     Vertices with zero mass have no row in the problem; φ there is the kernel-weighted mean
     of its neighbours (the λ → 0 Nyström extension), or 0 where that row of L is empty.
 
@@ -372,7 +372,7 @@ def eigs(
 
     def dense(want: int):
         S = S_P().toarray()
-        lam, X = sla.eigh(-0.5 * (S + S.T), np.diag(m), subset_by_index=[0, min(want, n_p - 1)])
+        lam, X = sla.eigh(-0.5 * (S + S.T), np.diag(m), subset_by_index=[0, min(2 * want, n_p - 1)])
         return lam, X, 0
 
     def lobpcg(wide: bool):
@@ -406,8 +406,8 @@ def eigs(
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
         # where a factorization fits, it comes before twice the iterations that did not converge
         ladder.insert(1 if method == "lobpcg" else len(ladder), shift)
-    if method != "dense" and n_p <= _DENSE_FALLBACK and not matrix_free:
-        ladder.append(exact)
+    if method != "dense" and n_p <= _DENSE_FALLBACK:  # matrix-free: n columns cost less than LOBPCG wider
+        ladder.insert(1 if matrix_free else len(ladder), exact)
     # the pencil's connected parts, found where asked: with several, each at its own scale comes next
     parts = functools.cache(lambda: _parts.part_labels(S_P()) if sparse else (1, None))
     if method == "shift-invert" and n_p > _DENSE_FALLBACK and parts()[0] == 1:

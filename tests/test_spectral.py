@@ -227,6 +227,23 @@ def test_matrix_free_operator_gives_the_same_spectrum():
     assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
 
 
+def test_matrix_free_pencil_that_lobpcg_cannot_verify_is_solved_densely():
+    """Where LOBPCG fails the check (here: two iterations allowed), a matrix-free pencil of at most
+    4,000 vertices goes to dense eigh on its columns before the wider LOBPCG, and its answer is the
+    stored pencil's; two parts give two zeros."""
+    V, F = shapes.sphere(1500, seed=6)
+    V2, F2 = np.vstack([V, V + [3.0, 0, 0]]), np.vstack([F, F + len(V)])
+    stored = meshlap.laplacian(V2, F2, h=0.01, correction="none")
+    free = meshlap.laplacian(V2, F2, h=0.01, matrix_free=True, correction="none")
+    info: dict = {}
+    lam_free, phi = spectral.eigs(free, 8, maxiter=2, info=info)
+    assert info["tried"] == ["lobpcg", "dense"] and info["complete"]
+    lam = spectral.eigs(stored, 8, method="dense")[0]
+    assert np.abs(lam_free - lam).max() < 1e-10 * lam[-1]
+    assert np.abs(lam_free[:2]).max() < 1e-10 and lam_free[2] > 1.0
+    check_eigenpairs(stored, lam_free, phi, 1e-6)
+
+
 def test_default_operator_eigenvalues_to_the_tolerance_asked():
     """The corrected default (its own pencil) by LOBPCG against dense eigh: each eigenvalue
     within tol of the reference, relative to itself, for tol = 1e-8 and 1e-5."""
