@@ -43,7 +43,7 @@ import scipy.sparse as sp
 from . import _ldl, _lobpcg
 from .errors import MeshWarning, user_stacklevel
 
-__all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_ceiling", "count_shift",
+__all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_ceiling", "count_shift", "lumped_eigh",
            "first_verified", "uncertified", "verify", "warn_roundoff"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
@@ -246,9 +246,27 @@ def count_below(A: sp.spmatrix, m: np.ndarray, sigma: float, supernodal: bool = 
     if negative is not None:
         return negative
     if B.shape[0] <= _DENSE_COUNT:
-        w = sla.eigh(sp.csr_matrix(A).toarray(), np.diag(m), eigvals_only=True)
+        w = lumped_eigh(sp.csr_matrix(A).toarray(), m, eigvals_only=True)
         return int((w < sigma).sum())
     return None
+
+
+def lumped_eigh(A: np.ndarray, m: np.ndarray, subset: list[int] | None = None,
+                eigvals_only: bool = False) -> Any:
+    """``scipy.linalg.eigh(A, diag(m))`` without the n × n mass matrix: the pencil scaled by
+    m^-1/2 on both sides (what LAPACK's reduction does with a diagonal B), ``A`` overwritten.
+
+    Examples
+    --------
+    >>> lam, X = lumped_eigh(np.array([[2.0, -1.0], [-1.0, 2.0]]), np.array([1.0, 4.0]))
+    >>> bool(np.allclose(X.T @ (np.array([1.0, 4.0])[:, None] * X), np.eye(2)))
+    True
+    """
+    d = 1.0 / np.sqrt(np.asarray(m, dtype=np.float64))
+    A *= d[:, None]
+    A *= d[None, :]
+    out = sla.eigh(A, subset_by_index=subset, eigvals_only=eigvals_only, overwrite_a=True)
+    return out if eigvals_only else (out[0], d[:, None] * out[1])
 
 
 class Attempt(NamedTuple):

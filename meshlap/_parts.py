@@ -21,10 +21,10 @@ import warnings
 from collections.abc import Callable
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ._eigcheck import lumped_eigh
 from .errors import MeshWarning, user_stacklevel
 from .lumped import SparseLaplacian
 
@@ -100,7 +100,7 @@ def _merged(S: sp.csr_matrix, labels: np.ndarray, m: np.ndarray, k: int,
         record: dict = {}
         if len(rows) <= k + 1:
             A = -0.5 * (S_p + S_p.T).toarray()
-            lam, X = sla.eigh(A, np.diag(m_p))
+            lam, X = lumped_eigh(A, m_p)
             record = dict(method="dense", tried=["dense"], iterations=0, complete=True, uncertified=0.0,
                           residuals=np.zeros(len(lam)), bounds=np.zeros(len(lam)), orthogonality=0.0,
                           count=len(lam))

@@ -27,7 +27,6 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.special import eval_legendre
@@ -372,7 +371,7 @@ def eigs(
 
     def dense(want: int):
         S = S_P().toarray()
-        lam, X = sla.eigh(-0.5 * (S + S.T), np.diag(m), subset_by_index=[0, min(2 * want, n_p - 1)])
+        lam, X = _eigcheck.lumped_eigh(-0.5 * (S + S.T), m, [0, min(2 * want, n_p - 1)])
         return lam, X, 0
 
     def lobpcg(wide: bool):
