@@ -197,6 +197,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         if it == 0:
             nn1[:] = dist[:, 1]
             reach8 = dist[:, 1:9].mean(axis=1)
+            searched = np.zeros(nu)
+        searched[todo] = dist[:, -1]  # how far the search for each point's star reached
         # drop each point itself from its list (it is the first hit: duplicates are merged)
         not_self = idx != todo[:, None]
         order = np.argsort(~not_self, axis=1, kind="stable")
@@ -288,7 +290,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                         f"{_MAX_NEIGHBORS} neighbours")
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
-    stars = uniq[_soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)]
+    stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
+    stars = uniq[_certified(stars, Q, (status == _INSECURE) & ~outlier, searched)]
     if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
         centre, other = np.repeat(np.arange(nu), 2), ends1.ravel()
         seg = np.column_stack([centre, other])[(other >= 0) & (mass[centre] > 0)]
@@ -358,6 +361,34 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
                         return_index=True)
     return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
+
+
+def _certified(stars: np.ndarray, Q: np.ndarray, insecure: np.ndarray, searched: np.ndarray) -> np.ndarray:
+    """``stars`` without the triangles of insecure stars whose circumdisc reaches past the search
+    (radius ``searched``, up to :data:`_MAX_NEIGHBORS` neighbours): nothing checked that it is empty.
+
+    An insecure star keeps its first neighbourhood's triangles; the uncertified ones are slivers
+    of nearly collinear rim points, laid across the empty side of an open surface's concave rim
+    (their circles pass far outside it). On the corpus's clean open freeform surface they took
+    its cloud's spectrum from 0.39% to 3.0% off. A hole the search spans (a polygon cap without
+    points) keeps the triangles that close it. A point whose every triangle is uncertified keeps
+    them: without a star it would have no row.
+    """
+    on = insecure[stars[:, 0]] if len(stars) else np.zeros(0, dtype=bool)
+    if not on.any():
+        return stars
+    t = stars[on]
+    a, b = Q[t[:, 1]] - Q[t[:, 0]], Q[t[:, 2]] - Q[t[:, 0]]
+    aa, ab, bb = (a * a).sum(1), (a * b).sum(1), (b * b).sum(1)
+    with np.errstate(divide="ignore", invalid="ignore"):  # the circumcentre c: c·a = aa / 2, c·b = bb / 2
+        det = 2 * (aa * bb - ab * ab)
+        centre = (bb * (aa - ab) / det)[:, None] * a + (aa * (bb - ab) / det)[:, None] * b
+    # the circle passes through the centre point: the disc reaches 2|c| from it
+    bad = ~(2 * np.linalg.norm(centre, axis=1) <= searched[t[:, 0]])  # a degenerate triangle (NaN) too
+    lost = np.bincount(t[:, 0], ~bad, minlength=len(Q)) == 0
+    bad &= ~lost[t[:, 0]]
+    drop = np.flatnonzero(on)[bad]
+    return np.delete(stars, drop, axis=0)
 
 
 def _lattice_spacing(mass: float, k: int) -> float:
