@@ -4,6 +4,7 @@
     python benchmarks/bench_real.py --only cow,spot --no-write
     python benchmarks/bench_real.py --max-n 3000 --corpus /path/to/corpus
     python benchmarks/bench_real.py --only spot,cow --no-write --noise-step 3   # another denoising step
+    python benchmarks/bench_real.py --elements linear   # the linear pencil: a RESULTS.md section of its own
 
 The corpus (benchmarks/corpus.toml; files written by build_corpus.py, outside the repository)
 is read from ``--corpus``, else $MESHLAP_CORPUS, else benchmarks/corpus (which git ignores);
@@ -462,21 +463,22 @@ def main() -> None:
     ap.add_argument("--max-n", type=int, default=0, help="skip meshes with more vertices")
     ap.add_argument("--no-write", action="store_true", help="print the table; leave RESULTS.md and the CSV")
     ap.add_argument("--mass", choices=["lumped", "blend"], default="lumped",
-                    help="the surface rows' mass (meshlap.laplacian's mass=); other than the default "
-                    "only with --no-write")
+                    help="the surface rows' mass (meshlap.laplacian's mass=); other than the default: "
+                    "a section of its own")
     ap.add_argument("--elements", choices=["quadratic", "linear"], default=None,
-                    help="the surface rows' spectral.eigs(elements=...); other than the default only "
-                    "with --no-write")
+                    help="the surface rows' spectral.eigs(elements=...); other than the default: "
+                    "RESULTS.md's section 'bench_real.py --elements ...'")
     ap.add_argument("--render", action="store_true", help="rewrite RESULTS.md's section from the CSV and "
                     "the cached references, running nothing")
     ap.add_argument("--noise-step", type=float, default=None, help="c of the denoising step τ = (cσ̂)² "
-                    "(tuned.NOISE_STEP); other than the default only with --no-write")
+                    "(tuned.NOISE_STEP); other than the default: a section of its own")
     args = ap.parse_args()
-    # an option other than the default measures that option: printed, never written as the default's
-    for flag, given in (("--mass", args.mass != "lumped"), ("--elements", args.elements is not None),
-                        ("--noise-step", args.noise_step is not None)):
-        if given and not args.no_write:
-            ap.error(f"{flag} measures an option, not the default: add --no-write")
+    # an option other than the default measures that option: written to a section of its own, never
+    # as the default's (nor to the CSV)
+    options = " ".join(f"{flag} {value}" for flag, value, given in (
+        ("--mass", args.mass, args.mass != "lumped"),
+        ("--elements", args.elements, args.elements is not None),
+        ("--noise-step", args.noise_step, args.noise_step is not None)) if given)
     if args.mass != "lumped":
         SURFACE_OPTIONS["mass"] = args.mass
     if args.elements is not None:
@@ -536,8 +538,15 @@ def main() -> None:
     if args.no_write:
         print("\n".join(lines))
         return
-    first = (f"`python benchmarks/bench_real.py` on {datetime.date.today()}, {platform.machine()}, 2 cores "
+    name = " ".join(filter(None, ["bench_real.py", options]))
+    first = (f"`python benchmarks/{name}` on {datetime.date.today()}, {platform.machine()}, 2 cores "
              f"(shared), {time.time() - start:.0f} s; meshlap measured: {meshlap_commit()}.")
+    if options:  # the option's own section, its surface rows (the options are theirs): the default's
+        # section and the CSV stay the default's
+        cut = next((i for i, x in enumerate(lines) if x.startswith("### The vertices alone")), len(lines))
+        write_section(name, header(first) + lines[:cut], script=name)
+        log(f"wrote the RESULTS.md section {name}")
+        return
     write_section("bench_real.py", header(first) + lines)
     write_csv(CSV, {"surface": surf, "cloud": cloud, "tet": tets, "noisy": noisy})
     log(f"wrote {CSV} and the RESULTS.md section")
