@@ -63,6 +63,7 @@ from .stars import (
     _INSECURE,
     _OK,
     _STAR_SLOTS,
+    _circumradii,
     _global_stars3,
     _masses1,
     _masses2,
@@ -145,6 +146,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         Delaunay triangles, each once from its corner of smallest index; a triangle soup,
         not a manifold mesh, used to precondition eigensolvers), ``stars`` (k = 2: every
         point's own star, its centre first: most triangles three times, once from each corner;
+        a star never secured keeps only the triangles whose circumcircle the search reached;
         k = 1: every point's segments to its nearest neighbours on either side along its
         tangent, most segments twice).
 
@@ -368,23 +370,17 @@ def _certified(stars: np.ndarray, Q: np.ndarray, insecure: np.ndarray, searched:
     (radius ``searched``, up to :data:`_MAX_NEIGHBORS` neighbours): nothing checked that it is empty.
 
     An insecure star keeps its first neighbourhood's triangles; the uncertified ones are slivers
-    of nearly collinear rim points, laid across the empty side of an open surface's concave rim
-    (their circles pass far outside it). On the corpus's clean open freeform surface they took
-    its cloud's spectrum from 0.39% to 3.0% off. A hole the search spans (a polygon cap without
-    points) keeps the triangles that close it. A point whose every triangle is uncertified keeps
-    them: without a star it would have no row.
+    of nearly collinear rim points laid across the empty side of an open surface's concave rim,
+    whose stiffness the other stars do not balance. A hole the search spans (a polygon cap
+    without points) keeps the triangles that close it. A point whose every triangle is
+    uncertified keeps them: without a star it would have no row.
     """
     on = insecure[stars[:, 0]] if len(stars) else np.zeros(0, dtype=bool)
     if not on.any():
         return stars
     t = stars[on]
-    a, b = Q[t[:, 1]] - Q[t[:, 0]], Q[t[:, 2]] - Q[t[:, 0]]
-    aa, ab, bb = (a * a).sum(1), (a * b).sum(1), (b * b).sum(1)
-    with np.errstate(divide="ignore", invalid="ignore"):  # the circumcentre c: c·a = aa / 2, c·b = bb / 2
-        det = 2 * (aa * bb - ab * ab)
-        centre = (bb * (aa - ab) / det)[:, None] * a + (aa * (bb - ab) / det)[:, None] * b
-    # the circle passes through the centre point: the disc reaches 2|c| from it
-    bad = ~(2 * np.linalg.norm(centre, axis=1) <= searched[t[:, 0]])  # a degenerate triangle (NaN) too
+    # the circle passes through the centre point: the disc reaches twice its radius from it
+    bad = ~(2 * _circumradii(Q[t]) <= searched[t[:, 0]])  # a flat triangle (inf) too
     lost = np.bincount(t[:, 0], ~bad, minlength=len(Q)) == 0
     bad &= ~lost[t[:, 0]]
     drop = np.flatnonzero(on)[bad]

@@ -330,14 +330,18 @@ def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
 
 
 def _circumradii(A: np.ndarray) -> np.ndarray:
-    """Circumradii of the simplices ``A`` (m, k + 1, k); inf for a flat one. The circumcentre c
-    solves 2 (x_i - x_0)·c = |x_i|² - |x_0|², i = 1..k."""
-    B = 2.0 * (A[:, 1:] - A[:, :1])
-    rhs = (A[:, 1:] ** 2).sum(axis=2) - (A[:, :1] ** 2).sum(axis=2)
+    """Circumradii of the simplices ``A`` (m, k + 1, d), d ≥ k (a cloud's triangles in R³ too);
+    inf for a flat one. In the simplex's own span (Eᵀ = QR, E the edges x_i - x_0, so e_i = Rᵀ's
+    rows there) the circumcentre y solves 2 Rᵀ y = |e_i|²: a k × k system as well conditioned as
+    the edges themselves."""
+    E = A[:, 1:] - A[:, :1]
+    R = np.linalg.qr(E.transpose(0, 2, 1), mode="r")
+    Rt = R.transpose(0, 2, 1)
+    rhs = 0.5 * (E**2).sum(axis=2)
     radius = np.full(len(A), np.inf)
-    solvable = np.linalg.det(B) != 0.0
-    c = np.linalg.solve(B[solvable], rhs[solvable][..., None])[..., 0]
-    radius[solvable] = np.linalg.norm(c - A[solvable, 0], axis=1)
+    solvable = np.linalg.det(Rt) != 0.0
+    y = np.linalg.solve(Rt[solvable], rhs[solvable][..., None])[..., 0]
+    radius[solvable] = np.linalg.norm(y, axis=1)
     return radius
 
 
