@@ -123,6 +123,8 @@ def main() -> None:
         rows.append(row)
         log(f"{row['name']}: " + ", ".join(f"{c} {pct(row[c])}" for c in COLUMNS)
             + f" ({time.time() - start:.0f} s)")
+    if not rows:
+        raise SystemExit(f"no corpus mesh found in {folder} (benchmarks/build_corpus.py makes them)")
     worst = sorted(rows, key=lambda x: -x["default"] / x["robust"])[:3]
     lines = [f"`python benchmarks/bench_cloud_stars.py` on {datetime.date.today()} "
              f"({time.time() - start:.0f} s, references v{REF_VERSION}): the {len(rows)} surface meshes' "

@@ -24,6 +24,11 @@ distance of the farthest neighbour; otherwise K grows. A trusted star is the one
 cloud's Delaunay triangulation, so a volume in R³ takes the stars the first neighbourhood does
 not secure from one tetrahedralization of all its points, and searches only the rest.
 
+What the points leave empty is a hole, not a face: a star's triangle (a curve's segment) whose
+empty circumdisc i.i.d. sampling at its corners' density would leave with odds below
+:data:`HOLE_ODDS` anywhere in the cloud is dropped, so an open surface's opening stays open
+however far the search reaches across it, and slivers along a concave rim go too.
+
 On 16,000 i.i.d. random points of the unit sphere these masses are within a few percent of
 the barycentric masses of the points' true triangulation (their convex hull), which is what
 the Laplacian's accuracy depends on (see the README's point-cloud section for numbers).
@@ -49,6 +54,7 @@ import numpy as np
 import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components
+from scipy.special import gammaln
 
 from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
@@ -83,7 +89,8 @@ _NOISE_SAMPLE = 2048
 # the first neighbourhood (STAR_NEIGHBORS) doubles for the points whose star it does not secure,
 # up to this
 _MAX_NEIGHBORS = 256
-# a curve cloud's gap less likely than this under i.i.d. sampling, anywhere in it, is a hole
+# an empty gap or circumdisc less likely than this under i.i.d. sampling, anywhere in a curve's or a
+# surface's cloud, is a hole
 HOLE_ODDS = 1e-3
 
 # -- the driver ----------------------------------------------------------------------------------
@@ -146,7 +153,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         Delaunay triangles, each once from its corner of smallest index; a triangle soup,
         not a manifold mesh, used to precondition eigensolvers), ``stars`` (k = 2: every
         point's own star, its centre first: most triangles three times, once from each corner;
-        a star never secured keeps only the triangles whose circumcircle the search reached;
+        without the triangles that span a hole (:func:`_holes`);
         k = 1: every point's segments to its nearest neighbours on either side along its
         tangent, most segments twice).
 
@@ -199,8 +206,6 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         if it == 0:
             nn1[:] = dist[:, 1]
             reach8 = dist[:, 1:9].mean(axis=1)
-            searched = np.zeros(nu)
-        searched[todo] = dist[:, -1]  # how far the search for each point's star reached
         # drop each point itself from its list (it is the first hit: duplicates are merged)
         not_self = idx != todo[:, None]
         order = np.argsort(~not_self, axis=1, kind="stable")
@@ -293,17 +298,17 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
-    stars = uniq[_certified(stars, Q, (status == _INSECURE) & ~outlier, searched)]
+    if k == 2 and len(stars):
+        hole = _holes(stars, Q, reach8, first_open, k)
+        lost = np.bincount(stars[:, 0], ~hole, minlength=nu) == 0
+        hole &= ~lost[stars[:, 0]]  # a point whose every triangle spans a hole keeps them: its row
+        stars = stars[~hole]
+    stars = uniq[stars]
     if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
         centre, other = np.repeat(np.arange(nu), 2), ends1.ravel()
         seg = np.column_stack([centre, other])[(other >= 0) & (mass[centre] > 0)]
-        # a gap that i.i.d. sampling at either end's density (its 8 nearest lie 2.5 spacings away
-        # on average, 4.5 where all are on one side) leaves with probability below HOLE_ODDS
-        # anywhere in the cloud is a hole, such as an open curve's opening, not a segment
+        hole = _holes(seg, Q, reach8, first_open, k)  # such as an open curve's opening
         gap = np.linalg.norm(Q[seg[:, 0]] - Q[seg[:, 1]], axis=1)
-        own = reach8 / np.where(first_open, 4.5, 2.5)
-        spacing = np.maximum(own[seg[:, 0]], own[seg[:, 1]])
-        hole = gap > spacing * math.log(nu / HOLE_ODDS)
         stars = uniq[seg[~hole]]
         ends = seg[hole, 0]  # an end of the curve: half its one segment, as a polyline's
         mass[ends] = 0.5 * np.bincount(seg[~hole, 0], gap[~hole], minlength=nu)[ends]
@@ -365,26 +370,25 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
 
 
-def _certified(stars: np.ndarray, Q: np.ndarray, insecure: np.ndarray, searched: np.ndarray) -> np.ndarray:
-    """``stars`` without the triangles of insecure stars whose circumdisc reaches past the search
-    (radius ``searched``, up to :data:`_MAX_NEIGHBORS` neighbours): nothing checked that it is empty.
+def _holes(cells: np.ndarray, Q: np.ndarray, reach8: np.ndarray, one_sided: np.ndarray,
+           k: int) -> np.ndarray:
+    """Which star simplices ``cells`` span a hole: an empty circumball that i.i.d. sampling at its
+    sparsest corner's density leaves anywhere in the cloud with probability below HOLE_ODDS.
 
-    An insecure star keeps its first neighbourhood's triangles; the uncertified ones are slivers
-    of nearly collinear rim points laid across the empty side of an open surface's concave rim,
-    whose stiffness the other stars do not balance. A hole the search spans (a polygon cap
-    without points) keeps the triangles that close it. A point whose every triangle is
-    uncertified keeps them: without a star it would have no row.
+    Sampling at density ρ in k dimensions (a Poisson process), the j-th nearest point lies
+    Γ(j + 1/k) / Γ(j) · (ω_k ρ)^(-1/k) away on average, 2^(1/k) times that where all lie on one
+    side (``one_sided``: a point on the hull of its first neighbours); the mean over the 8 nearest
+    (``reach8``) gives each point's ρ. A ball of radius R is then empty with probability
+    exp(-ρ ω_k R^k), so an empty one among the n points' is a hole when ρ ω_k R^k > log(n / odds):
+    an open surface's opening, a curve's gap, the empty side of a concave rim that slivers of
+    nearly collinear rim points would span.
     """
-    on = insecure[stars[:, 0]] if len(stars) else np.zeros(0, dtype=bool)
-    if not on.any():
-        return stars
-    t = stars[on]
-    # the circle passes through the centre point: the disc reaches twice its radius from it
-    bad = ~(2 * _circumradii(Q[t]) <= searched[t[:, 0]])  # a flat triangle (inf) too
-    lost = np.bincount(t[:, 0], ~bad, minlength=len(Q)) == 0
-    bad &= ~lost[t[:, 0]]
-    drop = np.flatnonzero(on)[bad]
-    return np.delete(stars, drop, axis=0)
+    n = len(Q)
+    j = np.arange(1, 9)
+    c = np.exp(gammaln(j + 1.0 / k) - gammaln(j)).mean() * np.where(one_sided, 2.0 ** (1.0 / k), 1.0)
+    density = c / np.maximum(reach8, 1e-300)  # (ω_k ρ)^(1/k)
+    expected = (_circumradii(Q[cells]) * density[cells].min(axis=1)) ** k  # a flat simplex: inf
+    return ~(expected <= math.log(n / HOLE_ODDS))
 
 
 def _lattice_spacing(mass: float, k: int) -> float:

@@ -335,6 +335,14 @@ def _circumradii(A: np.ndarray) -> np.ndarray:
     rows there) the circumcentre y solves 2 Rᵀ y = |e_i|²: a k × k system as well conditioned as
     the edges themselves."""
     E = A[:, 1:] - A[:, :1]
+    if A.shape[1] == 2:  # a segment
+        return 0.5 * np.linalg.norm(E[:, 0], axis=1)
+    if A.shape[1] == 3:  # a triangle: |a| |b| |a - b| / (2 |a × b|), |a × b|² = |a|² |b|² - (a·b)²
+        aa, bb, ab = (E[:, 0] ** 2).sum(1), (E[:, 1] ** 2).sum(1), (E[:, 0] * E[:, 1]).sum(1)
+        cross2 = aa * bb - ab**2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            radius = np.sqrt(aa * bb * (aa + bb - 2 * ab)) / (2 * np.sqrt(cross2))
+        return np.where(cross2 > 0, radius, np.inf)
     R = np.linalg.qr(E.transpose(0, 2, 1), mode="r")
     Rt = R.transpose(0, 2, 1)
     rhs = 0.5 * (E**2).sum(axis=2)
