@@ -514,3 +514,16 @@ def test_two_sheets_across_the_air_stay_apart():
     lam = meshlap.spectral.eigs(op, 4)[0]
     assert op.decision.operator == "fem"
     assert abs(lam[1]) < 1e-8 * lam[2] and 3.2 < lam[2] < 3.6
+
+
+def test_circumradii_of_known_simplices():
+    # a segment, a 3-4-5 and an equilateral triangle in R³, a flat one, a regular tetrahedron
+    segment = np.array([[[0.0, 0, 0], [2, 0, 0]]])
+    triangles = np.array([[[0.0, 0, 0], [3, 0, 0], [0, 4, 0]],
+                          [[0.0, 0, 1], [1, 0, 1], [0.5, 3**0.5 / 2, 1]],
+                          [[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]])
+    tet = np.array([[[1.0, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]])  # edge 2√2
+    assert stars._circumradii(segment) == pytest.approx([1.0])
+    assert stars._circumradii(triangles)[:2] == pytest.approx([2.5, 3**-0.5])
+    assert np.isinf(stars._circumradii(triangles)[2])
+    assert stars._circumradii(tet) == pytest.approx([3**0.5])

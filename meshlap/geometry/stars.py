@@ -331,9 +331,9 @@ def _star_k(U: np.ndarray, k: int) -> tuple[float, int, bool]:
 
 def _circumradii(A: np.ndarray) -> np.ndarray:
     """Circumradii of the simplices ``A`` (m, k + 1, d), d ≥ k (a cloud's triangles in R³ too);
-    inf for a flat one. In the simplex's own span (Eᵀ = QR, E the edges x_i - x_0, so e_i = Rᵀ's
-    rows there) the circumcentre y solves 2 Rᵀ y = |e_i|²: a k × k system as well conditioned as
-    the edges themselves."""
+    inf for a flat one. Segments and triangles in closed form; a larger simplex in its own span
+    (Eᵀ = QR, E the edges x_i - x_0, so e_i = Rᵀ's rows there), where the circumcentre y solves
+    2 Rᵀ y = |e_i|²: a k × k system as well conditioned as the edges themselves."""
     E = A[:, 1:] - A[:, :1]
     if A.shape[1] == 2:  # a segment
         return 0.5 * np.linalg.norm(E[:, 0], axis=1)
