@@ -107,13 +107,7 @@ def main() -> None:
     only = {s for s in args.only.split(",") if s}
     rows: list[dict] = []
     start = time.time()
-    for entry in rc.manifest():
-        path = folder / entry["file"]
-        if only and entry["name"] not in only or not path.exists() or rc.sha256(path) != entry["sha256"]:
-            continue
-        mesh = rc.load(path, entry["format"])
-        if mesh.tet:
-            continue
+    for entry, mesh in rc.surfaces(folder, only):
         n_parts = rc.parts(mesh.Cw, len(mesh.Vw))
         k = 10 + n_parts
         R = np.array(cache.get(entry["sha256"], mesh, k)["ref"])

@@ -80,13 +80,7 @@ def main(argv=None) -> int:
             "| paper's | default / FEM | points as a cloud (builder) | cloud, kernel | cloud / FEM |",
             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     print("\n".join(head), flush=True)
-    for entry in rc.manifest():
-        path = folder / entry["file"]
-        if not path.exists() or rc.sha256(path) != entry["sha256"]:
-            continue
-        mesh = rc.load(path, entry["format"])
-        if mesh.tet:
-            continue
+    for entry, mesh in rc.surfaces(folder):
         for i, loop in enumerate(loops(mesh.Cw)):
             P = mesh.Vw[loop]
             if len(np.unique(P, axis=0)) < len(P):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -154,6 +154,18 @@ def load(path: Path, fmt: str = "") -> Mesh:
     V, faces = read(path, fmt)
     Vw, Cw = weld(V, triangulate(faces))
     return Mesh(V, faces, Vw, Cw)
+
+
+def surfaces(folder: Path, only: set[str] | frozenset[str] = frozenset()) -> Iterator[tuple[dict, Mesh]]:
+    """The corpus's surface meshes in ``folder`` whose file matches corpus.toml's sha256 (those
+    named in ``only``, where given), each with its manifest entry."""
+    for entry in manifest():
+        path = folder / entry["file"]
+        if only and entry["name"] not in only or not path.exists() or sha256(path) != entry["sha256"]:
+            continue
+        mesh = load(path, entry["format"])
+        if not mesh.tet:
+            yield entry, mesh
 
 
 def parts(C: np.ndarray, n: int) -> int:

@@ -57,6 +57,7 @@ RUNS: dict[str, list[str]] = {
     "bench_real.py": ["--only", "cow,fuze,octopus-tet", "--no-write"],
     "bench_real_uses.py": ["--only", "cow,fandisk-coarse", "--no-write"],
     "bench_cloud_stars.py": ["--only", "fuze", "--no-write"],
+    "bench_cloud_boundary.py": ["--only", "beetle-c3", "--spheres", "2000", "--no-write"],
     "bench_rowchoice.py": ["--base", "{base}", "--n", "2000", "--repeat", "1"],
     "bench_scale.py": ["--n", "5000", "--no-write"],
     "bench_seams.py": ["--no-write"],
@@ -70,8 +71,9 @@ RUNS: dict[str, list[str]] = {
     "touching_oracle.py": ["cow"],
 }
 #: scripts that read bench_real.py's corpus
-CORPUS = {"bench_cloud_stars.py", "bench_factor.py", "bench_loops.py", "bench_real.py", "bench_real_uses.py",
-          "bench_seams.py", "bench_smoothing.py", "cloud_neighbors.py", "touching_oracle.py"}
+CORPUS = {"bench_cloud_boundary.py", "bench_cloud_stars.py", "bench_factor.py", "bench_loops.py",
+          "bench_real.py", "bench_real_uses.py", "bench_seams.py", "bench_smoothing.py", "cloud_neighbors.py",
+          "touching_oracle.py"}
 #: not benchmarks: helpers the others import, this script, the corpus builder (it needs clones)
 NOT_RUN = {"real_corpus.py", "results_file.py", "smoke.py", "build_corpus.py"}
 

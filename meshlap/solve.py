@@ -11,8 +11,9 @@ vertices is solved in its weak form on the other vertices,
     (-S) φ = -M f + B q,    φ_D = g,
 
 with B the boundary measure of each vertex (half the adjacent boundary edges on a surface,
-a third of the adjacent hull triangles on a tetrahedral mesh, 1 at a curve's end; on a point
-cloud, which has no boundary cells, m_i^((k-1)/k) at the points it flags as boundary, an
+a third of the adjacent hull triangles on a tetrahedral mesh, 1 at a curve's end; on a surface's
+point cloud half the edges of each point's star where the star soup ends,
+``geometry.boundary_share``; on a volume cloud m_i^(2/3) at the points it flags, an
 estimate). The rest of the boundary is insulated (∂φ/∂n = 0). A connected part of the
 geometry without Dirichlet vertices fixes φ only up to a constant: its data are made
 compatible (a warning says when they were not) and φ has zero mean there.
@@ -117,6 +118,8 @@ def boundary_measure(geometry: Any) -> np.ndarray:
             return np.zeros(n)
         share = np.repeat(simplex_volumes(P, once) / (c - 1), c - 1)
         return np.bincount(once.ravel(), weights=share, minlength=n)
+    if geo.boundary_share is not None:
+        return np.array(geo.boundary_share)
     if geo.boundary is None:
         return np.zeros(n)
     k = geo.dim

@@ -178,7 +178,7 @@ def _geometry_arrays(op: Any) -> dict[str, Any]:
                            "source": np.array(geo.source)}
     if geo.faces is not None:
         out["face_indices"], out["face_offsets"] = geo.faces.indices, geo.faces.offsets
-    for key in ("boundary", "cells"):
+    for key in ("boundary", "cells", "boundary_share"):
         if getattr(geo, key) is not None:
             out[key] = getattr(geo, key)
     moved = getattr(op, "pencil_points", None)
@@ -312,7 +312,9 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
                             len(P), name=f"faces in {name}")
     return Geometry(P, mass, int(data["dim"]), float(data["spacing"]),
                     boundary=data["boundary"] if "boundary" in data else None, faces=faces,
-                    cells=data["cells"] if "cells" in data else None, source=str(data["source"]))
+                    cells=data["cells"] if "cells" in data else None,
+                    boundary_share=data["boundary_share"] if "boundary_share" in data else None,
+                    source=str(data["source"]))
 
 
 def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:

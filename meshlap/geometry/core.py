@@ -76,12 +76,15 @@ class Geometry:
         Typical distance between neighbouring points (mean edge length of a mesh); the
         automatic kernel width is h = (2·spacing)².
     boundary : (n,) bool ndarray or None
-        Points on the boundary (polyline ends, surface boundary loops, tet mesh hull); None
-        when unknown (point clouds).
+        Points on the boundary (polyline ends, surface boundary loops, tet mesh hull, a
+        cloud's open stars); None when unknown.
     faces : Polygons or None
         The faces of a surface mesh (for normals and cotangent preconditioners), else None.
     cells : (m, k+1) ndarray or None
         Edges of a polyline or tetrahedra of a volume mesh, else None.
+    boundary_share : (n,) ndarray or None
+        Each point's share of the boundary's length where no cells tile the surface (a surface
+        cloud: half its star's edges that no other of its triangles has), else None.
     source : str
         What the masses came from ("polyline", "surface", "tetrahedra", "point cloud").
     notes : str
@@ -102,6 +105,7 @@ class Geometry:
     boundary: np.ndarray | None = None
     faces: Polygons | None = None
     cells: np.ndarray | None = None
+    boundary_share: np.ndarray | None = None
     source: str = "mesh"
     notes: str = ""  # what the builder did to the input, e.g. that it denoised a cloud
     # frames computed on first use and kept: a build asks for each once

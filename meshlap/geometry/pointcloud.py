@@ -172,7 +172,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     k = int(k)
     if d < k:
         raise MeshError(f"points in R^{d} cannot sample a {k}-dimensional manifold (k={k} > d={d})")
-    rep, share, spacing0 = _merge_duplicates(P, merge_tol)
+    rep, shared, spacing0 = _merge_duplicates(P, merge_tol)
     uniq = np.flatnonzero(rep == np.arange(n))
     n_dup = n - len(uniq)
     if len(uniq) < k + 2:
@@ -298,11 +298,16 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
+    share = np.zeros(nu)
     if k == 2 and len(stars):
         hole = _holes(stars, Q, reach8, first_open, k)
         lost = np.bincount(stars[:, 0], ~hole, minlength=nu) == 0
         hole &= ~lost[stars[:, 0]]  # a point whose every triangle spans a hole keeps them: its row
+        ends = open_cell.copy()
+        ends[stars[hole].ravel()] = True
         stars = stars[~hole]
+        share = _open_edges(stars, Q, ends)
+        open_cell |= share > 0
     stars = uniq[stars]
     if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
         centre, other = np.repeat(np.arange(nu), 2), ends1.ravel()
@@ -315,8 +320,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         open_cell[ends] = True
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])] if k == 2 else \
         np.zeros((0, 3), np.int64)  # each once
-    full = mass[np.searchsorted(uniq, rep)] / share
-    boundary = open_cell[np.searchsorted(uniq, rep)]
+    at = np.searchsorted(uniq, rep)
+    full = mass[at] / shared
+    boundary = open_cell[at]
     positive = full[full > 0]
     mean_mass = float(positive.mean()) if len(positive) else 0.0
     info = {
@@ -328,6 +334,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "boundary": boundary,
         "triangles": triangles,
         "stars": stars,
+        "boundary_share": (share[at] / shared) if k == 2 else None,
     }
     return full, info
 
@@ -368,6 +375,23 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
                         return_index=True)
     return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
+
+
+def _open_edges(stars: np.ndarray, Q: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Each point's share of the star soup's boundary: half the length of the edges that one
+    triangle of its own star has and no other, where the star at the edge's other end has it
+    once too, between points ``at`` the sampling ends (an open cell, a hole's corner). Elsewhere
+    such an edge is two neighbouring stars' disagreement (a random sphere of 1,000,000 points
+    has six), not an end of the surface."""
+    n = len(Q)
+    rows = stars[at[stars[:, 0]]]
+    centre, other = np.repeat(rows[:, 0], 2), rows[:, 1:].ravel()
+    key, once = np.unique(centre * n + other, return_counts=True)
+    edge = key[once == 1]
+    a, b = edge // n, edge % n
+    both = at[b] & np.isin(b * n + a, edge)
+    a, b = a[both], b[both]
+    return 0.5 * np.bincount(a, np.linalg.norm(Q[a] - Q[b], axis=1), minlength=n)
 
 
 def _holes(cells: np.ndarray, Q: np.ndarray, reach8: np.ndarray, one_sided: np.ndarray,
@@ -556,7 +580,7 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     cells = info["triangles"] if k == 2 else np.unique(np.sort(info["stars"], axis=1), axis=0) if k == 1 \
         else None
     geo = Geometry(P, mass, int(k), info["spacing"], boundary=info["boundary"], cells=cells,
-                   source="point cloud", notes=notes)
+                   boundary_share=info["boundary_share"], source="point cloud", notes=notes)
     if k <= 2:  # the FEM pencil's cells and their weight: each simplex is in its k + 1 corners' stars
         geo._cache["fem_cells"] = (info["stars"], 1 / (k + 1))
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
