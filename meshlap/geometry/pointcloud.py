@@ -149,7 +149,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     info : dict
         ``spacing`` (equivalent lattice spacing), ``duplicates``, ``outliers``,
         ``degenerate``, ``insecure`` (point counts), ``boundary`` ((n,) bool: cells that
-        stay open, e.g. on the rim of an open surface), ``triangles`` (k = 2: the local
+        stay open, e.g. on the rim of an open surface, and for k = 2 where the stars end, an
+        opening's rim too), ``boundary_share`` (k = 2: each point's share of the boundary's
+        length, half its star's edges there; else None), ``triangles`` (k = 2: the local
         Delaunay triangles, each once from its corner of smallest index; a triangle soup,
         not a manifold mesh, used to precondition eigensolvers), ``stars`` (k = 2: every
         point's own star, its centre first: most triangles three times, once from each corner;
@@ -307,7 +309,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         ends[stars[hole].ravel()] = True
         stars = stars[~hole]
         share = _open_edges(stars, Q, ends)
-        open_cell |= share > 0
+        open_cell = share > 0  # where the soup ends: an open first cell whose star closed is inside
     stars = uniq[stars]
     if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
         centre, other = np.repeat(np.arange(nu), 2), ends1.ravel()
