@@ -97,6 +97,9 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     >>> V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     >>> boundary_measure(meshlap.geometry.surface(V, [[0, 1, 2], [0, 2, 3]])).tolist()
     [1.0, 1.0, 1.0, 1.0]
+    >>> P = meshlap.shapes.disc(1500)[0]       # the unit disc's vertices, as a cloud: its rim, 2π
+    >>> round(float(boundary_measure(meshlap.point_cloud_laplacian(P)).sum()), 3)
+    6.283
     """
     geo = getattr(geometry, "geometry", geometry)
     if not isinstance(geo, Geometry):

@@ -193,6 +193,9 @@ def test_a_lopsided_neighbourhood_keeps_its_closed_star():
     op = meshlap.point_cloud_laplacian(samples.sphere_points(16000, "random", seed=0))
     lam = np.sort(spectral.eigs(op, 16, tol=1e-8)[0])
     assert np.abs(lam[1:] / SPHERE_EIGS[1:] - 1).max() < 0.003
+    # and no boundary, nor any length of it: a closed surface (bench_cloud_boundary.py: none at
+    # 1,000,000 points either)
+    assert not op.geometry.boundary.any() and not meshlap.solve.boundary_measure(op).any()
 
 
 def _thick_tube(a=0.5, r1=1.5, r2=2.5, height=3.0):
