@@ -237,6 +237,30 @@ def test_harmonic_on_the_disc_s_cloud(disc):
     assert err.max() < 1e-3
 
 
+def test_neumann_problem_on_the_disc_s_cloud(disc):
+    # the cloud's rim is where its stars end, each point weighted by the length it borders (with
+    # √mass, as before, the rim was 4.41 long for 2π)
+    V = disc[0]
+    x = V[:, 0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        op = meshlap.point_cloud_laplacian(V)
+    rim = np.flatnonzero(op.geometry.boundary)
+    assert np.hypot(V[rim, 0], V[rim, 1]).min() > 0.999  # the rim and nothing else
+    u = poisson(op, 0.0, neumann=(rim, x[rim]))
+    assert np.abs(u - x).max() < 1e-3  # measured 2.0e-4, as the mesh's
+
+
+def test_a_volume_cloud_s_boundary_measure_says_it_is_an_estimate():
+    V = meshlap.samples.cube_tetrahedra(12)[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        geo = meshlap.geometry.point_cloud_geometry(V, 3)
+    with pytest.warns(meshlap.MeshWarning, match="give the tetrahedra"):
+        w = boundary_measure(geo)
+    assert w.sum() < 1.0  # measured 0.27, for the cube's area 6: the warning's figure
+
+
 def test_solver_reuses_its_factorisation_for_many_right_hand_sides(disc):
     V, F, edge = disc
     op = cotangent(V, F)
