@@ -38,7 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import real_corpus as rc  # noqa: E402
 import robust_laplacian  # noqa: E402
 from bench_real import REF_VERSION, RefCache, log, pct  # noqa: E402
-from results_file import write_section  # noqa: E402
+from results_file import publish  # noqa: E402
 
 import meshlap  # noqa: E402
 from meshlap import spectral  # noqa: E402
@@ -132,10 +132,7 @@ def main() -> None:
         lines.append(f"| {x['name']} | {x['n']:,} | " + " | ".join(pct(x[c]) for c in COLUMNS) + " |")
     lines += ["", "The rows: the default's three worst against robust-laplacian, then those a variant "
               "worsens most."]
-    if args.no_write:
-        print("\n".join(lines))
-    else:
-        write_section("bench_cloud_stars.py", lines)
+    publish(lines, args.no_write)
 
 
 if __name__ == "__main__":

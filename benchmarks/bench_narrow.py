@@ -29,7 +29,7 @@ import scipy.linalg as sla
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import real_corpus as rc  # noqa: E402
-from results_file import write_section  # noqa: E402
+from results_file import publish  # noqa: E402
 
 import meshlap  # noqa: E402
 from meshlap import samples, shapes, spectral  # noqa: E402
@@ -111,10 +111,7 @@ def main() -> None:
                   "refined linear FEM, the same two operators:", "",
                   "| mesh | " + " | ".join(f"h = {f:g} a²" for f in FRACTIONS[1:]) + " |",
                   "|---|" + "---|" * (len(FRACTIONS) - 1), *real]
-    if args.no_write:
-        print("\n".join(lines))
-    else:
-        write_section("bench_narrow.py", lines)
+    publish(lines, args.no_write)
 
 
 if __name__ == "__main__":

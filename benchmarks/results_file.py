@@ -44,6 +44,14 @@ def write_section(title: str, lines: list[str], script: str | None = None) -> No
     RESULTS.write_text(text.rstrip() + "\n")
 
 
+def publish(lines: list[str], no_write: bool) -> None:
+    """The running script's section of RESULTS.md set to ``lines``, or printed with ``no_write``."""
+    if no_write:
+        print("\n".join(lines))
+    else:
+        write_section(Path(sys.argv[0]).name, lines)
+
+
 if __name__ == "__main__":  # a module the scripts import: run, it only answers --help
     import argparse
 
