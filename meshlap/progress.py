@@ -6,7 +6,7 @@ import sys
 import time
 from collections.abc import Callable
 
-__all__ = ["ProgressLike", "make_progress"]
+__all__ = ["ProgressLike", "make_progress", "onward"]
 
 #: ``None``/``False`` (silent), ``True`` (a bar on stderr) or ``callback(fraction, stage)``.
 ProgressLike = bool | Callable[[float, str], None] | None
@@ -40,3 +40,30 @@ def make_progress(progress: ProgressLike) -> Callable[[float, str], None] | None
     if callable(progress):
         return progress
     raise TypeError(f"progress must be None, a bool or a callable(fraction, stage); got {progress!r}")
+
+
+def onward(report: Callable[[float, str], None] | None) -> Callable[[float, str], None] | None:
+    """``report`` for work that may start a stage over (a solver's retry): a fraction below the
+    last one begins the stage again in what is left of the bar, so the bar never goes back.
+
+    Examples
+    --------
+    >>> seen = []
+    >>> r = onward(lambda f, s: seen.append(round(f, 2)))
+    >>> for f in (0.0, 0.8, 0.0, 0.5, 1.0):
+    ...     r(f, "stage")
+    >>> seen
+    [0.0, 0.8, 0.8, 0.9, 1.0]
+    """
+    if report is None:
+        return None
+    base, span, last, shown = 0.0, 1.0, 0.0, 0.0
+
+    def call(fraction: float, stage: str) -> None:
+        nonlocal base, span, last, shown
+        if fraction < last:
+            base, span = shown, 1.0 - shown
+        last = fraction
+        shown = max(shown, base + span * fraction)
+        report(shown, stage)
+    return call

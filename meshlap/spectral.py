@@ -38,7 +38,7 @@ from .fem import expand_copies
 from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
 from .geometry.validation import check_faces, check_k, check_vertices
-from .progress import ProgressLike, make_progress
+from .progress import ProgressLike, make_progress, onward
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 
@@ -361,7 +361,7 @@ def eigs(
     if method == "lobpcg" and 3 * (k + extra) >= n_p:
         method = "dense"
 
-    report = make_progress(progress)
+    report = onward(make_progress(progress))  # a retry starts its stages over
     if report is not None and method != "lobpcg":
         report(0.0, method)
     # made on first use: -S on the vertices with mass, and L_sym there in spatial order (for

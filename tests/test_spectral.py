@@ -320,6 +320,13 @@ def test_eigs_progress_reports_stages_in_order():
     stages = [s for _, s in sparse]
     assert stages[:3] == ["shift-invert", "shift-invert: factoring", "Lanczos"], stages
     assert stages[-2:] == ["inertia count", "done"] and [f for f, _ in sparse] == sorted(f for f, _ in sparse)
+    retried, info = [], {}  # LOBPCG given 3 iterations fails its check; shift-invert goes on
+    spectral.eigs(meshlap.laplacian(V, F), 6, method="lobpcg", maxiter=3, elements="linear", info=info,
+                  progress=lambda f, s: retried.append((f, s)))
+    assert info["tried"][:2] == ["lobpcg", "shift-invert"], info["tried"]
+    stages = [s for _, s in retried]
+    assert "LOBPCG (iteration 1)" in stages and "shift-invert: factoring" in stages and stages[-1] == "done"
+    assert [f for f, _ in retried] == sorted(f for f, _ in retried)  # it went back to 0.6 after 0.85
 
 
 def test_spatial_order_is_the_same_problem_permuted(monkeypatch):
