@@ -18,6 +18,9 @@ from pathlib import Path
 
 from meshlap.reproduce import FULL_NS, QUICK_NS, run
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_file import write_section  # noqa: E402
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -47,6 +50,12 @@ def main(argv: list[str] | None = None) -> int:
     print(md)
     for f in rep.files:
         print(f"wrote {f}")
+    if not args.quick:  # RESULTS.md holds the summary; the tables themselves stay in tables.md
+        beside = md.split("## The paper beside ours", 1)[1].split("\n### ", 1)[0]
+        write_section("reproduce_tables.py", [
+            f"Command: `{command}`; every table, with the paper's cells beside ours: "
+            "[tables/tables.md](tables/tables.md) (docs/reproduction.md reads them).", "",
+            "### The paper beside ours" + beside.rstrip(), *(ln.replace("## ", "### ", 1) for ln in lines)])
     return 0
 
 
