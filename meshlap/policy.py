@@ -29,10 +29,11 @@ The policy for ``operator="auto"`` has no tuned threshold:
 - a curve's segments get the "galerkin" pencil: the heat kernel integrated over the segments.
   Its failure on surfaces is a triangle too thin for the kernel's quadrature, and a segment has
   no shape; on the 24 synthetic curves of ``benchmarks/bench_curves.py`` it is 0.02-0.49× linear
-  FEM's error, on the 15 boundary loops of 12 real meshes 0.05-0.32× (median 0.14×;
+  FEM's error, on the 25 boundary loops of 19 real meshes 0.05-0.84× (median 0.10×;
   ``benchmarks/bench_loops.py``);
-- a surface's point cloud gets the "fem" pencil on every point's local Delaunay star, each
-  triangle weighted by a third (most come from each of their three corners): the triangles
+- a surface's or a curve's point cloud gets the "fem" pencil on every point's local Delaunay
+  star, each triangle weighted by a third (a segment by a half: most come from each of their
+  corners): the triangles
   robust-laplacian's point-cloud Laplacian starts from, without its tufted cover; on 16,000
   random sphere points 0.20% off on eigenvalues 1-9 against the kernel's 0.29% and
   robust-laplacian's 7.8%;
@@ -42,8 +43,9 @@ The policy for ``operator="auto"`` has no tuned threshold:
   explained) gets the "kernel" pencil: the
   projected points keep a tangential jitter that makes the local triangles' shapes random,
   while the kernel's width averages over many points (1% radial noise, 16,000 points: 0.29%
-  against FEM's 0.75%), as does a cloud along a curve or filling a volume, which has no local
-  triangles;
+  against FEM's 0.75%), as does a cloud filling a volume, whose Delaunay tetrahedra span its
+  concavities and the slivers of its hull (FEM on them: better on 2 of 6 rows, but up to 580%
+  off where the kernel is at most 69%; ``benchmarks/bench_pointcloud.py --volume``);
 - a kernel width ``h`` or an option of the kernel (``correction``, ``quadrature``, ...) asks for
   the kernel: "paper" with ``correction="none"``, "galerkin" with ``quadrature="galerkin"``,
   else "kernel".
