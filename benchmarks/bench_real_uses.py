@@ -7,7 +7,8 @@ unreferenced vertices and all; tetrahedra with ``k=3``) and for its welded verti
 cloud: ``laplacian`` / ``point_cloud_laplacian`` with their defaults, then ``op @ f``,
 ``spectral.eigs(op, 10)``, ``heat.heat_flow`` at t = 10⁻³·diameter², ``geodesic_distance``
 from the first vertex with mass, ``harmonic`` between it and the farthest vertex,
-``shape_dna(op, 10)``, ``wave_kernel_signature(op, 20, 30 + parts)``, ``smooth_function``, the mean
+``shape_dna(op, 10)``, ``wave_kernel_signature(op, 20, k)`` (k = 30 + parts, at most the vertices with
+mass less one: all the pairs a 20-vertex mesh has), ``smooth_function``, the mean
 curvature (``mean_curvature`` on faces, ``mean_curvature_normal`` otherwise) and a save/load
 round trip (the reloaded ``op @ f`` equal). A use fails when it raises, when its result holds a
 NaN or an infinity where a value is defined (``mean_curvature`` is NaN by definition at
@@ -57,12 +58,13 @@ def uses(op, V: np.ndarray, faces: bool, parts: int, folder: Path) -> list[tuple
         return np.zeros(1) if np.allclose(again, first, rtol=1e-12, atol=1e-12 * np.abs(first).max()) else \
             np.array([np.nan])
 
+    most = int((op.mass > 0).sum()) - 1  # all the pairs a tiny mesh has
     steps = [("apply", lambda: op @ f), ("eigs", lambda: spectral.eigs(op, 10)[0]),
              ("heat", lambda: heat.heat_flow(op, f, t)),
              ("geodesic", lambda: geodesics.geodesic_distance(op, [source])),
              ("harmonic", lambda: meshlap.harmonic(op, [source, far], [0.0, 1.0])),
              ("shape_dna", lambda: descriptors.shape_dna(op, 10)),
-             ("wks", lambda: descriptors.wave_kernel_signature(op, 20, 30 + parts)),
+             ("wks", lambda: descriptors.wave_kernel_signature(op, 20, min(30 + parts, most))),
              ("smooth", lambda: smoothing.smooth_function(op, f, t)), ("curvature", curv), ("reload", reload)]
     out = []
     for name, step in steps:

@@ -126,6 +126,21 @@ SOURCES: list[tuple[str, str, str, str, str, int]] = [
     ("bumpy", IG, "bumpy.off", "holdout", "libigl tutorial data (source unknown)", 0),
     ("inspired-quads", IG, "inspired_mesh_quads_Conjugate.off", "quad holdout",
      "libigl tutorial data (source unknown)", 0),
+    # held out again: added later on 2026-12-06, after the point clouds' hole test and boundary
+    # (stops 63-64), and measured once
+    ("armadillo", IG, "armadillo.obj", "scan decimated holdout2", "Stanford 3D Scanning Repository", 9000),
+    ("bunny-oded", G, "test/unit_tests_data/bunny_oded.obj", "closed holdout2", "gpytoolbox test data", 0),
+    ("disc", IG, "circle.obj", "open holdout2", "libigl tutorial data", 0),
+    ("cylinder-stl", T, "models/cylinder.stl", "CAD holdout2", "trimesh test model", 0),
+    ("fixed-top", T, "models/fixed_top.ply", "CAD holdout2", "trimesh test model", 0),
+    ("groups", T, "models/groups.obj", "closed holdout2", "trimesh test model", 0),
+    ("intersection", IG, "intersection_quads.off", "open holdout2", "libigl tutorial data", 0),
+    ("mirror", T, "models/mirror.ply", "closed holdout2", "trimesh test model", 0),
+    ("multibody", T, "models/multibody.stl", "CAD multi-part holdout2", "trimesh test model", 0),
+    ("not-convex", T, "models/not_convex.obj", "closed holdout2", "trimesh test model", 0),
+    ("reference", T, "models/reference.obj", "open holdout2", "trimesh test model", 0),
+    ("tube", T, "models/tube.obj", "closed holdout2", "trimesh test model", 0),
+    ("xyz-cube", T, "models/20mm-xyz-cube.stl", "CAD holdout2", "trimesh test model", 0),
 ]
 
 
