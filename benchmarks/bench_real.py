@@ -302,7 +302,8 @@ def summary(rows: list[dict], peer: str) -> str:
     if not rows:
         return "(no rows)"
     r = np.array([x["ratio"] for x in rows])
-    c = np.array([x["cpu_ratio"] for x in rows])
+    # a peer that failed has no time to compare (its error counts as a loss: ratio 0)
+    c = np.array([x["cpu_ratio"] for x in rows if np.isfinite(x["best_peer"])] or [np.nan])
     # a tie: the same pencil as a peer's (robust-laplacian's is intrinsic Delaunay + lumped mass
     # too), equal to rounding in the eigensolvers
     return (f"within 1.5× of {peer} in **{int((r <= 1.5).sum())} of {len(r)}**, ahead (≤ 1×) in "
@@ -596,7 +597,8 @@ def header(first: str) -> list[str]:
             "from the extrapolation (about that level's own error; the extrapolation's is smaller). "
             "Ratio = default / best peer. The default gets the mesh as published (polygons, seams); the "
             "peers the welded, triangulated mesh. CPU = process time of build + eigenpairs (meshlap's "
-            "timed again where its first call compiled kernels). CSV: benchmarks/results/"
+            "timed again where its first call compiled kernels; a summary's CPU ratios leave out the rows "
+            "where the peer failed). CSV: benchmarks/results/"
             "bench_real.csv. Corpus: benchmarks/corpus.toml.", ""]
 
 
