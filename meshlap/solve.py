@@ -134,14 +134,23 @@ def boundary_measure(geometry: Any) -> np.ndarray:
     return np.where(geo.boundary, np.asarray(geo.mass) ** ((k - 1) / k), 0.0)
 
 
-def _warn_kernel_boundary(op: Any, idx: np.ndarray) -> None:
-    """Warn where data on the boundary meet a heat-kernel pencil (``op.decision.operator``
-    "kernel" or "paper"): its rows reach past the boundary vertices, so under boundary data it
-    has a boundary layer that linear FEM has not (the unit disc, 2,000 vertices, x² − y² from its
-    boundary values: 0.19 off with the corrected kernel, 0.56 with the paper's, 2e-4 with FEM)."""
+def _kernel_boundary(op: Any, idx: np.ndarray) -> str | None:
+    """``op.decision.operator`` where it is a heat kernel ("kernel" or "paper") and ``idx`` holds
+    a boundary vertex, else None."""
     operator = getattr(getattr(op, "decision", None), "operator", None)
     boundary = getattr(getattr(op, "geometry", None), "boundary", None)
     if operator in ("kernel", "paper") and boundary is not None and len(idx) and boundary[idx].any():
+        return operator
+    return None
+
+
+def _warn_kernel_boundary(op: Any, idx: np.ndarray) -> None:
+    """Warn where data on the boundary meet a heat-kernel pencil: its rows reach past the
+    boundary vertices, so under boundary data it has a boundary layer that linear FEM has not
+    (the unit disc, 2,000 vertices, x² − y² from its boundary values: 0.19 off with the corrected
+    kernel, 0.56 with the paper's, 2e-4 with FEM)."""
+    operator = _kernel_boundary(op, idx)
+    if operator is not None:
         warnings.warn(f"boundary data on a heat-kernel pencil (operator={operator!r}) leave a boundary "
                       "layer (the unit disc from its boundary values: 0.19 off with the kernel, 2e-4 with "
                       "linear FEM); for boundary problems build the operator with operator='fem'",
@@ -334,7 +343,7 @@ def poisson(op: Any, f: Any = 0.0, *, dirichlet: Indexed = None, neumann: Indexe
     n = op.n_vertices
     fixed, g = _indexed(dirichlet, n, "dirichlet")
     nidx, q = _indexed(neumann, n, "neumann")
-    if not len(fixed):  # with Dirichlet vertices the solver says it
+    if _kernel_boundary(op, fixed) is None:  # Dirichlet data on the boundary: the solver says it
         _warn_kernel_boundary(op, nidx)
     f_arr = np.asarray(f, dtype=np.float64)
     width = [a.shape[1] for a in (f_arr, g, q) if a.ndim == 2]

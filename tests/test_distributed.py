@@ -305,3 +305,8 @@ def test_progress_of_distributed_build_and_eigs():
     names = [s.split(" (")[0] for _, s in seen]
     assert names[0] == "preconditioner" and names[-1] == "done" and "LOBPCG" in names
     assert [f for f, _ in seen] == sorted(f for f, _ in seen) and seen[-1][0] == 1.0
+    seen.clear()  # LOBPCG given 3 iterations fails its check: the next solver's stages go on from there
+    info = {}
+    distributed.eigs(op, 6, mesh=(V, F), maxiter=3, info=info, progress=lambda f, s: seen.append((f, s)))
+    assert len(info["tried"]) > 1, info["tried"]
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen) and seen[-1][0] == 1.0

@@ -278,6 +278,8 @@ def test_boundary_data_on_a_heat_kernel_pencil_warn(disc):
     assert np.abs(u - (x**2 - y**2)).max() > 0.1  # what the warning is about
     with pytest.warns(meshlap.MeshWarning, match="boundary layer"):
         poisson(op, 0.0, neumann=(edge, x[edge]))
+    with pytest.warns(meshlap.MeshWarning, match="boundary layer"):  # Dirichlet data inside only
+        poisson(op, 0.0, dirichlet=([0], [0.0]), neumann=(edge, x[edge]))
     with warnings.catch_warnings():
         warnings.simplefilter("error", meshlap.MeshWarning)  # not on FEM, nor away from the boundary
         harmonic(meshlap.laplacian(V, F), edge, (x**2 - y**2)[edge])

@@ -56,7 +56,7 @@ from .._jit import one_blas_thread
 from ..errors import EigenError, MeshError
 from ..geometry.topology import duplicate_vertices
 from ..geometry.validation import check_faces, check_k, check_vertices
-from ..progress import ProgressLike, make_progress
+from ..progress import ProgressLike, make_progress, onward
 from .comm import _has_mumps
 
 __all__ = ["eigs", "finish"]
@@ -377,7 +377,8 @@ def eigs(
     mesh = getattr(op, "mesh", None) if mesh is None else mesh
     allsum = _allsum(comm)
     full = len(P) == op.n_local
-    report = make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None)
+    # a retry (LOBPCG wider, the gathered solve) starts its stages over
+    report = onward(make_progress(progress if (progress is not True or comm.Get_rank() == 0) else None))
     if report is not None:
         report(0.0, "preconditioner")
 
