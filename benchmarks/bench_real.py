@@ -147,8 +147,10 @@ def robust_cloud(P: np.ndarray, k: int) -> np.ndarray:
     return rc.pencil_eigs(L, M, k)
 
 
-def meshlap_cloud(P: np.ndarray, k: int, info: dict | None = None) -> np.ndarray:
-    return spectral.eigs(meshlap.point_cloud_laplacian(P), k, info=info)[0]
+def meshlap_cloud(P: np.ndarray, k: int, info: dict) -> np.ndarray:
+    op = meshlap.point_cloud_laplacian(P)
+    info["pieces"] = op.decision.measured.get("parts", 0)  # the pieces its stars join
+    return spectral.eigs(op, k, info=info)[0]
 
 
 def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | None, float, str]]:
@@ -158,9 +160,7 @@ def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | 
 
 def warm_up() -> None:
     """Build and solve once on a small sphere, so that no row pays meshlap's first-use compilation."""
-    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
-    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
-    V, F = rc.refine(V, F, 3, project=lambda X: X / np.linalg.norm(X, axis=1, keepdims=True))
+    V, F = meshlap.shapes.sphere(500, seed=0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         spectral.eigs(meshlap.laplacian(V, F), 10)
@@ -223,6 +223,7 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
     cloud = {"name": entry["name"], "kind": entry["kind"], "n": len(V), "parts": n_parts,
              "err_default": err(clam, R, n_parts), "cpu_default": ccpu, "warnings": cwarn,
              "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu, "touching": rc.touching(V, F),
+             "pieces": cinfo.get("pieces", 0),
              "uncertified": float(cinfo.get("uncertified", float("nan")))}
     finish(cloud, [cloud["err_robust"]], rcpu)
     return row, cloud
@@ -304,8 +305,7 @@ def summary(rows: list[dict], peer: str) -> str:
     r = np.array([x["ratio"] for x in rows])
     # a peer that failed has no time to compare (its error counts as a loss: ratio 0)
     c = np.array([x["cpu_ratio"] for x in rows if np.isfinite(x["best_peer"])] or [np.nan])
-    # a tie: the same pencil as a peer's (robust-laplacian's is intrinsic Delaunay + lumped mass
-    # too), equal to rounding in the eigensolvers
+    # a tie: a peer's very pencil (robust-laplacian's: intrinsic Delaunay, lumped mass), to rounding
     return (f"within 1.5× of {peer} in **{int((r <= 1.5).sum())} of {len(r)}**, ahead (≤ 1×) in "
             f"{int((r <= 1).sum())}, ahead or tied (≤ 1.001×) in {int((r <= 1.001).sum())}; "
             f"error ratio median {np.median(r):.3g}×, worst {r.max():.3g}×; "
@@ -330,19 +330,15 @@ def held_out(rows: list[dict], kind: str = "holdout") -> list[dict]:
 
 def by_kind(rows: list[dict], peer: str) -> list[str]:
     kinds = sorted({t for x in rows for t in x["kind"].split()})
-    out = ["| kind | rows | summary |", "|---|---|---|"]
-    for t in kinds:
-        sel = [x for x in rows if t in x["kind"].split()]
-        out.append(f"| {t} | {len(sel)} | {summary(sel, peer)} |")
-    return out
+    return ["| kind | rows | summary |", "|---|---|---|"] + [
+        f"| {t} | {len(held_out(rows, t))} | {summary(held_out(rows, t), peer)} |" for t in kinds]
 
 
 def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[dict],
            refs: dict[str, dict]) -> list[str]:
     def lv(name: str) -> str:
-        r = refs[name]
-        grow = 8 if r["tet"] else 4
-        return f"{grow ** r['levels'][0]}×/{grow ** r['levels'][1]}×"
+        grow, levels = 8 if refs[name]["tet"] else 4, refs[name]["levels"]
+        return f"{grow ** levels[0]}×/{grow ** levels[1]}×"
 
     settled = [x for x in surf if refs[x["name"]]["spread"] <= SETTLED]
     out = ["### Surfaces: meshlap's default against COT, LaPy, robust-laplacian", "",
@@ -372,12 +368,13 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
             + summary(resolved, "robust-laplacian") + ".", "",
             "Held out (kind `holdout`): " + summary(held, "robust-laplacian") + "; held out again "
             "(`holdout2`): " + summary(held_out(cloud, "holdout2"), "robust-laplacian") + ".", "",
-            roundoff(cloud), "",
-            "| mesh | n | parts | touching | default | robust | ratio | CPU default s | CPU robust s | "
-            "warnings |",
-            "|" + "---|" * 10]
+            roundoff(cloud), "", "The pieces the cloud's stars join (`op.decision.measured['parts']`, one "
+            f"zero eigenvalue each) equal the mesh's parts on {sum(x['pieces'] == x['parts'] for x in cloud)}"
+            f" of {len(cloud)}.", "", "| mesh | n | parts | pieces | touching | default | robust | ratio | "
+            "CPU default s | CPU robust s | warnings |", "|" + "---|" * 11]
     for x in cloud:
-        out.append(f"| {x['name']} | {x['n']} | {x['parts']} | {x['touching']} | {pct(x['err_default'])} | "
+        out.append(f"| {x['name']} | {x['n']} | {x['parts']} | {x['pieces']} | {x['touching']} | "
+                   f"{pct(x['err_default'])} | "
                    f"{pct(x['err_robust'])} | {x['ratio']:.3g} | {x['cpu_default']:.2f} | "
                    f"{x['cpu_robust']:.3f} | {x['warnings']} |")
     out += ["", "### Tetrahedral meshes (Neumann): meshlap (k=3) against LaPy's TetMesh", "",
@@ -434,10 +431,7 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
 
 
 def write_csv(path: Path, sections: dict[str, list[dict]]) -> None:
-    keys: list[str] = []
-    for rows in sections.values():
-        for r in rows:
-            keys += [k for k in r if k not in keys]
+    keys = list(dict.fromkeys(k for rows in sections.values() for r in rows for k in r))
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=["section", *keys])
@@ -566,7 +560,7 @@ def render(folder: Path) -> None:
         for r in csv.DictReader(fh):
             row: dict = {}
             for key, v in r.items():
-                if key in ("n", "parts", "touching"):
+                if key in ("n", "parts", "pieces", "touching"):
                     row[key] = int(v) if v else 0
                 elif key.startswith(("err_", "cpu_")) or key in ("ratio", "best_peer", "noise", "sigma",
                                                                  "extent", "uncertified"):
@@ -598,8 +592,8 @@ def header(first: str) -> list[str]:
             "Ratio = default / best peer. The default gets the mesh as published (polygons, seams); the "
             "peers the welded, triangulated mesh. CPU = process time of build + eigenpairs (meshlap's "
             "timed again where its first call compiled kernels; a summary's CPU ratios leave out the rows "
-            "where the peer failed). CSV: benchmarks/results/"
-            "bench_real.csv. Corpus: benchmarks/corpus.toml.", ""]
+            "where the peer failed). CSV: benchmarks/results/bench_real.csv. Corpus: benchmarks/corpus.toml.",
+            ""]
 
 
 if __name__ == "__main__":

@@ -145,6 +145,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     rows.append(("kind", f"point cloud (k={geo.dim}, --dim)") if cells is None else
                 ("faces", _face_summary(cells, len(V))) if k == 2 else
                 ("cells", f"{len(cells):,} {'tetrahedra' if k == 3 else 'edges'} ({kind})"))
+    if cells is None and "parts" in decision.measured:  # a mesh's come in its diagnosis below
+        rows.append(("parts", f"{decision.measured['parts']:,} (pieces its points' stars join)"))
     rows += [
         (measure, f"{geo.mass.sum():.6g}"),
         ("bounding box", " x ".join(f"{b:.4g}" for b in bbox)),

@@ -62,6 +62,7 @@ The decision, with what it read, is kept on the operator as ``op.decision``.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -69,7 +70,7 @@ import numpy as np
 
 from .corrections.highorder import fewest_points
 from .denoise import noise_extent, surface_noise
-from .errors import MeshError
+from .errors import MeshError, MeshWarning, user_stacklevel
 from .fem import lumped_pencil, part_labels
 from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
@@ -232,6 +233,17 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
     if operator == "fem" and not (has_cells or stars) or operator == "galerkin" and not has_cells:
         raise MeshError(f"operator={operator!r} integrates over cells; this {geo.source} has none "
                         "(use operator='kernel' or 'auto')")
+    if stars and operator == "fem" and geo._cache.get("star_pieces") is not None:
+        measured["parts"] = pieces = geo._cache["star_pieces"][0]
+        if pieces > 1:  # a mesh's parts are in its cells; a cloud's are read from its stars: say so
+            label = geo._cache["star_pieces"][1]
+            sizes = np.sort(np.bincount(label[label >= 0]))[::-1]
+            shown = ", ".join(f"{s:,}" for s in sizes[:6]) + (", ..." if len(sizes) > 6 else "")
+            warnings.warn(f"the point cloud falls into {pieces} pieces that no local Delaunay star joins "
+                          f"({shown} points), so its pencil has {pieces} zero eigenvalues: separate "
+                          "objects, or parts of one whose surface between them has no points (a CAD "
+                          "part's vertices leave its flat faces empty; pass its faces then)",
+                          MeshWarning, stacklevel=user_stacklevel())
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None
     if not pencil_rows and geo.n_points < fewest_points(geo.dim):

@@ -73,6 +73,7 @@ def test_eigs_of_tetrahedra_tetgen_and_meshio(capsys, tets, tmp_path):
 def test_info_build_and_curvature_of_clouds_and_volumes(capsys, cloud, tets, tmp_path):
     code, out, _ = run(capsys, "info", cloud)
     assert code == 0 and "point cloud (k=2" in out and "1,000" in out
+    assert any(line.split()[:2] == ["parts", "1"] for line in out.splitlines())  # its stars join it
     area = float(next(line for line in out.splitlines() if line.startswith("surface area")).split()[-1])
     assert area == pytest.approx(4 * np.pi, rel=0.02)
     code, out, _ = run(capsys, "info", tets)

@@ -405,6 +405,7 @@ def test_cloud_fem_on_local_stars():
         return float(np.max(np.abs(meshlap.spectral.eigs(o, 10)[0][1:] - exact) / exact))
 
     assert err(op) < 0.02 and err(op) < err(meshlap.point_cloud_laplacian(P, operator="kernel"))
-    apart = meshlap.point_cloud_laplacian(np.vstack([P, P + [3.0, 0, 0]]))
+    with pytest.warns(meshlap.MeshWarning, match="2 pieces"):  # the pieces are said
+        apart = meshlap.point_cloud_laplacian(np.vstack([P, P + [3.0, 0, 0]]))
     lam = meshlap.spectral.eigs(apart, 3)[0]
     assert abs(lam[:2]).max() < 1e-8 and abs(lam[2] - 2) < 0.05

@@ -296,7 +296,9 @@ def test_a_curve_clouds_stars_end_at_its_ends_and_keep_its_parts_apart():
     lam = spectral.eigs(op, 6)[0]
     assert np.abs(lam[1:] / (np.pi * np.arange(1, 6) / length) ** 2 - 1).max() < 1e-4
     V, _, _ = samples.circle(2000, d=3, kind="random", seed=2)
-    lam = spectral.eigs(meshlap.point_cloud_laplacian(np.vstack([V, V + [5.0, 0, 0]]), k=1), 6)[0]
+    with pytest.warns(meshlap.MeshWarning, match="2 pieces"):
+        op = meshlap.point_cloud_laplacian(np.vstack([V, V + [5.0, 0, 0]]), k=1)
+    lam = spectral.eigs(op, 6)[0]
     assert np.abs(lam[:2]).max() < 1e-8 and np.abs(lam[2:] - 1).max() < 1e-4
 
 
@@ -552,7 +554,8 @@ def test_two_sheets_across_the_air_stay_apart():
         return np.c_[r * np.cos(t), r * np.sin(t), np.full(1500, z)]
 
     P = np.vstack([disc(0.0), disc(0.3)])
-    op = meshlap.point_cloud_laplacian(P)
+    with pytest.warns(meshlap.MeshWarning, match=r"2 pieces .*\(1,500, 1,500 points\)"):
+        op = meshlap.point_cloud_laplacian(P)
     lam = meshlap.spectral.eigs(op, 4)[0]
     assert op.decision.operator == "fem"
     assert abs(lam[1]) < 1e-8 * lam[2] and 3.2 < lam[2] < 3.6
@@ -586,3 +589,22 @@ def test_a_face_without_points_is_a_hole():
     axial = (np.pi / 2.85) ** 2
     open_tube = np.array([1.0, 1.0, axial, 1 + axial, 1 + axial])  # m² + (πj/ℓ)², radius 1
     assert np.max(np.abs(lam[1:6] / open_tube - 1)) < 0.06  # 4.4% measured
+
+
+def test_pieces_no_star_joins_are_counted_and_named():
+    # two unit spheres 3 apart: two pieces, each its own zero eigenvalue, said at the build; one
+    # sphere: one piece, no warning. A duplicate point joins its point's piece
+    P = meshlap.samples.sphere_points(800)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", meshlap.MeshWarning)
+        one = meshlap.point_cloud_laplacian(P)
+    assert one.decision.measured["parts"] == 1
+    Q = np.vstack([P, P + [3.0, 0.0, 0.0], P[:1]])
+    with pytest.warns(meshlap.MeshWarning, match=r"falls into 2 pieces .*\(801, 800 points\).* 2 zero"):
+        two = meshlap.point_cloud_laplacian(Q)
+    assert two.decision.measured["parts"] == 2
+    lam = meshlap.spectral.eigs(two, 4)[0]
+    assert np.all(np.abs(lam[:2]) < 1e-8) and lam[2] == pytest.approx(2.0, rel=0.02)
+    m, info = pointcloud.point_masses(Q)
+    count, label = info["pieces"]
+    assert count == 2 and label[-1] == label[0] != label[800]

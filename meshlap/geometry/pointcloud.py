@@ -76,6 +76,7 @@ from .stars import (
     _masses3,
     _masses_k,
 )
+from .topology import star_pieces
 
 __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
            "project_to_tangent"]
@@ -157,7 +158,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         point's own star, its centre first: most triangles three times, once from each corner;
         without the triangles that span a hole (:func:`_holes`);
         k = 1: every point's segments to its nearest neighbours on either side along its
-        tangent, most segments twice).
+        tangent, most segments twice), ``pieces`` (k ≤ 2: the number of connected pieces of the
+        stars among the points with mass, each a zero eigenvalue of the FEM pencil, and each
+        point's piece, -1 without mass; else None).
 
     Examples
     --------
@@ -323,6 +326,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])] if k == 2 else \
         np.zeros((0, 3), np.int64)  # each once
     at = np.searchsorted(uniq, rep)
+    pieces = star_pieces(stars, mass[at] > 0, rep) if k <= 2 else None
     full = mass[at] / shared
     boundary = open_cell[at]
     positive = full[full > 0]
@@ -337,6 +341,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "triangles": triangles,
         "stars": stars,
         "boundary_share": (share[at] / shared) if k == 2 else None,
+        "pieces": pieces,
     }
     return full, info
 
@@ -585,6 +590,7 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
                    boundary_share=info["boundary_share"], source="point cloud", notes=notes)
     if k <= 2:  # the FEM pencil's cells and their weight: each simplex is in its k + 1 corners' stars
         geo._cache["fem_cells"] = (info["stars"], 1 / (k + 1))
+        geo._cache["star_pieces"] = info["pieces"]
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there

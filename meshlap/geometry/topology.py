@@ -48,6 +48,7 @@ __all__ = [
     "duplicate_vertices",
     "near_boundary",
     "nonmanifold_edges",
+    "star_pieces",
     "unreferenced_vertices",
     "warn_if_messy",
     "zero_area_faces",
@@ -471,6 +472,26 @@ class MeshReport:
 #: is about 0.08 times this number and the masses' about 0.2 times, so 1e-6 flags meshes
 #: whose operator is no longer good to float32 precision.
 PRECISION_WARN = 1e-6
+
+
+def star_pieces(stars: np.ndarray, massive: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
+    """The connected pieces of the stars' graph among the points with mass (a duplicate in its
+    point's piece): their number and each point's piece (-1: no mass). The FEM pencil on the
+    stars has one zero eigenvalue per piece.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.ones(7, bool), np.r_[0:6, 0])
+    (2, array([0, 0, 0, 1, 1, 1, 0]))
+    """
+    n = len(rep)
+    i, j = np.repeat(stars[:, :1], stars.shape[1] - 1, axis=1).ravel(), stars[:, 1:].ravel()
+    graph = sp.coo_matrix((np.ones(len(i) + n), (np.r_[i, np.arange(n)], np.r_[j, rep])), shape=(n, n))
+    _, label = _cc(graph, directed=False)
+    _, label = np.unique(np.where(massive, label, -1), return_inverse=True)
+    label = label - int(not massive.all())  # -1 for the points without mass
+    return int(label.max()) + 1, label
 
 
 def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
