@@ -343,6 +343,15 @@ def test_outlier_gets_no_mass():
         m, info = pointcloud.point_masses(P)
     assert m[-1] == 0 and info["outliers"] == 1
     assert m[:-1].sum() == pytest.approx(4 * math.pi, rel=0.01)
+    # nor a star: the FEM pencil's spectrum is the cloud's without it (the outlier's own star,
+    # 50 high over a unit square, had given it mass 0.86 and λ1 = 0.002 in place of 10.56)
+    rng = np.random.default_rng(0)
+    Q = np.c_[rng.uniform(size=(500, 2)), np.zeros(500)]
+    with pytest.warns(meshlap.MeshWarning, match="1 outlier"):
+        op = meshlap.point_cloud_laplacian(np.r_[Q, [[0.5, 0.5, 50.0]]])
+    assert not (op.M.diagonal()[-1] > 1e-6 * op.M.diagonal()[:-1].mean())
+    np.testing.assert_allclose(spectral.eigs(op, 4)[0][1:], spectral.eigs(
+        meshlap.point_cloud_laplacian(Q), 4)[0][1:], rtol=1e-6)
 
 
 def test_degenerate_neighbourhoods():

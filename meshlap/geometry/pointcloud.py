@@ -37,8 +37,8 @@ Messy input has defined behaviour, each with a :class:`~meshlap.validation.MeshW
 
 * duplicate and near-coincident points (closer than ``merge_tol`` times the median
   neighbour distance) are merged for the mass estimate and share the merged point's mass;
-* outliers (a nearest neighbour more than ``outlier_ratio`` times farther than is usual
-  around it) get mass 0: they are rows of L but never sources of its sums;
+* outliers (a nearest neighbour ``outlier_ratio`` times farther than usual around it) get mass 0
+  and no star: rows of L, never sources of its sums, outside the FEM pencil's cells;
 * points whose neighbourhood has no k-dimensional extent (collinear neighbours for k = 2)
   take the median mass of their neighbours;
 * fewer than k + 2 distinct points, or d < k, raise :class:`~meshlap.validation.MeshError`.
@@ -303,6 +303,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
+    stars = stars[~outlier[stars].any(axis=1)] if len(stars) else stars
     share = np.zeros(nu)
     if k == 2 and len(stars):
         hole = _holes(stars, Q, reach8, first_open, k)
@@ -316,7 +317,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     stars = uniq[stars]
     if k == 1:  # every point's segments to its neighbours on either side: its 1-D star
         centre, other = np.repeat(np.arange(nu), 2), ends1.ravel()
-        seg = np.column_stack([centre, other])[(other >= 0) & (mass[centre] > 0)]
+        seg = np.column_stack([centre, other])[(other >= 0) & (mass[centre] > 0) & ~outlier[other]]
         hole = _holes(seg, Q, reach8, first_open, k)  # such as an open curve's opening
         gap = np.linalg.norm(Q[seg[:, 0]] - Q[seg[:, 1]], axis=1)
         stars = uniq[seg[~hole]]
@@ -350,8 +351,7 @@ def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Which rows of ``a`` are rows of ``b``."""
     if not len(a) or not len(b):
         return np.zeros(len(a), dtype=bool)
-    _, inv = np.unique(np.vstack([b, a]), axis=0, return_inverse=True)
-    inv = inv.ravel()
+    inv = np.unique(np.vstack([b, a]), axis=0, return_inverse=True)[1].ravel()
     return np.isin(inv[len(b):], inv[:len(b)])
 
 
