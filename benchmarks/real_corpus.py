@@ -82,7 +82,7 @@ def read(path: Path, fmt: str = "") -> tuple[np.ndarray, list[np.ndarray] | np.n
     suffix = path.suffix.lower()
     if suffix in (".obj", ".off"):
         return _read_polygons(path)
-    if suffix in (".vtk", ".ply", ".stl"):  # VTK's readers (STL: coincident points merged)
+    if suffix in (".vtk", ".vtp", ".ply", ".stl"):  # VTK's readers (STL: coincident points merged)
         import pyvista as pv
 
         pd = pv.read(str(path))
