@@ -51,8 +51,7 @@ import meshlap  # noqa: E402
 from meshlap import spectral  # noqa: E402
 
 CSV = Path(__file__).resolve().parent / "results" / "bench_real.csv"
-NOISY = ["spot", "cow", "bunny-igl", "fertility", "homer"]
-NOISE = (0.1, 0.3)  # noise along the normals, in mean edge lengths
+NOISY, NOISE = ["spot", "cow", "bunny-igl", "fertility", "homer"], (0.1, 0.3)  # normal noise, in mean edges
 PEERS = ("COT", "LaPy", "robust")
 HELD_OUT = ("Kind `holdout`: the {} meshes build_corpus.py added on 2026-12-06, after the default and "
             "its constants were settled; measured as they came, no setting chosen with them. One "
@@ -61,11 +60,12 @@ HELD_OUT = ("Kind `holdout`: the {} meshes build_corpus.py added on 2026-12-06, 
             "beetle-igl's clouds had failed here. Kind `holdout2`: the {} added later that day, after "
             "that mechanism and the clouds' boundary, measured once as they came. Kind `holdout3`: the {} "
             "from pyvista's downloadable examples added in stop 66, after the clouds' pieces and outliers, "
-            "chosen by kind, size and parts before any was measured, and measured once.")
+            "chosen by kind, size and parts before any was measured, and measured once; one mechanism came "
+            "after that: the area the denoising step's masses take out is at most what the noise σ̂ reads "
+            "adds, once the held-out sea-vase (denoised) had read 2.5% against 0.81% (3.07×).")
 HOLDOUTS = ("holdout", "holdout2", "holdout3")
-#: bump when the reference's computation changes, so that cached ones are recomputed
-REF_VERSION = 1
-#: a reference whose finer level is within this of the extrapolation is settled: some CAD parts and
+REF_VERSION = 1  # bumped when the reference's computation changes: cached ones are then recomputed
+#: a reference whose finer level is within this of the extrapolation is settled: CAD parts and
 #: multi-part models (surfaces touching at single vertices, slivers) converge slowly under refinement
 SETTLED = 0.01
 
@@ -94,9 +94,9 @@ def decision_text(op: object) -> str:
     d = getattr(op, "decision", None)
     if d is None:
         return ""
+    quadratic = EIGS_OPTIONS.get("elements", getattr(d, "elements", "linear")) == "quadratic"
     return str(getattr(d, "operator", d)) + (" + denoise" if getattr(d, "denoise", False) else "") + \
-        (" (quadratic eigs)" if EIGS_OPTIONS.get("elements", getattr(d, "elements", "linear")) == "quadratic"
-         else "")
+        (" (quadratic eigs)" if quadratic else "")
 
 
 # -- the operators ------------------------------------------------------------------------------
@@ -164,8 +164,7 @@ def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | 
 def warm_up() -> None:
     """Build and solve once on a small sphere, so that no row pays meshlap's first-use compilation."""
     V, F = meshlap.shapes.sphere(500, seed=0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with warnings.catch_warnings(action="ignore"):
         spectral.eigs(meshlap.laplacian(V, F), 10)
         spectral.eigs(meshlap.point_cloud_laplacian(V), 10)
 
@@ -282,7 +281,9 @@ def noisy_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> l
 def finish(row: dict, peer_errs: list[float], cpu_base: float) -> None:
     row["best_peer"] = min(peer_errs)
     row["ratio"] = row["err_default"] / row["best_peer"] if row["best_peer"] > 0 else float("inf")
-    row["cpu_ratio"] = row["cpu_default"] / cpu_base if cpu_base > 0 else float("inf")
+    # the CPU's base: the first peer's, where it did not fail (in no time); a failed best peer: ratio 0
+    ok = cpu_base > 0 and np.isfinite(peer_errs[0])
+    row["cpu_ratio"] = row["cpu_default"] / cpu_base if ok else float("nan")
 
 
 # -- tables -------------------------------------------------------------------------------------
@@ -306,8 +307,7 @@ def summary(rows: list[dict], peer: str) -> str:
     if not rows:
         return "(no rows)"
     r = np.array([x["ratio"] for x in rows])
-    # a peer that failed has no time to compare (its error counts as a loss: ratio 0)
-    c = np.array([x["cpu_ratio"] for x in rows if np.isfinite(x["best_peer"])] or [np.nan])
+    c = np.array([x["cpu_ratio"] for x in rows if np.isfinite(x["cpu_ratio"])] or [np.nan])
     # a tie: a peer's very pencil (robust-laplacian's: intrinsic Delaunay, lumped mass), to rounding
     return (f"within 1.5× of {peer} in **{int((r <= 1.5).sum())} of {len(r)}**, ahead (≤ 1×) in "
             f"{int((r <= 1).sum())}, ahead or tied (≤ 1.001×) in {int((r <= 1.001).sum())}; "
@@ -460,14 +460,12 @@ def meshlap_commit() -> str:
 # -- the run --------------------------------------------------------------------------------------
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--corpus", default=None, help="corpus folder (default: $MESHLAP_CORPUS, "
-                    "benchmarks/corpus)")
+    ap.add_argument("--corpus", default=None, help="corpus (default $MESHLAP_CORPUS, benchmarks/corpus)")
     ap.add_argument("--only", default="", help="comma-separated mesh names")
     ap.add_argument("--max-n", type=int, default=0, help="skip meshes with more vertices")
     ap.add_argument("--no-write", action="store_true", help="print the table; leave RESULTS.md and the CSV")
-    ap.add_argument("--mass", choices=["lumped", "blend"], default="lumped",
-                    help="the surface rows' mass (meshlap.laplacian's mass=); other than the default: "
-                    "a section of its own")
+    ap.add_argument("--mass", choices=["lumped", "blend"], default="lumped", help="the surface rows' mass "
+                    "(meshlap.laplacian's mass=); other than the default: a section of its own")
     ap.add_argument("--elements", choices=["quadratic", "linear"], default=None,
                     help="the surface rows' spectral.eigs(elements=...); other than the default: "
                     "RESULTS.md's section 'bench_real.py --elements ...'")

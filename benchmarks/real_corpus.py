@@ -264,7 +264,11 @@ def p1_fem(V: np.ndarray, C: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
 
 
 def pencil_eigs(K: sp.spmatrix, M: sp.spmatrix, k: int) -> np.ndarray:
-    """The k smallest eigenvalues of K x = λ M x (K semidefinite), by shift-invert below zero."""
+    """The k smallest eigenvalues of K x = λ M x (K semidefinite), by shift-invert below zero; the
+    rows without mass (a vertex in no cell of positive measure: no part of the surface) left out."""
+    keep = np.flatnonzero(M.diagonal() > 0)
+    if len(keep) < M.shape[0]:
+        K, M = sp.csr_matrix(K)[keep][:, keep], sp.csr_matrix(M)[keep][:, keep]
     scale = K.diagonal().sum() / M.diagonal().sum()
     lam = eigsh(sp.csc_matrix(K), k, sp.csc_matrix(M), sigma=-1e-6 * scale, which="LM",
                 return_eigenvectors=False)

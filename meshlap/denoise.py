@@ -353,8 +353,9 @@ class NoiseStep:
     share : float
         :func:`noise_share` of what the step took out.
     area_left : float
-        :func:`area_left`: the share of the area the noise the step left still adds; the
-        denoised pencil's masses are divided by 1 + area_left.
+        :func:`area_left`: the share of the area the noise the step left still adds, at most
+        what all the noise σ̂ reads adds, NOISE_AREA·(σ̂/ē)²; the denoised pencil's masses are
+        divided by 1 + area_left.
     """
 
     points: np.ndarray
@@ -391,7 +392,10 @@ def noise_step(geo: Any) -> NoiseStep:
         removed = np.einsum("ij,ij->i", geo.points - X, geo.normals())
         w, left = white_noise(solve, len(m))
         share = noise_share(removed, w - left, geo.edges())
-        return NoiseStep(X, sigma, share, area_left(removed, w, left, S, m, share))
+        # what the step left of the noise adds no more area than all the noise σ̂ reads adds: where
+        # the removed energy says more, its share of noise was shape that looks like noise
+        whole = NOISE_AREA * (sigma / geo.spacing) ** 2
+        return NoiseStep(X, sigma, share, min(area_left(removed, w, left, S, m, share), whole))
 
     return geo._cached("noise_step", make)
 
