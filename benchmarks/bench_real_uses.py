@@ -43,7 +43,7 @@ def uses(op, V: np.ndarray, faces: bool, parts: int, folder: Path) -> list[tuple
     parts (the WKS asks for 30 eigenpairs beyond their zeros)."""
     f = V[:, 0] ** 2
     t = 1e-3 * float(np.linalg.norm(V.max(0) - V.min(0))) ** 2
-    source = int(np.flatnonzero(np.asarray(op.mass) > 0)[0])
+    source = int(np.flatnonzero(np.asarray(op.geometry.mass) > 0)[0])  # a cloud's outliers have none
     far = int(np.argmax(np.linalg.norm(V - V[source], axis=1)))
     unused = ~np.isin(np.arange(len(V)), op.faces.triangles()) if faces else np.zeros(len(V), bool)
 

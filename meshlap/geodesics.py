@@ -282,7 +282,8 @@ class HeatDistance:
         idx = self._stand_in[idx]
         if np.isin(idx, self._lonely).any():
             raise MeshError(f"source vertex {int(idx[np.isin(idx, self._lonely)][0])} lies in no element "
-                            "of the geometry: heat cannot start there")
+                            "of the geometry (a vertex in no face, or a point cloud's outlier): heat "
+                            "cannot start there")
         if (self.mass[idx] == 0).any():
             raise MeshError(f"source vertex {int(idx[self.mass[idx] == 0][0])} has zero mass (an "
                             "unreferenced vertex or an outlier): heat cannot start there")

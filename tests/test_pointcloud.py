@@ -352,6 +352,8 @@ def test_outlier_gets_no_mass():
     assert not (op.M.diagonal()[-1] > 1e-6 * op.M.diagonal()[:-1].mean())
     np.testing.assert_allclose(spectral.eigs(op, 4)[0][1:], spectral.eigs(
         meshlap.point_cloud_laplacian(Q), 4)[0][1:], rtol=1e-6)
+    with pytest.raises(meshlap.MeshError, match="500 lies in no element .*outlier"):  # heat starts nowhere
+        meshlap.geodesics.geodesic_distance(op, [500])
 
 
 def test_degenerate_neighbourhoods():
