@@ -475,22 +475,26 @@ PRECISION_WARN = 1e-6
 
 
 def star_pieces(stars: np.ndarray, massive: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
-    """The connected pieces of the stars' graph among the points with mass (a duplicate in its
-    point's piece): their number and each point's piece (-1: no mass). The FEM pencil on the
-    stars has one zero eigenvalue per piece.
+    """The connected pieces of the stars' graph among the points with mass in a star (a
+    duplicate in its point's piece): their number and each point's piece (-1: none). The FEM
+    pencil on the stars has one zero eigenvalue per piece; a point in no star has a stiff mode
+    of its own instead (:func:`meshlap.fem.expand_copies`).
 
     Examples
     --------
     >>> import numpy as np
-    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.ones(7, bool), np.r_[0:6, 0])
-    (2, array([0, 0, 0, 1, 1, 1, 0]))
+    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.ones(8, bool), np.r_[0:6, 0, 7])
+    (2, array([ 0,  0,  0,  1,  1,  1,  0, -1]))
     """
     n = len(rep)
     i, j = np.repeat(stars[:, :1], stars.shape[1] - 1, axis=1).ravel(), stars[:, 1:].ravel()
     graph = sp.coo_matrix((np.ones(len(i) + n), (np.r_[i, np.arange(n)], np.r_[j, rep])), shape=(n, n))
     _, label = _cc(graph, directed=False)
-    _, label = np.unique(np.where(massive, label, -1), return_inverse=True)
-    label = label - int(not massive.all())  # -1 for the points without mass
+    in_star = np.zeros(n, dtype=bool)
+    in_star[stars.ravel()] = True
+    counted = massive & in_star[rep]
+    _, label = np.unique(np.where(counted, label, -1), return_inverse=True)
+    label = label.ravel() - int(not counted.all())  # -1 for the points not counted
     return int(label.max()) + 1, label
 
 
