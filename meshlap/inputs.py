@@ -191,7 +191,9 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
     lines), TetGen's .node/.ele, legacy VTK POLYDATA, ASCII or binary (pyvista's ``save``; LaPy's
     tetrahedra: polygons of 4 corners spanning a volume), and with meshio installed every format
     meshio reads; VTK's XML formats (.vtp, ...) with pyvista, scenes (.glb, .gltf, .3mf, .dae) with
-    trimesh.
+    trimesh. A .vtk or .vtu file that meshio cannot read, or whose cells meshlap does not take
+    (hexahedra, wedges, quadratic tetrahedra), is read by pyvista where it is installed, its cells
+    split into tetrahedra by VTK.
 
     Examples
     --------
@@ -231,7 +233,14 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
                             ) from None
     try:
         return _by_meshio(path)
-    except ImportError:
+    except (ImportError, MeshError) as exc:
+        # VTK's own reader takes the files meshio cannot, and VTK splits the cells meshlap does not
+        # take (hexahedra, wedges, quadratic tetrahedra) into tetrahedra, as for a pyvista object
+        if suffix in (".vtk", ".vtu"):
+            with contextlib.suppress(ImportError, MeshError):
+                return _by_pyvista(path)
+        if isinstance(exc, MeshError):
+            raise
         known = ", ".join(MESH_FORMATS + POINT_FORMATS + TETGEN_FORMATS + tuple(_OTHER_READERS))
         what = suffix or "files without a suffix"
         raise MeshError(f"{path.name}: meshlap reads {known} itself; for {what} "

@@ -91,6 +91,22 @@ def test_grids_of_hexahedra_are_split_or_refused_never_read_as_points():
     assert as_geometry_input(Cells())[2] == 3
 
 
+def test_vtk_files_of_hexahedra_are_read_by_pyvista_and_split(tmp_path):
+    """A .vtu or .vtk file of hexahedra, which meshio reads but meshlap does not take, goes to
+    pyvista's reader and VTK splits it into tetrahedra, as a pyvista grid is (it had raised
+    "holds 512 hexahedron cells"): the unit cube's π² three times after one zero."""
+    pv, meshio = pytest.importorskip("pyvista"), pytest.importorskip("meshio")
+    cube = pv.ImageData(dimensions=(9, 9, 9), spacing=(1 / 8,) * 3).cast_to_structured_grid()
+    cube = cube.cast_to_unstructured_grid()
+    for suffix in (".vtu", ".vtk"):
+        path = tmp_path / f"hexes{suffix}"
+        meshio.write(path, meshio.Mesh(np.asarray(cube.points), [("hexahedron", cube.cells_dict[12])]))
+        P_, cells, k = meshlap.inputs.read_input(path)
+        assert k == 3 and cells.shape == (512 * 6, 4) and len(P_) == 729
+        lam = meshlap.spectral.eigs(meshlap.laplacian(P_, cells, k=3), 4)[0]
+        assert abs(lam[0]) < 1e-10 and np.abs(lam[1:4] / np.pi**2 - 1).max() < 0.04
+
+
 def test_meshio_objects(tmp_path):
     meshio = pytest.importorskip("meshio")
     vol = meshio.Mesh(VT, [("triangle", boundary_triangles(T)), ("tetra", T)])
