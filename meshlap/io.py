@@ -317,7 +317,11 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     elif suffix == ".obj":  # the 'v' lines, with or without faces
         text = path.read_text(encoding="utf-8", errors="replace")
         rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
-        P = check_rows(rows, 3, f"{path.name}: vertex") if rows else np.zeros((0, 3))
+        if not rows:  # an MNI surface (its first line "P ...") shares the suffix
+            mni = " (its first line starts with 'P': an MNI surface, another format)" \
+                if text.lstrip().startswith("P ") else ""
+            raise MeshError(f"{path.name}: no 'v' lines, so no points: not a Wavefront OBJ file{mni}")
+        P = check_rows(rows, 3, f"{path.name}: vertex")
     else:
         P = _text_columns(path, columns)
     return check_points(P, name=f"points of {path.name}")
