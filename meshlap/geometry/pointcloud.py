@@ -159,8 +159,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         without the triangles that span a hole (:func:`_holes`);
         k = 1: every point's segments to its nearest neighbours on either side along its
         tangent, most segments twice), ``pieces`` (k ≤ 2: the number of connected pieces of the
-        stars among the points with mass, each a zero eigenvalue of the FEM pencil, and each
-        point's piece, -1 without mass; else None).
+        stars, each a zero eigenvalue of the FEM pencil, and each point's piece, -1 in no star:
+        :func:`~meshlap.geometry.topology.star_pieces`; else None).
 
     Examples
     --------
@@ -303,7 +303,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
-    stars = stars[~outlier[stars].any(axis=1)] if len(stars) else stars
+    stars = stars[~outlier[stars].any(axis=1)]
     share = np.zeros(nu)
     if k == 2 and len(stars):
         hole = _holes(stars, Q, reach8, first_open, k)
@@ -327,7 +327,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     triangles = stars[(stars[:, 0] < stars[:, 1]) & (stars[:, 0] < stars[:, 2])] if k == 2 else \
         np.zeros((0, 3), np.int64)  # each once
     at = np.searchsorted(uniq, rep)
-    pieces = star_pieces(stars, mass[at] > 0, rep) if k <= 2 else None
+    pieces = star_pieces(stars, rep) if k <= 2 else None
     full = mass[at] / shared
     boundary = open_cell[at]
     positive = full[full > 0]

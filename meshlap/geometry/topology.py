@@ -474,28 +474,21 @@ class MeshReport:
 PRECISION_WARN = 1e-6
 
 
-def star_pieces(stars: np.ndarray, massive: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
-    """The connected pieces of the stars' graph among the points with mass in a star (a
-    duplicate in its point's piece): their number and each point's piece (-1: none). The FEM
-    pencil on the stars has one zero eigenvalue per piece; a point in no star has a stiff mode
-    of its own instead (:func:`meshlap.fem.expand_copies`).
+def star_pieces(stars: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
+    """The connected pieces of a point cloud's local Delaunay stars (a duplicate ``rep``-resented
+    by its point, in that point's piece): their number and each point's piece (-1: in no star),
+    as :func:`connected_components` gives a mesh's. The FEM pencil on the stars has one zero
+    eigenvalue per piece; a point in no star (an outlier, a degenerate neighbourhood's) has a
+    stiff mode of its own instead (:func:`meshlap.fem.expand_copies`).
 
     Examples
     --------
     >>> import numpy as np
-    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.ones(8, bool), np.r_[0:6, 0, 7])
+    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.r_[0:6, 0, 7])
     (2, array([ 0,  0,  0,  1,  1,  1,  0, -1]))
     """
-    n = len(rep)
-    i, j = np.repeat(stars[:, :1], stars.shape[1] - 1, axis=1).ravel(), stars[:, 1:].ravel()
-    graph = sp.coo_matrix((np.ones(len(i) + n), (np.r_[i, np.arange(n)], np.r_[j, rep])), shape=(n, n))
-    _, label = _cc(graph, directed=False)
-    in_star = np.zeros(n, dtype=bool)
-    in_star[stars.ravel()] = True
-    counted = massive & in_star[rep]
-    _, label = np.unique(np.where(counted, label, -1), return_inverse=True)
-    label = label.ravel() - int(not counted.all())  # -1 for the points not counted
-    return int(label.max()) + 1, label
+    cells = Polygons(stars.ravel().astype(np.int64), np.arange(0, stars.size + 1, stars.shape[1]))
+    return _components(cells, len(rep), rep)
 
 
 def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
