@@ -55,7 +55,8 @@ def cmd_distance(args: argparse.Namespace, operator_from: Callable[[argparse.Nam
     print(f"median {pct[0]:.6g}, 90% {pct[1]:.6g}, max {pct[2]:.6g} at vertex "
           f"{int(np.flatnonzero(reached)[np.argmax(far[reached])])}")
     if not reached.all():
-        print(f"{int((~reached).sum())} vertices lie on parts without a source: distance inf")
+        print(f"{int((~reached).sum())} vertices lie on parts without a source or off the surface (a "
+              "cloud's outliers): distance inf")
     if args.output:
         save_values(args.output, d.T)  # one column per source
     if args.png:

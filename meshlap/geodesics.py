@@ -56,7 +56,9 @@ Parts. Heat does not cross from one connected part of the pencil to another, and
 Poisson solution has its own constant: φ is matched to the planar distance on each part
 separately (on the source neighbourhood points of the same part), and a part that holds no
 source is at distance ``inf``. Matched once per column, two spheres with a source each were 0.39
-off on both (0.003 and 0.0015 each alone), and a part without a source read 1.5-1.6.
+off on both (0.003 and 0.0015 each alone), and a part without a source read 1.5-1.6. A point
+cloud's outliers (:func:`~meshlap.geometry.point_masses`) are off the surface: ``inf`` too, where
+a fit to their neighbours had given them a value that was no distance.
 
 The time step ``t = c ē²``, ē the geometry's mean spacing (``op.geometry.spacing``), c = 1:
 Crane et al.'s rule, and potpourri3d's, LaPy's and libigl's default. With log u the gradient's
@@ -268,6 +270,8 @@ class HeatDistance:
             sub = first[rep[self._lonely]]
             self._stand_in[self._lonely[sub >= 0]] = sub[sub >= 0]
         self._part = _parts(self._poisson.part_label, self._lonely, self._fill)
+        # a cloud's outliers are off the surface (no value a neighbour's fit gives is a distance)
+        self._off_surface = geo._cache.get("outliers", np.zeros(self.n, dtype=bool))
         self._tree = cKDTree(self._points)
         cells = self.grad.cells  # the elements' centres, and for each vertex the elements at it
         self._centres = self._points if cells is None else self._points[cells].mean(axis=1)
@@ -310,6 +314,7 @@ class HeatDistance:
         phi = self._poisson.solve(-self.grad.divergence(X), compatible=True)  # Σ_j ∇λ_j = 0: sums to 0
         if len(self._lonely):
             phi[self._lonely] = self._fill @ phi
+        phi[self._off_surface] = np.inf
         offsets = self._offsets(phi, groups, src, col, near)
         phi = np.where(np.isfinite(offsets), phi - offsets, np.inf)  # inf: a part without a source
         for j, grp in enumerate(groups):

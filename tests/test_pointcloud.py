@@ -354,6 +354,11 @@ def test_outlier_gets_no_mass():
         meshlap.point_cloud_laplacian(Q), 4)[0][1:], rtol=1e-6)
     with pytest.raises(meshlap.MeshError, match="500 lies in no element .*outlier"):  # heat starts nowhere
         meshlap.geodesics.geodesic_distance(op, [500])
+    # nor reaches it: off the surface, no distance (a neighbours' fit had read 0.27)
+    d = meshlap.geodesics.geodesic_distance(op, [0])
+    assert d[500] == np.inf and np.isfinite(d[:500]).all()
+    planar = np.linalg.norm(Q[:, :2] - Q[0, :2], axis=1)
+    assert np.abs(d[:500] - planar).max() < 0.05
 
 
 def test_degenerate_neighbourhoods():

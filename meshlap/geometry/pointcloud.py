@@ -160,7 +160,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         k = 1: every point's segments to its nearest neighbours on either side along its
         tangent, most segments twice), ``pieces`` (k ≤ 2: the number of connected pieces of the
         stars, each a zero eigenvalue of the FEM pencil, and each point's piece, -1 in no star:
-        :func:`~meshlap.geometry.topology.star_pieces`; else None).
+        :func:`~meshlap.geometry.topology.star_pieces`; else None), ``outlier`` ((n,) bool:
+        the outliers, mass 0 and in no star).
 
     Examples
     --------
@@ -343,6 +344,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "stars": stars,
         "boundary_share": (share[at] / shared) if k == 2 else None,
         "pieces": pieces,
+        "outlier": outlier[at],
     }
     return full, info
 
@@ -591,6 +593,8 @@ def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **k
     if k <= 2:  # the FEM pencil's cells and their weight: each simplex is in its k + 1 corners' stars
         geo._cache["fem_cells"] = (info["stars"], 1 / (k + 1))
         geo._cache["star_pieces"] = info["pieces"]
+    if info["outliers"]:  # not on the surface: no distance reaches them (meshlap.geodesics)
+        geo._cache["outliers"] = info["outlier"]
     if pca is not None:  # the frames of these very points: the operator's stages reuse them
         geo._cache["pca"] = pca
     if raw is not P:  # where the user's f was sampled: the point-wise rows fit it there
