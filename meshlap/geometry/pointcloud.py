@@ -75,6 +75,7 @@ from .stars import (
     _masses2,
     _masses3,
     _masses_k,
+    _soup,
 )
 from .topology import star_pieces
 
@@ -347,43 +348,6 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         "outlier": outlier[at],
     }
     return full, info
-
-
-def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Which rows of ``a`` are rows of ``b``."""
-    if not len(a) or not len(b):
-        return np.zeros(len(a), dtype=bool)
-    inv = np.unique(np.vstack([b, a]), axis=0, return_inverse=True)[1].ravel()
-    return np.isin(inv[len(b):], inv[:len(b)])
-
-
-def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray) -> np.ndarray:
-    """Every point's star, its centre first: the one of search round ``use``.
-
-    A star the wider search secured replaces the first; one that stayed insecure keeps the first,
-    local star (the wider one reaches other sheets: a petal's rim takes triangles across to the
-    next petal). A point on the hull of its first neighbours (``rim``) keeps its first star, and
-    of its wider star only the triangles that a point whose first star closed also holds: across
-    what the sampling leaves empty (a flat figure's notch) only rim points see them, while a
-    lopsided neighbourhood's wider triangles are its neighbours' own.
-    """
-    if not parts:  # k != 2
-        return np.zeros((0, 3), np.int64)
-    stars = np.concatenate([t[use[t[:, 0]] == it] for it, t in parts])
-    widened = rim & (use > 0)
-    if not widened.any():
-        return stars
-    wide = widened[stars[:, 0]]
-    held = stars[~wide]
-    held = np.sort(held[widened[held].any(axis=1)], axis=1)  # only these can hold a rim triangle
-    extra = stars[wide]
-    extra = extra[_rows_in(np.sort(extra, axis=1), held)]
-    first = parts[0][1]
-    rim_stars = np.concatenate([first[widened[first[:, 0]]], extra])
-    # a triangle in both of a rim point's stars, once
-    _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
-                        return_index=True)
-    return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
 
 
 def _open_edges(stars: np.ndarray, Q: np.ndarray, at: np.ndarray) -> np.ndarray:
