@@ -12,7 +12,7 @@ those of the saved one. What is stored:
 * ``S`` itself for operators whose S is not ``M @ L`` to the bit (the cotangent Laplacian);
 * the masses, the kernel parameters (h, tol, radius, correction, the moment factor,
   per-vertex widths) and the geometry (points, faces or cells, boundary, intrinsic
-  dimension), unless ``mesh=False``;
+  dimension, a cloud's outliers), unless ``mesh=False``;
 * the policy's decision (``op.decision``: what was built and why), as JSON;
 * ``meshlap_format``, the layout's version: files of another version are refused with
   :class:`OperatorFormatError`.
@@ -181,6 +181,8 @@ def _geometry_arrays(op: Any) -> dict[str, Any]:
     for key in ("boundary", "cells", "boundary_share"):
         if getattr(geo, key) is not None:
             out[key] = getattr(geo, key)
+    if "outliers" in geo._cache:  # a cloud's points off the surface: no distance reaches them
+        out["outliers"] = geo._cache["outliers"]
     moved = getattr(op, "pencil_points", None)
     if moved is not None and moved is not geo.points:  # denoise=True: gradients and distances read them
         out["pencil_points"] = moved
@@ -310,11 +312,14 @@ def _geometry(data: Any, mass: np.ndarray, name: str) -> Geometry | None:
     if "face_indices" in data:
         faces = check_faces(Polygons(indices=data["face_indices"], offsets=data["face_offsets"]),
                             len(P), name=f"faces in {name}")
-    return Geometry(P, mass, int(data["dim"]), float(data["spacing"]),
-                    boundary=data["boundary"] if "boundary" in data else None, faces=faces,
-                    cells=data["cells"] if "cells" in data else None,
-                    boundary_share=data["boundary_share"] if "boundary_share" in data else None,
-                    source=str(data["source"]))
+    geo = Geometry(P, mass, int(data["dim"]), float(data["spacing"]),
+                   boundary=data["boundary"] if "boundary" in data else None, faces=faces,
+                   cells=data["cells"] if "cells" in data else None,
+                   boundary_share=data["boundary_share"] if "boundary_share" in data else None,
+                   source=str(data["source"]))
+    if "outliers" in data:
+        geo._cache["outliers"] = data["outliers"]
+    return geo
 
 
 def _rebuild_matrix_free(geo: Geometry | None, params: dict[str, Any], name: str) -> MeshLaplacian:

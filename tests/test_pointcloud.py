@@ -337,7 +337,7 @@ def test_duplicates_share_the_mass():
     assert np.isfinite(op.L.data).all()
 
 
-def test_outlier_gets_no_mass():
+def test_outlier_gets_no_mass(tmp_path):
     P = np.vstack([samples.sphere_points(2000, "random", seed=0), [[5.0, 5.0, 5.0]]])
     with pytest.warns(meshlap.MeshWarning, match="1 outlier"):
         m, info = pointcloud.point_masses(P)
@@ -359,6 +359,9 @@ def test_outlier_gets_no_mass():
     assert d[500] == np.inf and np.isfinite(d[:500]).all()
     planar = np.linalg.norm(Q[:, :2] - Q[0, :2], axis=1)
     assert np.abs(d[:500] - planar).max() < 0.05
+    path = tmp_path / "outlier.npz"
+    meshlap.io.save_operator(path, op)
+    np.testing.assert_array_equal(meshlap.geodesics.geodesic_distance(meshlap.io.load_operator(path), [0]), d)
 
 
 def test_degenerate_neighbourhoods():
