@@ -508,6 +508,25 @@ def test_clean_mesh_is_quiet_and_messy_mesh_warns_once(ball):
     assert report.n_components == 1 and "no problems" not in str(report)
 
 
+def test_a_soup_whose_corners_do_not_coincide_is_named(ball):
+    V, F = ball
+    soup = V[F].reshape(-1, 3)
+    G = np.arange(len(soup)).reshape(-1, 3)
+    # each corner copied exactly (an STL file's soup): duplicates, welded, no isolated face
+    report = topology.diagnose(soup, G)
+    assert len(report.isolated) == 0 and report.n_components == 1
+    # the copies 1% of an edge apart: every face a part of its own, and the warning says so
+    edge = np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1).mean()
+    jittered = soup + 0.01 * edge * np.random.default_rng(0).standard_normal(soup.shape)
+    report = topology.diagnose(jittered, G)
+    assert len(report.isolated) == len(F) == report.n_components
+    gap = float(str(report).split("lies ")[1].split(" mean")[0])
+    assert 0.005 < gap < 0.03
+    _, warned = build(jittered, G, h=0.05)
+    assert len(warned) == 1 and f"{len(F):,} isolated faces" in str(warned[0].message)
+    assert len(topology.diagnose(V, F[:1]).isolated) == 0  # a one-face mesh is what it is
+
+
 def test_no_nan_from_any_messy_input(ball):
     V, F = ball
     n = len(V)

@@ -76,8 +76,8 @@ from .stars import (
     _masses3,
     _masses_k,
     _soup,
+    star_pieces,
 )
-from .topology import star_pieces
 
 __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
            "project_to_tangent"]
@@ -161,7 +161,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         k = 1: every point's segments to its nearest neighbours on either side along its
         tangent, most segments twice), ``pieces`` (k ≤ 2: the number of connected pieces of the
         stars, each a zero eigenvalue of the FEM pencil, and each point's piece, -1 in no star:
-        :func:`~meshlap.geometry.topology.star_pieces`; else None), ``outlier`` ((n,) bool:
+        :func:`~meshlap.geometry.stars.star_pieces`; else None), ``outlier`` ((n,) bool:
         the outliers, mass 0 and in no star).
 
     Examples

@@ -4,7 +4,7 @@
 tangent space and asks these kernels for the star of the point: k = 1 half the gaps to the
 neighbours on each side, k = 2 the Voronoi cell by half-plane clipping, k = 3 the Delaunay
 tetrahedra from the Voronoi cell's vertices, k ≥ 4 Qhull; :func:`_soup` gathers the stars of
-all the search rounds into one soup of triangles.
+all the search rounds into one soup of triangles, :func:`star_pieces` its connected pieces.
 """
 
 from __future__ import annotations
@@ -17,8 +17,10 @@ from scipy.spatial import Delaunay, QhullError
 from .._dense import sym_eigh
 from .._jit import jit
 from ..tuned import STAR_SCATTER
+from .polygons import Polygons
+from .topology import _components
 
-__all__ = []
+__all__ = ["star_pieces"]
 
 # A neighbourhood whose k-th principal variance is below this fraction of the first has no
 # k-dimensional extent.
@@ -429,3 +431,20 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
                         return_index=True)
     return np.concatenate([stars[~wide], rim_stars[np.sort(once)]])
+
+
+def star_pieces(stars: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
+    """The connected pieces of a point cloud's local Delaunay stars (a duplicate ``rep``-resented
+    by its point, in that point's piece): their number and each point's piece (-1: in no star),
+    as :func:`~meshlap.geometry.topology.connected_components` gives a mesh's. The FEM pencil on
+    the stars has one zero eigenvalue per piece; a point in no star (an outlier, a degenerate
+    neighbourhood's) has a stiff mode of its own instead (:func:`meshlap.fem.expand_copies`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.r_[0:6, 0, 7])
+    (2, array([ 0,  0,  0,  1,  1,  1,  0, -1]))
+    """
+    cells = Polygons(stars.ravel().astype(np.int64), np.arange(0, stars.size + 1, stars.shape[1]))
+    return _components(cells, len(rep), rep)

@@ -48,7 +48,6 @@ __all__ = [
     "duplicate_vertices",
     "near_boundary",
     "nonmanifold_edges",
-    "star_pieces",
     "unreferenced_vertices",
     "warn_if_messy",
     "zero_area_faces",
@@ -452,6 +451,7 @@ class MeshReport:
     zero_area: np.ndarray  # face indices
     duplicates: np.ndarray  # vertex indices that repeat an earlier vertex's position
     nonmanifold: np.ndarray  # (k, 2) edges
+    isolated: np.ndarray  # face indices: faces that share no corner with another face
     n_components: int
     n_boundary_vertices: int
     n_boundary_loops: int
@@ -472,23 +472,6 @@ class MeshReport:
 #: is about 0.08 times this number and the masses' about 0.2 times, so 1e-6 flags meshes
 #: whose operator is no longer good to float32 precision.
 PRECISION_WARN = 1e-6
-
-
-def star_pieces(stars: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
-    """The connected pieces of a point cloud's local Delaunay stars (a duplicate ``rep``-resented
-    by its point, in that point's piece): their number and each point's piece (-1: in no star),
-    as :func:`connected_components` gives a mesh's. The FEM pencil on the stars has one zero
-    eigenvalue per piece; a point in no star (an outlier, a degenerate neighbourhood's) has a
-    stiff mode of its own instead (:func:`meshlap.fem.expand_copies`).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> star_pieces(np.array([[0, 1, 2], [3, 4, 5]]), np.r_[0:6, 0, 7])
-    (2, array([ 0,  0,  0,  1,  1,  1,  0, -1]))
-    """
-    cells = Polygons(stars.ravel().astype(np.int64), np.arange(0, stars.size + 1, stars.shape[1]))
-    return _components(cells, len(rep), rep)
 
 
 def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
@@ -519,22 +502,53 @@ def _problems(V: np.ndarray, faces: Polygons, area: np.ndarray,
         )
     if len(nonman):
         problems.append(f"{len(nonman):,} non-manifold edges (shared by more than two faces)")
+    isolated = _isolated_faces(faces, rep)
+    if len(isolated):
+        problems.append(
+            f"{len(isolated):,} isolated faces (no corner shared with another face): each is a part of "
+            "its own, with a zero eigenvalue; a triangle soup whose copies of a corner do not coincide "
+            f"(the nearest corner of another face lies {_gap(V, faces, isolated) / mean_edge:.2g} mean "
+            "edges away)?"
+        )
     if loss > PRECISION_WARN:
         problems.append(
             f"coordinates up to {np.abs(V).max():.3g} are large next to the mean edge {mean_edge:.3g}: "
             f"edge vectors keep a relative precision of only {loss:.1e}; translate the mesh near "
             "the origin before converting it to floating point"
         )
-    return dict(unreferenced=unref, zero_area=zero, duplicates=dup, nonmanifold=nonman,
+    return dict(unreferenced=unref, zero_area=zero, duplicates=dup, nonmanifold=nonman, isolated=isolated,
                 precision_loss=loss, problems=problems, rep=rep)
+
+
+def _isolated_faces(faces: Polygons, rep: np.ndarray) -> np.ndarray:
+    """The faces none of whose corners (copies welded) is in another face (none in a one-face mesh)."""
+    if faces.n_faces < 2:
+        return np.zeros(0, dtype=np.int64)
+    corner = rep[faces.indices]
+    uses = np.bincount(corner, minlength=len(rep))[corner]
+    return np.flatnonzero(np.maximum.reduceat(uses, faces.offsets[:-1]) == 1)
+
+
+def _gap(V: np.ndarray, faces: Polygons, isolated: np.ndarray) -> float:
+    """The median distance from a corner of an isolated face to the nearest corner of another face."""
+    owner = np.repeat(np.arange(faces.n_faces), faces.sizes)
+    at = np.full(len(V), -1)
+    at[faces.indices] = owner
+    corners = faces.indices[np.isin(owner, isolated)]
+    size = int(faces.sizes.max())
+    d, i = KDTree(V).query(V[corners], k=min(size + 1, len(V)))
+    d, i = np.atleast_2d(d.T).T, np.atleast_2d(i.T).T
+    other = np.where(at[i] != at[corners][:, None], d, np.inf).min(axis=1)
+    return float(np.median(other))
 
 
 def diagnose(V: Any, F: Any) -> MeshReport:
     """Check a mesh for everything that makes it messy, in one pass.
 
     Reports unreferenced vertices, zero-area faces, duplicate vertices, non-manifold edges,
-    components and boundary loops (after welding duplicates), and whether the coordinates
-    are so large next to the edges that they lost precision. :func:`meshlap.laplacian`
+    isolated faces (a soup whose corners were not merged), components and boundary loops (after
+    welding duplicates), and whether the coordinates are so large next to the edges that they lost
+    precision. :func:`meshlap.laplacian`
     runs the same checks and warns once per build with the counts of the problems found.
 
     Examples
