@@ -168,8 +168,57 @@ def _parse_off(text: str, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]
     if V.shape != (nv, 3) or len(faces) != nf:
         raise MeshError(f"{name}: truncated OFF file: expected {nv} vertices and {nf} faces")
     if short is not None:
-        raise MeshError(f"{name}: face {short} lists fewer corners than its count says")
+        # a face may run over several lines (OFF is a stream of tokens): read the faces so, where
+        # that uses up every token after the vertices (no per-face colours to tell apart)
+        faces = _face_stream([t for ln in body[nv:] for t in ln], nf)
+        if faces is None:
+            raise MeshError(f"{name}: face {short} lists fewer corners than its count says")
     return V, _faces_out(check_faces(faces, nv, name=f"faces of {name}"))
+
+
+def _face_stream(tokens: list[str], nf: int) -> list[list[int]] | None:
+    """``nf`` faces, each its count and corners, read from a stream of tokens; None unless the
+    faces use up exactly all of them."""
+    faces, pos = [], 0
+    try:
+        for _ in range(nf):
+            n = int(tokens[pos])
+            if n < 1 or pos + 1 + n > len(tokens):
+                return None
+            faces.append([int(t) for t in tokens[pos + 1:pos + 1 + n]])
+            pos += 1 + n
+    except (IndexError, ValueError):
+        return None
+    return faces if pos == len(tokens) else None
+
+
+def _parse_off_binary(data: bytes, name: str) -> tuple[np.ndarray, np.ndarray | Polygons]:
+    """A binary OFF file: after the line ``OFF BINARY``, the counts (nv, nf, ne) as int32, nv
+    float32 positions, then each face's count and corners as int32, in Geomview's layout (big
+    endian, a colour count after each face's corners) or pmp-library's (little endian, none):
+    the one whose counts fit the file's size and whose faces end where it does."""
+    start = data.index(b"\n") + 1
+    for order in (">", "<"):
+        counts = np.frombuffer(data, f"{order}i4", 3, start) if len(data) >= start + 12 else None
+        if counts is None or counts[0] < 1 or counts[1] < 1 or start + 12 + 12 * int(counts[0]) > len(data):
+            continue
+        nv, nf = int(counts[0]), int(counts[1])
+        V = np.frombuffer(data, f"{order}f4", 3 * nv, start + 12).reshape(nv, 3).astype(np.float64)
+        ints = np.frombuffer(data[start + 12 + 12 * nv:len(data) - (len(data) - start) % 4], f"{order}i4")
+        for colours in (order == ">", order != ">"):
+            faces, pos = [], 0
+            while len(faces) < nf and pos < len(ints) and 0 < ints[pos] <= len(ints) - pos - 1:
+                n = int(ints[pos])
+                faces.append(ints[pos + 1:pos + 1 + n].astype(np.int64))
+                pos += 1 + n
+                if colours:
+                    if pos >= len(ints) or ints[pos] < 0:
+                        break
+                    pos += 1 + int(ints[pos])
+            if len(faces) == nf and 4 * pos == len(data) - start - 12 - 12 * nv:
+                return check_vertices(V, name=f"vertices of {name}"), _faces_out(
+                    check_faces(faces, nv, name=f"faces of {name}"))
+    raise MeshError(f"{name}: a binary OFF file whose counts and faces do not fit its size (truncated?)")
 
 
 def _suffix(path: Path, formats: Sequence[str], what: str, verb: str = "reads") -> str:
@@ -223,7 +272,9 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     """
     path = existing_file(path, "mesh")
     suffix = _suffix(path, MESH_FORMATS, "mesh")
-    if suffix in (".obj", ".off"):
+    if suffix == ".off" and path.read_bytes()[:64].split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]:
+        V, F = _parse_off_binary(path.read_bytes(), path.name)
+    elif suffix in (".obj", ".off"):
         try:
             text = path.read_text(encoding="utf-8", errors="replace")
         except UnicodeError as exc:  # pragma: no cover - errors="replace" makes this rare

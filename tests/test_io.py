@@ -110,6 +110,27 @@ def test_off_polygons_and_errors(tmp_path):
             io.read_mesh(p)
 
 
+def test_off_faces_over_several_lines_and_binary_off(tmp_path):
+    """libigl's inspired_mesh_quads_Smooth.off writes each face's corners one per line (OFF is a
+    stream of tokens); pmp-library writes binary OFF little endian without colour counts, where
+    Geomview's is big endian with them. All three read as the text file's square."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    p = tmp_path / "q.off"
+    p.write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0\n1\n2\n3 0 2\n3\n")
+    W, F = io.read_mesh(p)
+    assert np.array_equal(W, V) and F.tolist() == [[0, 1, 2], [0, 2, 3]]
+    for order, colours in ((">", True), ("<", False)):
+        faces = [np.r_[3, f, [0] if colours else []] for f in ([0, 1, 2], [0, 2, 3])]
+        body = (np.array([4, 2, 0], f"{order}i4").tobytes() + V.astype(f"{order}f4").tobytes()
+                + np.concatenate(faces).astype(f"{order}i4").tobytes())
+        p.write_bytes(b"OFF BINARY\n" + body)
+        W, F = io.read_mesh(p)
+        assert np.array_equal(W, V) and F.tolist() == [[0, 1, 2], [0, 2, 3]], order
+        p.write_bytes(b"OFF BINARY\n" + body[:-6])
+        with pytest.raises(meshlap.MeshError, match="binary OFF file whose counts and faces do not fit"):
+            io.read_mesh(p)
+
+
 def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
     """libigl reads a PLY mesh's malformed ASCII vertex as zeros without a word (then its faces as
     garbage indices); meshlap reads the vertices itself and names the row. Well-formed PLY meshes,
