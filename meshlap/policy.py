@@ -29,7 +29,7 @@ The policy for ``operator="auto"`` has no tuned threshold:
 - a curve's segments get the "galerkin" pencil: the heat kernel integrated over the segments.
   Its failure on surfaces is a triangle too thin for the kernel's quadrature, and a segment has
   no shape; on the 24 synthetic curves of ``benchmarks/bench_curves.py`` it is 0.02-0.49× linear
-  FEM's error, on the 30 boundary loops of 22 real meshes 0.05-0.84× (median 0.12×;
+  FEM's error, on the 47 boundary loops of 32 real meshes 0.05-0.84× (median 0.09×;
   ``benchmarks/bench_loops.py``);
 - a surface's or a curve's point cloud gets the "fem" pencil on every point's local Delaunay
   star, each triangle weighted by a third (a segment by a half: most come from each of their
