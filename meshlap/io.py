@@ -197,8 +197,8 @@ def _parse_off_binary(data: bytes, name: str) -> tuple[np.ndarray, np.ndarray | 
     float32 positions, then each face's count and corners as int32, in Geomview's layout (big
     endian, a colour count after each face's corners) or pmp-library's (little endian, none):
     the one whose counts fit the file's size and whose faces end where it does."""
-    start = data.index(b"\n") + 1
-    for order in (">", "<"):
+    start = data.find(b"\n") + 1
+    for order in ((">", "<") if start else ()):
         counts = np.frombuffer(data, f"{order}i4", 3, start) if len(data) >= start + 12 else None
         if counts is None or counts[0] < 1 or counts[1] < 1 or start + 12 + 12 * int(counts[0]) > len(data):
             continue
@@ -272,7 +272,9 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     """
     path = existing_file(path, "mesh")
     suffix = _suffix(path, MESH_FORMATS, "mesh")
-    if suffix == ".off" and path.read_bytes()[:64].split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]:
+    with open(path, "rb") as fh:
+        binary = suffix == ".off" and fh.read(64).split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]
+    if binary:
         V, F = _parse_off_binary(path.read_bytes(), path.name)
     elif suffix in (".obj", ".off"):
         try:

@@ -548,8 +548,8 @@ def diagnose(V: Any, F: Any) -> MeshReport:
     Reports unreferenced vertices, zero-area faces, duplicate vertices, non-manifold edges,
     isolated faces (a soup whose corners were not merged), components and boundary loops (after
     welding duplicates), and whether the coordinates are so large next to the edges that they lost
-    precision. :func:`meshlap.laplacian`
-    runs the same checks and warns once per build with the counts of the problems found.
+    precision. :func:`meshlap.laplacian` runs the same checks and warns once per build with the
+    counts of the problems found.
 
     Examples
     --------
