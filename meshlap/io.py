@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _ply
+from . import _pcd, _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -51,7 +51,7 @@ __all__ = [
 MESH_FORMATS = (".obj", ".off", ".ply", ".stl")
 
 #: File suffixes :func:`read_points` understands.
-POINT_FORMATS = (".ply", ".xyz", ".csv", ".txt", ".pts", ".npy", ".obj", ".off")
+POINT_FORMATS = (".ply", ".pcd", ".xyz", ".csv", ".txt", ".pts", ".npy", ".obj", ".off")
 
 PathLike = str | os.PathLike
 
@@ -329,13 +329,15 @@ def _text_columns(path: Path, columns: Any) -> np.ndarray:
 
 
 def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
-    """Read a point cloud: the positions of a PLY, XYZ/CSV/TXT/PTS, NPY, OBJ or OFF file.
+    """Read a point cloud: the positions of a PLY, PCD, XYZ/CSV/TXT/PTS, NPY, OBJ or OFF file.
 
     Parameters
     ----------
     path : str or path-like
         The file; its suffix picks the reader. PLY may be ASCII or binary, with or without
-        faces (only the vertices are read). Text files hold one point per line, separated
+        faces (only the vertices are read). PCD (the Point Cloud Library's) may be ascii, binary
+        or binary_compressed; its points without a return (NaN) are left out. Text files hold one
+        point per line, separated
         by spaces, commas or semicolons; a first line of column names and ``#`` comments
         are skipped. ``.npy`` holds an (n, d) array.
     columns : sequence of int, optional
@@ -360,6 +362,8 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
     suffix = _suffix(path, POINT_FORMATS, "point cloud")
     if suffix == ".ply":
         P = _ply.read(path.read_bytes(), path.name, faces=False)[0]
+    elif suffix == ".pcd":
+        P = _pcd.read(path.read_bytes(), path.name)
     elif suffix == ".npy":
         try:
             P = np.load(path, allow_pickle=False)

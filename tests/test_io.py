@@ -132,6 +132,54 @@ def test_off_faces_over_several_lines_and_binary_off(tmp_path):
                 io.read_mesh(p)
 
 
+def _pcd_header(fields, size, kind, count, n, data, height=1):
+    return (f"# .PCD v0.7\nVERSION 0.7\nFIELDS {' '.join(fields)}\nSIZE {' '.join(map(str, size))}\n"
+            f"TYPE {' '.join(kind)}\nCOUNT {' '.join(map(str, count))}\nWIDTH {n // height}\n"
+            f"HEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\nDATA {data}\n").encode()
+
+
+def test_pcd_point_clouds_ascii_binary_and_compressed(tmp_path):
+    """PCL's PCD: ascii, binary and binary_compressed (LZF, field after field); fields besides
+    x, y, z read past (a 3-count normal, a 16-bit label); NaN rows (an organized cloud's pixels
+    without a return) left out. The compressed file was written by pypcd4 with liblzf's
+    compressor (tests/data/README.md)."""
+    j, i = np.mgrid[0:30, 0:40]
+    x, y = 0.01 * i.ravel(), 0.01 * j.ravel()
+    P = np.column_stack([x, y, 0.5 + 0.25 * x]).astype(np.float32)
+    P[::7] = np.nan
+    want = P[~np.isnan(P).any(axis=1)].astype(np.float64)
+    got = io.read_points(DATA / "grid_compressed.pcd")
+    assert got.shape == (1028, 3) and np.array_equal(got, want)
+    rng = np.random.default_rng(0)
+    n = len(P)
+    normal, label = rng.normal(size=(n, 3)).astype(np.float32), np.arange(n, dtype=np.int16)
+    fields, size, kind, count = ["normal", "x", "y", "z", "label"], [4, 4, 4, 4, 2], "FFFFI", [3, 1, 1, 1, 1]
+    p = tmp_path / "c.pcd"
+    record = np.dtype([("n", "<f4", (3,)), ("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("l", "<i2")])
+    body = np.zeros(n, record)
+    body["n"], body["x"], body["y"], body["z"], body["l"] = normal, P[:, 0], P[:, 1], P[:, 2], label
+    p.write_bytes(_pcd_header(fields, size, kind, count, n, "binary", height=30) + body.tobytes())
+    assert np.array_equal(io.read_points(p), want)
+    rows = "\n".join(" ".join(f"{v:.9g}" for v in (*nn, a, b, c, ll))
+                     for nn, (a, b, c), ll in zip(normal, P, label, strict=True))
+    p.write_bytes(_pcd_header(fields, size, kind, count, n, "ascii") + rows.encode())
+    assert np.allclose(io.read_points(p), want, rtol=1e-7)
+    op = meshlap.point_cloud_laplacian(str(DATA / "grid_compressed.pcd"))  # a path, as the CLI reads it
+    assert op.n_vertices == 1028
+    # what is wrong is said, not crashed on
+    cases = [
+        (_pcd_header(fields, size, kind, count, n, "binary") + body.tobytes()[:-10], "cut short"),
+        (_pcd_header(fields, size, kind, count, n, "binary_lzma") + body.tobytes(), "binary_lzma"),
+        (_pcd_header(["a", "b", "c"], [4] * 3, "FFF", [1] * 3, n, "binary") + body.tobytes(), "x, y and z"),
+        ((DATA / "grid_compressed.pcd").read_bytes()[:-40], "does not decompress"),
+        (b"VERSION 0.7\nFIELDS x y z\n", "no DATA line"),
+    ]
+    for data, message in cases:
+        p.write_bytes(data)
+        with pytest.raises(meshlap.MeshError, match=message):
+            io.read_points(p)
+
+
 def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
     """libigl reads a PLY mesh's malformed ASCII vertex as zeros without a word (then its faces as
     garbage indices); meshlap reads the vertices itself and names the row. Well-formed PLY meshes,
