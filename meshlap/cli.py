@@ -29,8 +29,8 @@ __all__ = ["main"]
 
 PROG = "meshlap"
 #: What info, build, eigs and curvature read (meshio adds its formats: pip install "meshlap[io]").
-INPUTS = ("surfaces (.obj .off .ply .stl .vtk; .vtp with pyvista, .glb with trimesh), point clouds (.ply "
-          "without faces, .xyz .csv .txt .pts .npy), tetrahedra (TetGen .node/.ele; .vtu .msh with meshio)")
+INPUTS = ("surfaces (.obj .off .ply .stl .vtk; .vtp by pyvista, .glb by trimesh), point clouds (.ply without "
+          "faces, .pcd .xyz .csv .txt .pts .npy), tetrahedra (TetGen .node/.ele; .vtu .msh by meshio)")
 
 
 # -- helpers ----------------------------------------------------------------------------

@@ -186,7 +186,7 @@ def as_geometry_input(obj: Any) -> GeometryInput:
 def read_input(path: str | os.PathLike) -> GeometryInput:
     """Read any geometry file the command line takes, as ``(points, cells, k)``.
 
-    Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces,
+    Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces, .pcd,
     .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
     lines), TetGen's .node/.ele, legacy VTK POLYDATA, ASCII or binary (pyvista's ``save``; LaPy's
     tetrahedra: polygons of 4 corners spanning a volume), and with meshio installed every format
