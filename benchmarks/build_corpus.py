@@ -24,7 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import real_corpus as rc  # noqa: E402
 
-from meshlap.io import read_mesh  # noqa: E402
+from meshlap.io import read_mesh, write_mesh  # noqa: E402
 
 REPOS = {
     "mikedh/trimesh": ("a513c0e2cfa6dfbd3121a6dfd8ceb002b9ef55d8",
@@ -200,7 +200,8 @@ def _git_dir(mirrors: Path, repo: str) -> Path:
     return base / ".git" if (base / ".git").is_dir() else base
 
 
-def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> None:
+def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> str:
+    """Write the file as published to ``out``; returns how it was changed ("" where it was not)."""
     if repo == PV:
         shutil.copyfile(PYVISTA / path, out)
     elif repo == SH:
@@ -210,12 +211,9 @@ def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> None:
                                f"{REPOS[repo][0]}:{path}"], check=True, capture_output=True).stdout
         out.write_bytes(blob)
         if blob.split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]:  # binary OFF: as text, by meshlap's reader
-            V, F = read_mesh(out)
-            F = F.tolist() if isinstance(F, np.ndarray) else np.split(F.indices, F.offsets[1:-1])
-            with open(out, "w") as fh:
-                fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
-                fh.writelines(f"{x:.9g} {y:.9g} {z:.9g}\n" for x, y, z in V)
-                fh.writelines(f"{len(f)} {' '.join(str(int(i)) for i in f)}\n" for f in F)
+            write_mesh(out, *read_mesh(out))
+            return "binary OFF written as ASCII OFF by meshlap.io"
+    return ""
 
 
 def _decimate(src: Path, out: Path, target: int) -> None:
@@ -243,7 +241,7 @@ def main() -> None:
     for name, repo, path, kinds, author, target in SOURCES:
         suffix = Path(path).suffix.lower()
         raw = out / f"{name}.published{suffix}" if target else out / f"{name}{suffix}"
-        _fetch(Path(args.mirrors), repo, path, raw)
+        fetched = _fetch(Path(args.mirrors), repo, path, raw)
         fmt = "lapy-tet" if repo == LP else ""
         file = raw
         if target:
@@ -252,7 +250,7 @@ def main() -> None:
             raw.unlink()
         m = rc.load(file, fmt)
         n_cells = len(m.faces)
-        note = f"decimated to {len(m.V)} vertices by VTK quadric decimation (pyvista)" if target else ""
+        note = f"decimated to {len(m.V)} vertices by VTK quadric decimation (pyvista)" if target else fetched
         rows += ["[[mesh]]", f'name = "{name}"', f'file = "{file.name}"', f'format = "{fmt}"',
                  f'source = "{repo}"', f'path = "{path}"', f'commit = "{REPOS[repo][0]}"',
                  f'licence = "{REPOS[repo][1]}"', f'author = "{author}"', f'kind = "{kinds}"',

@@ -116,7 +116,7 @@ def read(data: bytes, name: str) -> np.ndarray:
         # field after field: each a block of n values of its type and count
         offsets = np.cumsum([0] + [n * dt.itemsize * c for dt, c in columns]).tolist()
         P = np.column_stack([
-            np.frombuffer(raw.tobytes(), dtypes[i], n * count[i], offsets[i])[::count[i]].astype(np.float64)
+            np.frombuffer(raw, dtypes[i], n * count[i], offsets[i])[::count[i]].astype(np.float64)
             for i in (fields.index(a) for a in "xyz")])
     else:
         raise MeshError(f"{name}: PCD data {mode!r}; meshlap reads ascii, binary and binary_compressed")
