@@ -145,8 +145,9 @@ class MeshLaplacian(LumpedLaplacian):
         the kernel. "vertex": one point per vertex, the lumped masses. "galerkin": over the
         triangles (segments, tetrahedra) with the hat functions, 3 points per triangle, at
         h = 0.5·ē² unless ``h`` is given (:mod:`meshlap.corrections.galerkin`); ``op.L``
-        keeps the vertex rows. ``op.quadrature`` says which is in effect (the vertex pencil
-        where the Galerkin one's -S is not semidefinite, with a :class:`MeshWarning`).
+        keeps the vertex rows. ``op.quadrature`` says which is in effect ("fem", linear FEM on
+        the same cells, where the Galerkin one's -S is not semidefinite, with a
+        :class:`MeshWarning`).
     feature_width : bool, optional
         With ``quadrature="galerkin"``: its width follows feature size: narrower (to h/2, its
         triangles cut in 4) within 2 kernel widths of a groove (a concave crease) and on parts

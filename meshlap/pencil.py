@@ -97,10 +97,11 @@ def _stencil_rows(geo: Geometry, free: sp.csr_matrix, hv: np.ndarray | None, opt
     return corrections.moment_correction(free, geo.points, geo.dim)
 
 
-def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
+def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil, label: np.ndarray | None,
               report: Callable[[float, str], None] | None) -> None:
     # the symmetric pencil from the kernel integrated over the cells, where asked for
-    # (quadrature="galerkin"); op.L keeps the vertex rows
+    # (quadrature="galerkin"); op.L keeps the vertex rows; label: each point's part, where the
+    # pencil keeps them apart
     gal = corrections.galerkin
     if opts.quadrature != "galerkin":
         return
@@ -131,13 +132,22 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil,
         S, m = fem.expand_copies(sp.csr_matrix(S), m, weld)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
+    if label is not None:  # checked as it is used: a pair between parts can hold the negative rows up
+        L = fem.separate_parts(L, label)
     if dog and opts.check_psd:
         margin, reason = corrections.psd.check(L, m, geo.points, _psd_faces(geo), "Galerkin pencil")
         if reason is not None:
+            # its cells are too coarse for its narrow kernel: linear FEM on the same cells, the
+            # floor a pencil over cells is held to (the vertex pencil reads the same cells worse)
             warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
-                          f"(margin {margin:.3g}); keeping the vertex pencil", MeshWarning,
-                          stacklevel=user_stacklevel())
-            return  # the vertex pencil stays
+                          f"(margin {margin:.3g}: the cells are too coarse for its kernel); linear FEM "
+                          "on them instead", MeshWarning, stacklevel=user_stacklevel())
+            S, m = fem.lumped_pencil(geo)
+            inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
+            out.L_sym, out.quadrature, out.mass = (sp.diags(inv) @ S).tocsr().astype(opts.dtype), "fem", m
+            if not opts.pointwise:
+                out.L = out.L_sym
+            return
         out.psd_margin = margin
     out.L_sym, out.quadrature, out.quadrature_h = L, "galerkin", float(h)
     if weld is not None:  # copies share their representative's mass
@@ -276,7 +286,19 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
              if opts.neumann else free)
         return free, L
 
+    label = part_label(geo, opts)
+
+    def apart(free: sp.csr_matrix, L: sp.csr_matrix) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        # the rows the pencil keeps, before the check: removing a pair between parts moves its
+        # weight onto the diagonal, and a positive pair removed can leave a row's negative
+        # ones uncovered (a curve's T-junction, two segments apart: eigenvalue -0.11)
+        if label is None:
+            return free, L
+        kept = fem.separate_parts(free, label)
+        return kept, kept if L is free else fem.separate_parts(L, label)
+
     free, L = stage(kern, "kernel rows")
+    kept, L = apart(free, L)
     out = Pencil(L, None if opts.pointwise == "fit" else L, opts.correction,
                  boundary_rows=0 if frames is None or not opts.neumann else len(band))
     if dog and opts.check_psd:
@@ -293,12 +315,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
             out.correction = "none"
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
+            kept, L = apart(free, L)
             out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
-    label = part_label(geo, opts)
-    kept = free if label is None else fem.separate_parts(free, label)  # the rows the pencil keeps
-    if label is not None:
-        L = kept if L is free else fem.separate_parts(L, label)
-        out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
     if out.correction != "none":
         if report is not None:
             report(0.8, "moment scale")
@@ -311,11 +329,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
             report(0.9, "point-wise rows")
         out.L, out.pointwise_unchanged = _stencil_rows(geo, free, hv, opts)
     if not opts.plain or opts.quadrature == "galerkin":
-        _galerkin(geo, widths, opts, out, report)
-    if label is not None and out.quadrature == "galerkin":  # its own pencil, over the cells
-        same = out.L is out.L_sym
-        out.L_sym = fem.separate_parts(out.L_sym, label)
-        out.L = out.L_sym if same else out.L
+        _galerkin(geo, widths, opts, out, label, report)
     if report is not None:
         report(1.0, "done")
     return out
@@ -327,7 +341,7 @@ def review(opts: Options, p: Pencil) -> Pencil:
     # the vertex pencil's fallback matters where that pencil is used: as the symmetric pencil
     # or as the stencil of rows on the kernel's own pattern (the fitted rows have their own);
     # the Galerkin pencil checks its own Richardson kernel, whatever the vertex pencil fell back to
-    if p.fallback_reason is not None and (p.quadrature != "galerkin" or opts.pointwise is True):
+    if p.fallback_reason is not None and (p.quadrature == "vertex" or opts.pointwise is True):
         warnings.warn(p.fallback_reason + "; pass a larger h to keep the correction", MeshWarning,
                       stacklevel=user_stacklevel())
     return p

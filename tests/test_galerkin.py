@@ -405,3 +405,26 @@ def test_short_cuts_dropped_in_place_as_in_a_copy():
     assert hit.any() and abs(copied - Lq).max() > 0
     inplace, hit2 = drop_shortcuts(Lq, V, F, X, radius, copy=False)
     assert (hit2 == hit).all() and abs(inplace - copied).max() == 0 and abs(Lq - copied).max() == 0
+
+
+def test_parts_are_apart_before_the_semidefinite_check():
+    # VTK's hello.vtk writes each letter's strokes as separate 2-point segments: the H's bar
+    # ends on its uprights without sharing their vertices, so each stroke is a part. The kernel
+    # pairs between the parts carried the negative weights of a stroke's own pair; once they
+    # were removed (after the check had passed) -S had an eigenvalue of -0.097 on this H (-0.106
+    # and -0.074 on the whole word). Checked as
+    # it is used, the Galerkin pencil fails and linear FEM on the same segments is built: one
+    # zero per part, then FEM's. The kernel builder's own vertex pencil is semidefinite too.
+    P = np.array([[0, 0, 0], [0, 2, 0], [0, 1, 0], [1, 1, 0], [1, 0, 0], [1, 2, 0]], float)
+    E = np.array([[0, 1], [4, 5], [2, 3]])
+    with pytest.warns(meshlap.MeshWarning, match="linear FEM on them instead"):
+        op = meshlap.laplacian(P, E).assemble()
+    assert op.decision.operator == "galerkin" and op.quadrature == "fem"
+    lam = spectral.eigs(op, 5)[0]
+    # three zeros; each stroke of length l is two vertices of mass l/2: λ = 4/l² (2, 1 for l = 2, 4 for l = 1)
+    assert np.abs(lam[:3]).max() < 1e-9 and np.allclose(lam[3:], [1.0, 1.0])
+    for kernel in (meshlap.laplacian(P, E, operator="kernel"), galerkin_laplacian(P, E)):
+        S = kernel.S.toarray()
+        m = kernel.mass
+        low = np.linalg.eigvalsh(-S / np.sqrt(np.outer(m, m)))[0]
+        assert low > -1e-9 * np.abs(S).max()

@@ -147,8 +147,18 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         L = corrections.neumann_images(free, P, frames, mass, hv, dog, attrs.dim) if attrs.neumann else free
         return free, L
 
+    label = attrs.part(table)
+
+    def apart(free: sp.csr_matrix, L: sp.csr_matrix) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        # the rows the pencil keeps, as the single machine's, before the check
+        if label is None:
+            return free, L
+        kept = fem.separate_parts(free, label)
+        return kept, kept if L is free else fem.separate_parts(L, label)
+
     tell(0.0, "kernel rows")
     free, L = stage(attrs.dog)
+    kept, L = apart(free, L)
     if attrs.dog and attrs.check_psd:
         tell(0.5, "semidefinite check")
         block = sp.csr_matrix(L[:n_own, :n_own])
@@ -164,9 +174,7 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
             info["correction"] = "none"
             tell(0.6, "plain kernel rows")
             free, L = stage(False)
-    label = attrs.part(table)
-    kept = free if label is None else fem.separate_parts(free, label)  # as the single machine's
-    L = L if label is None else fem.separate_parts(L, label)
+            kept, L = apart(free, L)
     if info["correction"] != "none":
         tell(0.8, "moment scale")
         Y = kept @ np.column_stack([(P**2).sum(axis=1), P])
