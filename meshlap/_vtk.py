@@ -5,8 +5,10 @@ writes (binary, version 5.1: cells as ``OFFSETS`` and ``CONNECTIVITY`` arrays) a
 ``TriaMesh.write_vtk`` and ``TetMesh.write_vtk`` write (ASCII, triangles or tetrahedra as
 ``POLYGONS`` of 3 or 4 indices, a count before each cell). meshlap reads these itself: a
 ``POLYGONS`` block of 4-index cells whose corners span a volume is read as tetrahedra; one whose
-corners are coplanar (quads of a surface) as polygons; triangle strips as their triangles.
-Attributes (``POINT_DATA``, ``CELL_DATA``, ``FIELD``) are not read.
+corners are coplanar (quads of a surface) as polygons; triangle strips as their triangles; a
+file with ``LINES`` and no faces (well tracks, contours, strokes) as a curve's segments.
+Attributes (``POINT_DATA``, ``CELL_DATA``, ``FIELD``) are not read. Past its first three lines an
+ASCII file is a stream of words, as VTK reads it: a block's values may begin on its key's line.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ class _Cursor:
 
     def __init__(self, data: bytes, binary: bool, name: str) -> None:
         self.data, self.pos, self.binary, self.name = data, 0, binary, name
+        self.held: list[str] = []  # words of a key's line past its own: the block's first values
 
     def line(self) -> bytes | None:
         """The next line (b"" if blank), or None at the end."""
@@ -61,7 +64,7 @@ class _Cursor:
                 raise MeshError(f"{self.name}: the file ends inside its {what} block ({count} values)")
             self.pos += len(raw)
             return np.frombuffer(raw, dtype=dtype)
-        words: list[str] = []
+        words, self.held = self.held, []
         while len(words) < count and (more := self.words()):
             words += more
         if len(words) != count:
@@ -73,7 +76,8 @@ class _Cursor:
 def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | None:
     """``(V, cells, k)`` of a legacy VTK POLYDATA file, or None if ``path`` is not one.
 
-    ``k`` is 3 when the cells are tetrahedra (4 indices each, spanning a volume), else 2.
+    ``k`` is 3 when the cells are tetrahedra (4 indices each, spanning a volume), 1 when the file
+    has lines and no faces (the cells are then segments), else 2.
 
     Examples
     --------
@@ -88,25 +92,29 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | Non
     with open(path, "rb") as f:
         data = f.read()
     cur = _Cursor(data, False, path.name)
-    head = [cur.line() or b"" for _ in range(4)]
+    head = [cur.line() or b"" for _ in range(3)]
     mode = head[2].upper()
     if not head[0].startswith(b"# vtk DataFile") or mode not in (b"ASCII", b"BINARY") \
-            or head[3].split()[:2] != [b"DATASET", b"POLYDATA"]:
+            or [w.upper() for w in cur.words()[:2]] != ["DATASET", "POLYDATA"]:
         return None
     cur.binary = mode == b"BINARY"
     version = head[0].split()[-1].decode("latin-1")
     offsets = not version[:1].isdigit() or int(version.split(".")[0]) >= 5  # 5.x: OFFSETS, CONNECTIVITY
-    V, cells = None, []
+    V, cells, lines = None, [], []
     try:
         while words := cur.words():
             key = words[0].upper()
             if key == "POINTS":
+                cur.held = [] if cur.binary else words[3:]
                 V = cur.array(3 * int(words[1]), words[2], key).astype(np.float64).reshape(-1, 3)
             elif key in _CELL_SECTIONS:
+                cur.held = [] if cur.binary or offsets else words[3:]
                 block = _offset_cells(cur, int(words[1]), key) if offsets else \
                     _cells(cur.array(int(words[2]), "int", key), path.name, key)
-                if key in ("POLYGONS", "TRIANGLE_STRIPS"):  # vertices and lines bound no surface
+                if key in ("POLYGONS", "TRIANGLE_STRIPS"):  # vertices bound nothing, lines no surface
                     cells += block if key == "POLYGONS" else _strip_triangles(block)
+                elif key == "LINES":
+                    lines += [[a, b] for c in block for a, b in zip(c[:-1], c[1:], strict=False)]
             elif key == "METADATA":  # field names and information keys, up to a blank line
                 while cur.line():
                     pass
@@ -116,8 +124,11 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | Non
         raise
     except (ValueError, IndexError) as exc:  # a short or non-numeric section
         raise MeshError(f"{path.name}: malformed VTK POLYDATA file ({exc})") from None
+    if V is not None and not cells and lines:  # a curve: each polyline's consecutive pairs
+        return V, np.array(lines, dtype=np.int64), 1
     if V is None or not cells:
-        raise MeshError(f"{path.name}: a VTK POLYDATA file without {'POINTS' if V is None else 'POLYGONS'}")
+        raise MeshError(f"{path.name}: a VTK POLYDATA file without "
+                        f"{'POINTS' if V is None else 'POLYGONS or LINES'}")
     sizes = {len(c) for c in cells}
     if sizes == {4} and _solid(V, np.array(cells)):
         return V, np.array(cells), 3

@@ -174,7 +174,26 @@ def test_legacy_vtk_quads_stay_a_surface_and_bad_ones_end_in_one_line(capsys, tm
     (tmp_path / "short.vtk").write_text(head + grid + "POLYGONS 2 10\n4 0 1 4 3\n4 1 2\n")
     fails(capsys, "malformed POLYGONS block", "info", tmp_path / "short.vtk")
     (tmp_path / "none.vtk").write_text(head + grid)
-    fails(capsys, "a VTK POLYDATA file without POLYGONS", "info", tmp_path / "none.vtk")
+    fails(capsys, "a VTK POLYDATA file without POLYGONS or LINES", "info", tmp_path / "none.vtk")
+
+
+def test_legacy_vtk_lines_are_a_curve_and_values_may_start_on_the_key_line(capsys, tmp_path):
+    # vtk-data's bore.vtk (a well track) writes "LINES 1 45 44": the first value on the key's
+    # line, which VTK reads as a stream of words; its faults.vtk and hello.vtk hold only lines,
+    # which bound no surface: a curve
+    head = "# vtk DataFile Version 2.0\ntrack\nASCII\nDATASET POLYDATA\n"
+    n = 41
+    s = np.linspace(0.0, 2.0, n)
+    points = " ".join(f"{x:.17g} {0.5 * x:.17g} 0" for x in s)
+    ids = " ".join(map(str, range(n)))
+    (tmp_path / "track.vtk").write_text(head + f"POINTS {n} double {points}\nLINES 1 {n + 1} {n}\n{ids}\n")
+    P, cells, k = read_input(tmp_path / "track.vtk")
+    assert k == 1 and cells.tolist() == [[i, i + 1] for i in range(n - 1)] and np.allclose(P[:, 0], s)
+    lam = meshlap.spectral.eigs(meshlap.laplacian(tmp_path / "track.vtk"), 3)[0]
+    length = 2.0 * np.sqrt(1.25)  # Neumann on a segment: (jπ/ℓ)²
+    assert np.allclose(lam, (np.pi * np.arange(3) / length) ** 2, rtol=1e-3, atol=1e-9)
+    code, out, _ = run(capsys, "info", tmp_path / "track.vtk")
+    assert code == 0 and "40 edges (curve)" in out
 
 
 @pytest.mark.parametrize("version", [51, 42])
