@@ -11,7 +11,7 @@ from setuptools.build_meta import *  # noqa: F403 - the backend's other hooks, u
 
 #: [project] dependencies in pyproject.toml
 DEPENDENCIES = ["numpy>=1.24", "scipy>=1.10", "libigl>=2.6", "pykdtree>=1.3", "numba>=0.59",
-                "threadpoolctl>=3", "qdldl>=0.1.9"]
+                "threadpoolctl>=3", "qdldl>=0.1.9", "pyamg>=5"]
 
 
 def get_requires_for_build_wheel(config_settings=None):

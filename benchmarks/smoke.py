@@ -65,6 +65,7 @@ RUNS: dict[str, list[str]] = {
     "bench_spectra.py": ["--quick"],
     "bench_tol.py": ["--quick"],
     "bench_uses.py": ["--sizes", "2000", "--no-write"],
+    "bench_volume_eigs.py": ["--quick", "--no-write", "--limit", "120"],
     "cloud_neighbors.py": ["--only", "cow", "--counts", "16"],
     "profile_check.py": ["--n", "5000"],
     "reproduce_tables.py": ["--quick", "--out", "{out}"],

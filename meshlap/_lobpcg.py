@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -276,13 +276,14 @@ class BlockFactor:
 
 class CotPreconditioner:
     """T R = (K + σM)⁻¹ R + ½ D⁻¹ R (see :mod:`meshlap.spectral`); K a sparse stiffness
-    (the cotangent Laplacian's) or None for the diagonal term alone."""
+    (the cotangent Laplacian's) or None for the diagonal term alone; ``factor`` what inverts it."""
 
-    def __init__(self, K: sp.spmatrix | None, m: np.ndarray, diag: np.ndarray, sigma: float) -> None:
+    def __init__(self, K: sp.spmatrix | None, m: np.ndarray, diag: np.ndarray, sigma: float,
+                 factor: Any = None) -> None:
         self.K = K
         self.m = m
         self.sigma = sigma
-        self.lu = None if K is None else BlockFactor(K + sp.diags(sigma * m))
+        self.lu = None if K is None else (factor or BlockFactor)(K + sp.diags(sigma * m))
         typical = float(np.median(diag / m)) if len(m) else 1.0  # no rows: an MPI rank without any
         d = np.where(diag > 0, diag, m * max(typical, 1e-300))
         self.half_inv_diag = 0.5 / d

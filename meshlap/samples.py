@@ -20,6 +20,8 @@ import itertools
 import math
 
 import numpy as np
+from scipy.integrate import quad
+from scipy.special import eval_legendre
 
 from .errors import MeshError
 from .shapes import _check_count, fibonacci_sphere, torus, torus_angles
@@ -30,6 +32,7 @@ __all__ = [
     "cube_eigenvalues",
     "cube_tetrahedra",
     "flat_torus_points",
+    "sphere_eigenvalue",
     "sphere_eigenvalues",
     "sphere_points",
     "three_sphere_points",
@@ -268,3 +271,43 @@ def cube_tetrahedra(n: int) -> tuple[np.ndarray, np.ndarray]:
             path.append(corner(*step))
         tets.append(np.column_stack(path))
     return V, np.vstack(tets).astype(np.int64)
+
+
+def sphere_eigenvalue(l: int, h: float) -> float:  # noqa: E741 - l is the harmonic degree
+    r"""Eigenvalue of the continuous heat-kernel operator on the unit sphere, degree l.
+
+    The continuous Belkin–Sun–Wang operator (integral over the surface, no mesh) maps a
+    spherical harmonic of degree l to ``c_l(h)`` times itself, with (Funk–Hecke, |p-w|² = 2u)
+
+        c_l(h) = 1/(2h²) ∫₀² exp(-u/(2h)) (P_l(1-u) - 1) du  ≤ 0.
+
+    This returns ``λ_l(h) = -c_l(h)``, the eigenvalue of ``-S φ = λ M φ`` that :func:`meshlap.spectral.eigs`
+    approaches as the mesh is refined at fixed h; λ_l(h) → l(l+1) as h → 0, with
+    λ_1(h) = 2(1 - e^{-1/h}(1 + 1/h)) in closed form.
+
+    Examples
+    --------
+    >>> round(sphere_eigenvalue(1, 0.01), 12)
+    2.0
+    >>> round(sphere_eigenvalue(3, 0.01), 3)     # below l(l+1) = 12: the O(h) bias
+    11.412
+    """
+    if isinstance(l, (bool, np.bool_)) or not isinstance(l, (int, np.integer)) or l < 0:
+        raise MeshError(f"l must be a non-negative integer; got {l!r}")
+    from .geometry.validation import check_h
+
+    h = check_h(h)
+    if l == 0:
+        return 0.0
+    a = 2.0 * h
+
+    def integrand(u: float) -> float:
+        return math.exp(-u / a) * (eval_legendre(l, 1.0 - u) - 1.0)
+
+    # the weight lives on [0, ~40a]; split there so quad sees its scale
+    cut = min(2.0, 40.0 * a)
+    val, _ = quad(integrand, 0.0, cut, epsabs=0.0, epsrel=1e-13, limit=400)
+    if cut < 2.0:
+        tail, _ = quad(integrand, cut, 2.0, epsabs=0.0, epsrel=1e-10, limit=400)
+        val += tail
+    return -val / (2.0 * h * h)

@@ -5,13 +5,14 @@ and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 200
 :class:`~meshlap.baselines.SparseLaplacian` such as the cotangent scheme. The problem is
 ``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite: λ ≥ 0, φ M-orthonormal.
 
-On a sparse pencil :func:`eigs` factors it (shift-invert). The heat-kernel operator keeps
-hundreds to thousands of entries per row, whose LU fills in badly (94 s for 36 pairs of a
-16,000-vertex sphere at h = 0.0025); there it runs LOBPCG (Knyazev 2001), preconditioned by the
-same mesh's cotangent Laplacian, cheap to factor and equal to the kernel at low frequencies. At
-high frequencies the kernel's symbol saturates, (1 - exp(-hω²))/h ≤ 1/h, while the cotangent
-one grows like ω²; the first two terms of 1/g(x) = 1/x + h/2 + O(h²x), g the symbol as a
-function of the cotangent eigenvalue x, give the preconditioner
+On a sparse pencil :func:`eigs` factors it (shift-invert); on a volume of more than
+``_MULTIGRID_MIN`` vertices, whose factor fills as n^(4/3), it runs LOBPCG (Knyazev 2001)
+preconditioned by multigrid (:mod:`meshlap._multigrid`). The heat-kernel operator keeps hundreds
+to thousands of entries per row, whose LU fills in badly (94 s for 36 pairs of a 16,000-vertex
+sphere at h = 0.0025); there LOBPCG is preconditioned by the same mesh's cotangent Laplacian,
+equal to the kernel at low frequencies. At high frequencies the kernel's symbol saturates,
+(1 - exp(-hω²))/h ≤ 1/h, while the cotangent one grows like ω²; 1/g(x) = 1/x + h/2 + O(h²x), g
+the symbol as a function of the cotangent eigenvalue x, gives the preconditioner
 
     T = (K + σM)⁻¹ + ½ D⁻¹,    K = -C (cotangent stiffness),  D = diag(-S) ≈ M/h,
 
@@ -28,10 +29,8 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.integrate import quad
-from scipy.special import eval_legendre
 
-from . import _eigcheck, _ldl, _lobpcg, _parts, _shiftinvert, quadratic
+from . import _eigcheck, _ldl, _lobpcg, _multigrid, _parts, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
 from .errors import EigenError, MeshError
 from .fem import expand_copies
@@ -39,6 +38,7 @@ from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
 from .geometry.validation import check_faces, check_k, check_vertices
 from .progress import ProgressLike, make_progress, onward
+from .samples import sphere_eigenvalue
 
 __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 
@@ -50,6 +50,9 @@ _SPARSE_ROW_MAX = 40
 # for a dense-row operator up to this many entries (5.1 M: 65 s on 2 cores, LOBPCG 18 s)
 _DENSE_FALLBACK = 4000
 _FALLBACK_NNZ = 8_000_000
+# a volume's vertices above which LOBPCG with multigrid replaces shift-invert: tetrahedral cubes,
+# 4,913 vertices 0.47 s against 0.14 s, 9,261 0.78 s against 1.49 s (bench_volume_eigs.py)
+_MULTIGRID_MIN = 8000
 # the cotangent start's residual, relative: the operator's own iterations do not depend on it
 # below ~0.3, as the start's error is then the two operators' difference (36 eigenpairs of a
 # 16k sphere: 7 iterations from a start to 0.3, 0.1, 0.03, 0.01 or 0.001, which took 5-8)
@@ -257,8 +260,9 @@ def eigs(
         the same mesh plus a diagonal term (module notes), used when the operator carries its
         mesh (``op.V``, ``op.faces``) or ``mesh`` is given, otherwise the diagonal alone.
         ``"shift-invert"``: :func:`scipy.sparse.linalg.eigsh` with a sparse LU of ``-S + σM``
-        (slow where it fills in: the heat kernel). ``"dense"``: :func:`scipy.linalg.eigh`.
-        ``"auto"``: dense up to 1,200 vertices, shift-invert up to 40 entries per row, else LOBPCG.
+        (slow where it fills in: the heat kernel, a volume). ``"dense"``: :func:`scipy.linalg.eigh`.
+        ``"auto"``: dense up to 1,200 vertices, shift-invert up to 40 entries per row, else LOBPCG;
+        LOBPCG with multigrid on a volume of more than 8,000 vertices (module notes).
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
         ``√tol``. Passed to eigsh for shift-invert.
@@ -354,8 +358,10 @@ def eigs(
     matrix_free = getattr(op, "matrix_free", False)
     nnz = 0 if matrix_free else symmetric_L(op).nnz
     sparse = not matrix_free and nnz <= _SPARSE_ROW_MAX * op.n_vertices
+    volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
+    multigrid = volume and sparse and n_p > _MULTIGRID_MIN and method in ("auto", "lobpcg")
     if method == "auto":
-        method = "dense" if n_p <= _DENSE_MAX else "shift-invert" if sparse else "lobpcg"
+        method = "dense" if n_p <= _DENSE_MAX else "shift-invert" if sparse and not multigrid else "lobpcg"
     adapt = extra is None
     extra = max(4, k // 10) if extra is None else int(extra)
     if method == "lobpcg" and 3 * (k + extra) >= n_p:
@@ -381,10 +387,11 @@ def eigs(
             more = max(extra, k // 2) if wide else extra
             ceiling = (lambda lam: _eigcheck.count_ceiling(lam, k, tol, floor)) if counted else None
             return _eigs_lobpcg(op, P, m, goal, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
-                                adapt and not wide, spatial(), report, S_P if sparse else None, ceiling)
+                                adapt and not wide, spatial(), report, S_P if sparse else None, ceiling,
+                                multigrid)
         return run
 
-    exact, volume = _eigcheck.Attempt("dense", dense, exact=True), _ldl.supernodal(op)
+    exact = _eigcheck.Attempt("dense", dense, exact=True)
     # one factorization for every run: a retry asked for more pairs reuses it (3-D: most of the time)
     inverse = functools.cache(lambda: _shiftinvert.shift_operator(S_P(), m, 1e-3 * _scale_shift(m), volume,
                                                                   report))
@@ -401,17 +408,18 @@ def eigs(
     shift = _eigcheck.Attempt("shift-invert", shift_invert)
     wider = _eigcheck.Attempt("lobpcg (wider)", lobpcg(True))
     ladder = {"dense": [exact], "shift-invert": [shift],
-              "lobpcg": [_eigcheck.Attempt("lobpcg", lobpcg(False)), wider]}[method]
+              "lobpcg": [_eigcheck.Attempt("lobpcg (multigrid)" if multigrid else "lobpcg", lobpcg(False)),
+                         wider]}[method]
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
         # where a factorization fits, it comes before twice the iterations that did not converge
-        ladder.insert(1 if method == "lobpcg" else len(ladder), shift)
+        ladder.insert(1 if method == "lobpcg" and not multigrid else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK:  # matrix-free: n columns cost less than LOBPCG wider
         ladder.insert(1 if matrix_free else len(ladder), exact)
     # the pencil's connected parts, found where asked: with several, each at its own scale comes next
     parts = functools.cache(lambda: _parts.part_labels(S_P()) if sparse else (1, None))
     if method == "shift-invert" and n_p > _DENSE_FALLBACK and parts()[0] == 1:
         ladder.append(wider)
-    counted = (sparse if count is None else count) and not matrix_free
+    counted = (sparse and not multigrid if count is None else count) and not matrix_free  # a count factors
     counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume, report)) if counted else None
 
     def apply_A(X: np.ndarray) -> np.ndarray:
@@ -455,7 +463,7 @@ def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ�
 
 
 def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None, own=None,
-                 ceiling=None):
+                 ceiling=None, multigrid=False):
     n, n_p = op.n_vertices, len(P)
     nb, full = k + extra, n_p == n
     if report is not None:
@@ -487,13 +495,13 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
         K = sp.csc_matrix(-own())     # its own stiffness, the exact preconditioner
     if K is not None and ordered is not None:
         K = sp.csc_matrix(K[order][:, order])
-    T = _lobpcg.CotPreconditioner(K, m, diag, sigma)
+    T = _lobpcg.CotPreconditioner(K, m, diag, sigma, _multigrid.Multigrid if multigrid else None)
     rng = np.random.default_rng(seed)
 
     def random(c: int) -> np.ndarray:
         return rng.standard_normal((n_p, c))[order]
     with one_blas_thread():
-        if K is None:
+        if K is None or multigrid:  # the start's inverse iteration wants exact solves
             X0 = random(nb)
         else:
             # start from the cotangent eigenvectors, found cheaply with the exact preconditioner
@@ -511,47 +519,6 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
     if ordered is not None:
         X = X[np.argsort(order)]  # back to the order of P
     return out.lam, X, out.iterations
-
-
-# -- the sphere's spectrum --------------------------------------------------------------------------
-def sphere_eigenvalue(l: int, h: float) -> float:  # noqa: E741 - l is the harmonic degree
-    r"""Eigenvalue of the continuous heat-kernel operator on the unit sphere, degree l.
-
-    The continuous Belkin–Sun–Wang operator (integral over the surface, no mesh) maps a
-    spherical harmonic of degree l to ``c_l(h)`` times itself, with (Funk–Hecke, |p-w|² = 2u)
-
-        c_l(h) = 1/(2h²) ∫₀² exp(-u/(2h)) (P_l(1-u) - 1) du  ≤ 0.
-
-    This returns ``λ_l(h) = -c_l(h)``, the eigenvalue of ``-S φ = λ M φ`` that :func:`eigs`
-    approaches as the mesh is refined at fixed h; λ_l(h) → l(l+1) as h → 0, with
-    λ_1(h) = 2(1 - e^{-1/h}(1 + 1/h)) in closed form.
-
-    Examples
-    --------
-    >>> round(sphere_eigenvalue(1, 0.01), 12)
-    2.0
-    >>> round(sphere_eigenvalue(3, 0.01), 3)     # below l(l+1) = 12: the O(h) bias
-    11.412
-    """
-    if isinstance(l, (bool, np.bool_)) or not isinstance(l, (int, np.integer)) or l < 0:
-        raise MeshError(f"l must be a non-negative integer; got {l!r}")
-    from .geometry.validation import check_h
-
-    h = check_h(h)
-    if l == 0:
-        return 0.0
-    a = 2.0 * h
-
-    def integrand(u: float) -> float:
-        return math.exp(-u / a) * (eval_legendre(l, 1.0 - u) - 1.0)
-
-    # the weight lives on [0, ~40a]; split there so quad sees its scale
-    cut = min(2.0, 40.0 * a)
-    val, _ = quad(integrand, 0.0, cut, epsabs=0.0, epsrel=1e-13, limit=400)
-    if cut < 2.0:
-        tail, _ = quad(integrand, cut, 2.0, epsabs=0.0, epsrel=1e-10, limit=400)
-        val += tail
-    return -val / (2.0 * h * h)
 
 
 # -- heat kernel signature ----------------------------------------------------------------------
