@@ -56,7 +56,8 @@ def laplacian(
     V : (n, d) array_like, Geometry, or a mesh object
         Vertex positions (or a :class:`~meshlap.geometry.Geometry`, with ``F`` None), or,
         with ``F`` None, a ``trimesh.Trimesh``, ``pyvista.PolyData`` / ``UnstructuredGrid``,
-        ``open3d`` mesh, ``meshio.Mesh`` or a file path (:func:`meshlap.inputs.as_geometry_input`).
+        ``open3d`` mesh, ``meshio.Mesh`` or a file path (:func:`meshlap.inputs.as_geometry_input`);
+        one that holds points alone is a point cloud, as :func:`point_cloud_laplacian` reads it.
     F : (m, c) array_like or list of sequences
         Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
     h : float or (n,) array_like, optional
@@ -120,6 +121,8 @@ def laplacian(
     """
     if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
         V, F, k = _held_input(V, k)
+        if F is None:  # a file or object of points alone: a cloud, as the command line reads it
+            V = point_cloud_geometry(V, 2 if k is None else k)
     geo = as_geometry(V, F, k)
     chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None,
                                        "denoise": denoise, "mass": None if mass == "lumped" else mass})

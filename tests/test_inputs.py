@@ -147,5 +147,15 @@ def test_open3d_like_objects():
 def test_unknown_objects_are_refused():
     with pytest.raises(meshlap.MeshError, match="cannot read a mesh or point cloud from a dict"):
         meshlap.laplacian({"V": V})
-    with pytest.raises(meshlap.MeshError, match="for points alone use meshlap.point_cloud_laplacian"):
-        meshlap.laplacian(type("Cloud", (), {"points": P})())
+
+
+def test_points_alone_in_an_object_or_a_file_are_a_cloud(tmp_path):
+    # laplacian(x) of an object or file holding points alone is point_cloud_laplacian(x), as the
+    # command line reads such a file (it had raised "F must be ... got None")
+    cloud = type("Cloud", (), {"points": P})()
+    assert same_operator(meshlap.laplacian(cloud, h=0.03), meshlap.point_cloud_laplacian(P, h=0.03), P)
+    np.savetxt(tmp_path / "cloud.xyz", P)
+    assert same_operator(meshlap.laplacian(tmp_path / "cloud.xyz", h=0.03),
+                         meshlap.point_cloud_laplacian(P, h=0.03), P)
+    reason = meshlap.laplacian(tmp_path / "cloud.xyz").decision.reason
+    assert reason.startswith("a surface's or a curve's point cloud")
