@@ -295,6 +295,9 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
             if len(F):
                 V, _, _, F = igl.remove_duplicate_vertices(V, F, 0.0)
         except RuntimeError as exc:
+            data = path.read_bytes()
+            if data.lstrip().startswith(b"solid") and b"facet" not in data:  # libigl says "Failed to open"
+                raise MeshError(f"{path.name}: an ASCII STL file without facets") from None
             raise MeshError(f"{path.name}: libigl could not read it ({exc})") from exc
         if V.size == 0 or F.size == 0:
             raise MeshError(f"{path.name}: no vertices or no faces could be read")

@@ -246,6 +246,10 @@ def test_missing_file_and_unknown_format(tmp_path):
     (tmp_path / "m.ply").write_text("not a ply\n")
     with pytest.raises(meshlap.MeshError, match="m.ply"):
         io.read_mesh(tmp_path / "m.ply")
+    # trimesh's empty.stl: libigl reports "Failed to open file" for a file it opened
+    (tmp_path / "empty.stl").write_text("solid Empty\nendsolid Empty")
+    with pytest.raises(meshlap.MeshError, match="empty.stl: an ASCII STL file without facets"):
+        io.read_mesh(tmp_path / "empty.stl")
 
 
 @pytest.mark.parametrize(("suffix", "atol"), [(".obj", 0), (".off", 0), (".ply", 1e-6), (".stl", 1e-6)])
