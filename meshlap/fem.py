@@ -53,8 +53,8 @@ from .tuned import FEM_TIE as TIE
 _FLAT = 8.0 * float(np.finfo(np.float64).eps)
 
 __all__ = ["FEM_MASSES", "cell_matrices", "expand_copies", "fem_pencil", "intrinsic_delaunay",
-           "lumped_pencil", "part_labels", "separate_parts", "simplicial_cells", "triangle_areas",
-           "voronoi_areas", "welded_cells"]
+           "lumped_pencil", "part_labels", "separate_parts", "separate_rows", "simplicial_cells",
+           "triangle_areas", "voronoi_areas", "welded_cells"]
 
 #: ``mass`` values of :func:`fem_pencil`: the lumped diagonal (the default: the cotangent
 #: Laplacian's pencil), ½(consistent + lumped) moved onto it, or the consistent mass moved onto
@@ -398,6 +398,27 @@ def part_labels(geo: Any) -> tuple[int, np.ndarray] | None:
         return int(len(np.unique(label[used]))), label
 
     return geo._cached("parts", make)
+
+
+def separate_rows(free: sp.csr_matrix, L: sp.csr_matrix, label: np.ndarray | None
+                  ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """A kernel pencil's rows without their pairs between parts (:func:`separate_parts`):
+    ``free`` (the plain rows) and ``L`` (with mirror images, or ``free`` itself), unchanged where
+    ``label`` is None. The pencil's semidefinite check must see these, as they are used: a positive
+    pair removed moves onto the diagonal and can leave a row's negative ones uncovered.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> L = sp.csr_matrix(np.array([[-2.0, 1, 1], [1, -2, 1], [1, 1, -2]]))
+    >>> kept, same = separate_rows(L, L, np.array([0, 0, 1]))
+    >>> same is kept, kept.diagonal().tolist()
+    (True, [-1.0, -1.0, 0.0])
+    """
+    if label is None:
+        return free, L
+    kept = separate_parts(free, label)
+    return kept, kept if L is free else separate_parts(L, label)
 
 
 def separate_parts(L: sp.csr_matrix, label: np.ndarray) -> sp.csr_matrix:

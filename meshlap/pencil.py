@@ -132,8 +132,7 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil, label: 
         S, m = fem.expand_copies(sp.csr_matrix(S), m, weld)
     inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
     L = (sp.diags(inv) @ S).tocsr().astype(opts.dtype)
-    if label is not None:  # checked as it is used: a pair between parts can hold the negative rows up
-        L = fem.separate_parts(L, label)
+    L = fem.separate_rows(L, L, label)[1]  # checked as it is used
     if dog and opts.check_psd:
         margin, reason = corrections.psd.check(L, m, geo.points, _psd_faces(geo), "Galerkin pencil")
         if reason is not None:
@@ -142,9 +141,8 @@ def _galerkin(geo: Geometry, widths: Widths, opts: Options, out: Pencil, label: 
             warnings.warn(f"quadrature='galerkin': -S of the Galerkin pencil is not semidefinite "
                           f"(margin {margin:.3g}: the cells are too coarse for its kernel); linear FEM "
                           "on them instead", MeshWarning, stacklevel=user_stacklevel())
-            S, m = fem.lumped_pencil(geo)
-            inv = np.divide(1.0, m, out=np.zeros_like(m), where=m > 0)
-            out.L_sym, out.quadrature, out.mass = (sp.diags(inv) @ S).tocsr().astype(opts.dtype), "fem", m
+            floor = _fem(geo, opts, None)
+            out.L_sym, out.quadrature, out.mass = floor.L_sym, "fem", floor.mass
             if not opts.pointwise:
                 out.L = out.L_sym
             return
@@ -287,18 +285,8 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
         return free, L
 
     label = part_label(geo, opts)
-
-    def apart(free: sp.csr_matrix, L: sp.csr_matrix) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        # the rows the pencil keeps, before the check: removing a pair between parts moves its
-        # weight onto the diagonal, and a positive pair removed can leave a row's negative
-        # ones uncovered (a curve's T-junction, two segments apart: eigenvalue -0.11)
-        if label is None:
-            return free, L
-        kept = fem.separate_parts(free, label)
-        return kept, kept if L is free else fem.separate_parts(L, label)
-
     free, L = stage(kern, "kernel rows")
-    kept, L = apart(free, L)
+    kept, L = fem.separate_rows(free, L, label)  # checked as it is used
     out = Pencil(L, None if opts.pointwise == "fit" else L, opts.correction,
                  boundary_rows=0 if frames is None or not opts.neumann else len(band))
     if dog and opts.check_psd:
@@ -315,7 +303,7 @@ def assemble(geo: Geometry, widths: Widths, opts: Options,
             out.correction = "none"
             held, out.L_sym, out.L, L, free = [free], None, None, None, None
             free, L = stage(replace(kern, dog=False), "plain kernel rows", held)
-            kept, L = apart(free, L)
+            kept, L = fem.separate_rows(free, L, label)
             out.L_sym, out.L = L, None if opts.pointwise == "fit" else L
     if out.correction != "none":
         if report is not None:

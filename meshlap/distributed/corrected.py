@@ -148,17 +148,9 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
         return free, L
 
     label = attrs.part(table)
-
-    def apart(free: sp.csr_matrix, L: sp.csr_matrix) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-        # the rows the pencil keeps, as the single machine's, before the check
-        if label is None:
-            return free, L
-        kept = fem.separate_parts(free, label)
-        return kept, kept if L is free else fem.separate_parts(L, label)
-
     tell(0.0, "kernel rows")
     free, L = stage(attrs.dog)
-    kept, L = apart(free, L)
+    kept, L = fem.separate_rows(free, L, label)  # as the single machine's: checked as it is used
     if attrs.dog and attrs.check_psd:
         tell(0.5, "semidefinite check")
         block = sp.csr_matrix(L[:n_own, :n_own])
@@ -174,7 +166,7 @@ def local_rows(comm, P: np.ndarray, mass: np.ndarray, table: np.ndarray, n_own: 
             info["correction"] = "none"
             tell(0.6, "plain kernel rows")
             free, L = stage(False)
-            kept, L = apart(free, L)
+            kept, L = fem.separate_rows(free, L, label)
     if info["correction"] != "none":
         tell(0.8, "moment scale")
         Y = kept @ np.column_stack([(P**2).sum(axis=1), P])
