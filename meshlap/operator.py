@@ -266,8 +266,8 @@ class MeshLaplacian(LumpedLaplacian):
                           doc="denoise=True's mass factors: 1/(1 + :func:`meshlap.denoise.area_left`).")
 
     n_vertices = property(lambda self: self.geometry.n_points, doc="Rows of the operator (builds nothing).")
-    decision = property(lambda self: self._decision or policy.decide(self.geometry, _named(self.options)),
-                        doc="Which operator was built and why (:mod:`meshlap.policy`).")
+    decision = property(lambda self: policy.as_built(self._decision or policy.decide(self.geometry, _named(
+        self.options)), getattr(self._built.held_pencil, "quadrature", None)), doc="What was built and why.")
     elements = property(lambda self: self.decision.elements, doc="What spectral.eigs solves (policy).")
 
     h = property(lambda self: self.widths.h, doc="Kernel width (the base width with per-point widths).")

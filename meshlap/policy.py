@@ -63,7 +63,7 @@ The decision, with what it read, is kept on the operator as ``op.decision``.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -76,7 +76,7 @@ from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
 from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
 
-__all__ = ["OPERATORS", "Decision", "decide"]
+__all__ = ["OPERATORS", "Decision", "as_built", "decide"]
 
 #: ``operator`` values of :func:`meshlap.laplacian`.
 OPERATORS = ("auto", "fem", "kernel", "galerkin", "paper")
@@ -101,6 +101,8 @@ _REASONS = {
     "h": "a kernel width h was given: the corrected heat kernel at that width",
     "options": "options of the kernel were given ({}): the kernel they configure",
     "asked": "operator={!r} was asked for",
+    "floor": "{}; but -S of the Galerkin pencil was not semidefinite (its cells are too coarse for its "
+             "kernel), so linear FEM on the same cells was built",
 }
 
 
@@ -258,3 +260,19 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         quadratic = unknowns <= QUADRATIC_MAX_UNKNOWNS
     return Decision(operator, "pencil" if pencil_rows else "fitted", reason, measured, bool(denoise),
                     "quadratic" if quadratic else "linear")
+
+
+def as_built(decision: Decision, quadrature: str | None) -> Decision:
+    """The decision as the build carried it out, given the pencil's ``quadrature`` in effect (None
+    before the pencil is built): a Galerkin pencil that fails its semidefinite check is replaced
+    by linear FEM on the same cells (:func:`meshlap.pencil.assemble`), and says so.
+
+    Examples
+    --------
+    >>> d = Decision("galerkin", "fitted", "asked")
+    >>> as_built(d, "galerkin") is d, as_built(d, "fem").operator
+    (True, 'fem')
+    """
+    if decision.operator == "galerkin" and quadrature == "fem":
+        return replace(decision, operator="fem", reason=_REASONS["floor"].format(decision.reason))
+    return decision

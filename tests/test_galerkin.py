@@ -419,7 +419,10 @@ def test_parts_are_apart_before_the_semidefinite_check():
     E = np.array([[0, 1], [4, 5], [2, 3]])
     with pytest.warns(meshlap.MeshWarning, match="linear FEM on them instead"):
         op = meshlap.laplacian(P, E).assemble()
-    assert op.decision.operator == "galerkin" and op.quadrature == "fem"
+    # the decision records what was built: before the build, what was chosen
+    assert meshlap.laplacian(P, E).decision.operator == "galerkin"
+    assert op.decision.operator == "fem" and op.quadrature == "fem"
+    assert "linear FEM on the same cells was built" in op.decision.reason
     lam = spectral.eigs(op, 5)[0]
     # three zeros; each stroke of length l is two vertices of mass l/2: λ = 4/l² (2, 1 for l = 2, 4 for l = 1)
     assert np.abs(lam[:3]).max() < 1e-9 and np.allclose(lam[3:], [1.0, 1.0])
