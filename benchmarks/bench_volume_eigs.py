@@ -4,10 +4,11 @@ on a sparse factorization, and LaPy's solver beside them.
     python benchmarks/bench_volume_eigs.py                    # RESULTS.md
     python benchmarks/bench_volume_eigs.py --quick --no-write
     python benchmarks/bench_volume_eigs.py --extra carotid.vtk ironProt.vtk   # any volume files
+    python benchmarks/bench_volume_eigs.py --solves           # Poisson solves and heat steps
 
 Each row is ``spectral.eigs(meshlap.laplacian(V, T, k=3), 10)`` (linear FEM, verified pairs) with
 ``method="lobpcg"`` (meshlap._multigrid's V-cycle as preconditioner, above
-``spectral._MULTIGRID_MIN`` vertices) and ``method="shift-invert"`` (SuperLU), and LaPy's
+``meshlap._multigrid.MIN_VERTICES`` vertices) and ``method="shift-invert"`` (SuperLU), and LaPy's
 ``Solver(TetMesh).eigs`` (its own linear FEM, scipy's or CHOLMOD's factorization), each in a
 process of its own so that its peak memory is its own: wall seconds of the solve (the build
 apart), peak resident memory, and the largest relative error of eigenvalues 1-9 against the
@@ -15,6 +16,14 @@ exact Neumann cube (π²(a² + b² + c²)) or, on other volumes, against shift-i
 shift-invert ran out of time: the same linear FEM and lumped mass). A run past ``--limit``
 seconds is stopped and shown as such. Files given with ``--extra`` (real volumes, such as
 pyvista/vtk-data's voxel images, split into tetrahedra by VTK) get a table of their own.
+
+``--solves`` times, on the same cubes, a Poisson solve (Δφ = f, φ = 0 on the face z = 0,
+insulated elsewhere; φ = cos πx cos πy sin(πz/2) exactly) and an implicit heat step
+(``(M - τS) u = M f``, τ = 0.01), each with its set-up: ``solver="auto"`` (conjugate gradient
+with multigrid above ``MIN_VERTICES``), ``solver="direct"`` (SuperLU), and LaPy's
+``Solver.poisson`` and ``heat.diffusion`` (a step of the same kind, its own factorization).
+Error: the Poisson solution's largest error against the exact φ, relative to its largest value;
+the heat step's largest difference from the direct step's, relative.
 """
 
 from __future__ import annotations
@@ -52,12 +61,59 @@ def _volume(spec: str) -> tuple[np.ndarray, np.ndarray]:
     return P, np.asarray(cells)
 
 
+def _exact_poisson(V: np.ndarray) -> np.ndarray:
+    return np.cos(np.pi * V[:, 0]) * np.cos(np.pi * V[:, 1]) * np.sin(0.5 * np.pi * V[:, 2])
+
+
+def _solve_child(V: np.ndarray, T: np.ndarray, task: str, solver: str) -> tuple[float, np.ndarray]:
+    # seconds of one Poisson solve or heat step with its set-up, and its solution
+    import meshlap
+    from meshlap import heat, solve
+
+    phi = _exact_poisson(V)
+    f = -2.25 * np.pi**2 * phi  # Δφ
+    bottom = np.flatnonzero(V[:, 2] < 1e-9)
+    if solver == "lapy":
+        from lapy import Solver, TetMesh
+        from lapy import heat as lapy_heat
+
+        tet = TetMesh(V, T)
+        tet.orient_()
+        t = time.perf_counter()
+        if task == "poisson":  # LaPy's A x = B h, A its stiffness: h = -f
+            u = Solver(tet, lump=True).poisson(-f, dtup=(bottom, np.zeros(len(bottom))))
+        else:  # a step from vertex 0 of the same time, τ = m ē²
+            edges = np.linalg.norm(V[T[:, 0]] - V[T[:, 1]], axis=1).mean()
+            u = lapy_heat.diffusion(tet, 0, m=0.01 / edges**2)
+        return time.perf_counter() - t, u
+    op = meshlap.laplacian(V, T, k=3)
+    op.assemble()
+    t = time.perf_counter()
+    if task == "poisson":
+        u = solve.PoissonSolver(op, bottom, solver=solver).solve(-op.mass * f)
+    else:
+        u = heat.ImplicitHeat(op, 0.01, solver=solver)(np.cos(np.pi * V[:, 0]) * np.cos(np.pi * V[:, 1]))
+    return time.perf_counter() - t, u
+
+
 def _child(spec: str, solver: str) -> None:
     # one solve in this process: prints a JSON line
     import meshlap
 
     warnings.simplefilter("ignore")
     V, T = _volume(spec)
+    if ":" in solver:  # --solves: task:solver
+        try:
+            seconds, u = _solve_child(V, T, *solver.split(":"))
+        except ImportError:
+            print(json.dumps({"missing": "lapy"}))
+            return
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+        exact = _exact_poisson(V)
+        err = float(np.abs(u - exact).max() / np.abs(exact).max())
+        print(json.dumps({"n": len(V), "seconds": seconds, "rss": rss, "err": err,
+                          "sample": np.asarray(u)[:: max(1, len(V) // 500)].tolist()}))
+        return
     if solver == "lapy":
         try:
             from lapy import Solver, TetMesh
@@ -102,13 +158,17 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--limit", type=float, default=600.0)
     ap.add_argument("--extra", nargs="*", default=[])
+    ap.add_argument("--solves", action="store_true", help="Poisson solves and heat steps instead")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         _child(*args.child)
         return
+    if args.solves:
+        solves(args)
+        return
     import meshlap
-    from meshlap import spectral
+    from meshlap import _multigrid
 
     cubes = (12, 20) if args.quick else (20, 30, 40, 50)
     specs = [f"cube:{n}" for n in cubes]
@@ -139,7 +199,7 @@ def main() -> None:
     extra = f" --extra {' '.join(Path(x).name for x in args.extra)}" if args.extra else ""
     head = [f"Command: `python benchmarks/bench_volume_eigs.py{' --quick' if args.quick else ''}"
             f" --limit {args.limit:g}{extra}` ({started}, 2 shared cores). `method=\"lobpcg\"` is "
-            f"preconditioned by multigrid above {spectral._MULTIGRID_MIN:,} vertices (the default there), "
+            f"preconditioned by multigrid above {_multigrid.MIN_VERTICES:,} vertices (the default there), "
             "by the exact factor below. Seconds of the solve (wall), peak resident GiB of its process, "
             "largest relative error of eigenvalues 1-9 (the cube's exact Neumann values; elsewhere "
             "shift-invert's, or LaPy's where shift-invert ran out of time).", "",
@@ -150,6 +210,53 @@ def main() -> None:
         write_section("Tetrahedral cubes and the corpus's volumes", head[2:] + rows)
         if extra_rows:
             write_section("Real volumes (--extra)", head[2:] + extra_rows)
+
+
+def _cell(r: dict | None, limit: float, err: str) -> str:
+    if r is None:
+        return f"> {limit:.0f} s | – | –"
+    if "missing" in r:
+        return "not installed | – | –"
+    return f"{r['seconds']:.2f} | {r['rss']:.2f} | {err}"
+
+
+def solves(args: argparse.Namespace) -> None:
+    from meshlap import _multigrid
+
+    cubes = (12, 20) if args.quick else (20, 30, 40, 50)
+    started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    rows = []
+    for n in cubes:
+        spec = f"cube:{n}"
+        for task in ("poisson", "heat"):
+            res = {s: run(spec, f"{task}:{s}", args.limit) for s in ("auto", "direct", "lapy")}
+            direct = res["direct"]
+            cells = []
+            for s in ("auto", "direct", "lapy"):
+                r = res[s]
+                if r is None or "missing" in r:
+                    err = "–"
+                elif task == "poisson":
+                    err = f"{100 * r['err']:.3g}%"
+                elif s == "lapy" or direct is None:
+                    err = "–"
+                else:
+                    a, b = np.asarray(r["sample"]), np.asarray(direct["sample"])
+                    err = f"{np.abs(a - b).max() / np.abs(b).max():.1e}"
+                cells.append(_cell(r, args.limit, err))
+            size = next((r["n"] for r in res.values() if r and "n" in r), 0)
+            rows.append(f"| cube {n}³ | {size:,} | {task} | " + " | ".join(cells) + " |")
+            print(rows[-1], flush=True)
+    head = [f"Command: `python benchmarks/bench_volume_eigs.py --solves{' --quick' if args.quick else ''}"
+            f" --limit {args.limit:g}` ({started}, 2 shared cores). `solver=\"auto\"` is conjugate "
+            f"gradient with multigrid above {_multigrid.MIN_VERTICES:,} vertices, SuperLU below. Seconds "
+            "of the set-up and one solve (wall), peak resident GiB of its process; error: the Poisson "
+            "solution's largest against the exact φ (relative), the heat step's largest difference "
+            "from the direct step's (relative).", "",
+            "| volume | vertices | task | auto s | GiB | error | direct s | GiB | error | LaPy s | GiB "
+            "| error |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    if not args.no_write:
+        write_section("Poisson solves and implicit heat steps (--solves)", head + rows)
 
 
 if __name__ == "__main__":

@@ -248,7 +248,9 @@ class HeatDistance:
         self.grad = gradient_operator(op, gradient)
         heat_op, poisson_op = _sparse_pencils(op, self.grad)
         self.sparse = heat_op is op
-        self._heat = ImplicitHeat(heat_op, self.t, solver=solver)
+        # factored even where a large volume's Poisson solve takes multigrid: an iterative step
+        # would leave the exponentially small far field to its residual (_sparse_pencils)
+        self._heat = ImplicitHeat(heat_op, self.t, solver="direct" if solver == "auto" else solver)
         self._poisson = PoissonSolver(poisson_op, solver=solver)
         # the positions the pencil was built on (denoise=True: after its heat step)
         self._points = np.asarray(getattr(op, "pencil_points", geo.points), dtype=np.float64)

@@ -6,7 +6,7 @@ and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 200
 ``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite: λ ≥ 0, φ M-orthonormal.
 
 On a sparse pencil :func:`eigs` factors it (shift-invert); on a volume of more than
-``_MULTIGRID_MIN`` vertices, whose factor fills as n^(4/3), it runs LOBPCG (Knyazev 2001)
+``_multigrid.MIN_VERTICES`` vertices, whose factor fills as n^(4/3), it runs LOBPCG (Knyazev 2001)
 preconditioned by multigrid (:mod:`meshlap._multigrid`). The heat-kernel operator keeps hundreds
 to thousands of entries per row, whose LU fills in badly (94 s for 36 pairs of a 16,000-vertex
 sphere at h = 0.0025); there LOBPCG is preconditioned by the same mesh's cotangent Laplacian,
@@ -50,9 +50,6 @@ _SPARSE_ROW_MAX = 40
 # for a dense-row operator up to this many entries (5.1 M: 65 s on 2 cores, LOBPCG 18 s)
 _DENSE_FALLBACK = 4000
 _FALLBACK_NNZ = 8_000_000
-# a volume's vertices above which LOBPCG with multigrid replaces shift-invert: tetrahedral cubes,
-# 4,913 vertices 0.47 s against 0.14 s, 9,261 0.78 s against 1.49 s (bench_volume_eigs.py)
-_MULTIGRID_MIN = 8000
 # the cotangent start's residual, relative: the operator's own iterations do not depend on it
 # below ~0.3, as the start's error is then the two operators' difference (36 eigenpairs of a
 # 16k sphere: 7 iterations from a start to 0.3, 0.1, 0.03, 0.01 or 0.001, which took 5-8)
@@ -359,7 +356,7 @@ def eigs(
     nnz = 0 if matrix_free else symmetric_L(op).nnz
     sparse = not matrix_free and nnz <= _SPARSE_ROW_MAX * op.n_vertices
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
-    multigrid = volume and sparse and n_p > _MULTIGRID_MIN and method in ("auto", "lobpcg")
+    multigrid = sparse and _multigrid.replaces_factor(op, n_p) and method in ("auto", "lobpcg")
     if method == "auto":
         method = "dense" if n_p <= _DENSE_MAX else "shift-invert" if sparse and not multigrid else "lobpcg"
     adapt = extra is None

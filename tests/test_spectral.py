@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import eigsh
 
 import meshlap
-from meshlap import shapes, spectral
+from meshlap import _multigrid, shapes, spectral
 from meshlap.baselines import bsw_scipy, cotangent
 
 DATA = Path(__file__).parent / "data"
@@ -301,13 +301,13 @@ def test_block_factor_solves_like_splu():
 
 
 def test_a_large_volume_is_solved_by_multigrid_without_a_factorization(monkeypatch):
-    # above _MULTIGRID_MIN vertices a volume's LOBPCG is preconditioned by a multigrid V-cycle:
+    # above _multigrid.MIN_VERTICES vertices a volume's LOBPCG is preconditioned by a multigrid V-cycle:
     # nothing is factored (shift-invert and the count held 5.5 GiB for 136 s on the 68,921-vertex
     # cube, multigrid 0.55 GiB and 5.0 s); the pairs are those shift-invert finds, verified
     from meshlap import _ldl, samples
 
     V, T = samples.cube_tetrahedra(21)  # 10,648 vertices
-    assert len(V) > spectral._MULTIGRID_MIN
+    assert len(V) > _multigrid.MIN_VERTICES
     op = meshlap.laplacian(V, T, k=3)
     reference = spectral.eigs(op, 10, method="shift-invert")[0]
 
