@@ -27,7 +27,6 @@ with pyvista, scene formats with trimesh.
 from __future__ import annotations
 
 import contextlib
-import io
 import os
 import warnings
 from pathlib import Path
@@ -35,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _ply
+from . import _meshio, _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -248,15 +247,7 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
 
 
 def _by_meshio(path: Path) -> GeometryInput:
-    import meshio
-
-    said = io.StringIO()
-    try:  # on a bad file meshio prints its reasons and calls sys.exit; keep them for the message
-        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
-            mesh = meshio.read(path)
-    except (Exception, SystemExit) as exc:  # meshio's ReadError, ValueError, KeyError, exit, ...
-        why = (said.getvalue().strip().splitlines() or [_why(exc)])[0]
-        raise MeshError(f"{path.name}: meshio could not read it ({why})") from None
+    mesh = _meshio.read(path)
     return _from_cell_blocks(mesh.points, mesh.cells_dict, path.name)
 
 
@@ -269,7 +260,7 @@ def _by_pyvista(path: Path) -> GeometryInput:
             warnings.simplefilter("ignore")
             mesh = pyvista.read(path)
     except Exception as exc:  # pyvista raises ValueError, IOError, VTK errors, ...
-        raise MeshError(f"{path.name}: pyvista could not read it ({_why(exc)})") from None
+        raise MeshError(f"{path.name}: pyvista could not read it ({_meshio.why(exc)})") from None
     if not mesh.n_points:
         raise MeshError(f"{path.name}: pyvista read no points from it")
     return as_geometry_input(mesh)
@@ -282,7 +273,7 @@ def _by_trimesh(path: Path) -> GeometryInput:
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises ValueError, KeyError, NotImplementedError, ...
-        raise MeshError(f"{path.name}: trimesh could not read it ({_why(exc)})") from None
+        raise MeshError(f"{path.name}: trimesh could not read it ({_meshio.why(exc)})") from None
     V, F, _ = as_geometry_input(mesh)
     return V, F, None if F is None else 2  # trimesh's faces are triangles
 
@@ -306,10 +297,6 @@ def _quiet_stderr() -> Any:
 #: suffixes meshio does not read: VTK's XML formats (pyvista) and scene formats (trimesh)
 _OTHER_READERS = {suffix: ("pyvista", _by_pyvista) for suffix in (".vtp", ".vts", ".vtr", ".vti", ".vtm")} | \
     {suffix: ("trimesh", _by_trimesh) for suffix in (".glb", ".gltf", ".3mf", ".dae")}
-
-
-def _why(exc: BaseException) -> str:
-    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
 
 
 def boundary_triangles(T: Any) -> np.ndarray:

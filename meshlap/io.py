@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _pcd, _ply
+from . import _meshio, _pcd, _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -485,11 +485,10 @@ def read_tetrahedra(path: PathLike) -> tuple[np.ndarray, np.ndarray]:
             raise MeshError(f"{path.name}: no tetrahedra in the file (its POLYGONS are a surface's)")
         return check_vertices(polydata[0], name=f"vertices of {path.name}"), polydata[1]
     try:
-        import meshio
+        mesh = _meshio.read(path)
     except ImportError as exc:
         raise MeshError(f"{path.name}: meshlap reads TetGen .node/.ele and LaPy's .vtk itself; for "
                         f"{suffix} files install meshio (pip install meshio)") from exc
-    mesh = meshio.read(path)
     T = [c.data for c in mesh.cells if c.type == "tetra"]
     if not T:
         raise MeshError(f"{path.name}: no tetrahedra in the file")

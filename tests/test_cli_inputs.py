@@ -70,6 +70,63 @@ def test_eigs_of_tetrahedra_tetgen_and_meshio(capsys, tets, tmp_path):
         assert code == 0 and np.allclose(eigenvalues(out), lam, rtol=1e-5, atol=1e-12), suffix
 
 
+def _gmsh22(path, V, T, binary):
+    # a Gmsh 2.2 file as libigl's writeMSH writes it: the hull's triangles and the tetrahedra, and
+    # element data for the tetrahedra alone, which meshio refuses ("Incompatible cell data")
+    import struct
+
+    tri = meshlap.inputs.boundary_triangles(T)
+    blocks = [(2, tri), (4, T)]
+    out = [b"$MeshFormat\n", b"2.2 %d 8\n" % binary]
+    if binary:
+        out.append(struct.pack("<i", 1) + b"\n")
+    out.append(b"$EndMeshFormat\n$Nodes\n%d\n" % len(V))
+    if binary:
+        out.append(b"".join(struct.pack("<i3d", i + 1, *p) for i, p in enumerate(V)) + b"\n")
+    else:
+        out += [b"%d %r %r %r\n" % (i + 1, *p) for i, p in enumerate(V.tolist())]
+    out.append(b"$EndNodes\n$Elements\n%d\n" % (len(tri) + len(T)))
+    number = 0
+    for kind, cells in blocks:
+        if binary:
+            out.append(struct.pack("<3i", kind, len(cells), 2))
+        for c in cells:
+            number += 1
+            fields = [number] + ([] if binary else [kind, 2]) + [1, 1] + [int(x) + 1 for x in c]
+            row = struct.pack(f"<{len(fields)}i", *fields) if binary else b" ".join(b"%d" % x for x in fields)
+            out.append(row if binary else row + b"\n")
+    head = b"$EndElements\n$ElementData\n1\n\"E\"\n1\n0.0\n3\n0\n1\n%d\n" % len(T)
+    out.append((b"\n" if binary else b"") + head)
+    if binary:  # numbered from 1, as libigl numbers them
+        out.append(b"".join(struct.pack("<id", 1 + i, 0.5) for i in range(len(T))) + b"$EndElementData\n")
+    else:
+        out += [b"%d 0.5\n" % (1 + i) for i in range(len(T))] + [b"$EndElementData\n"]
+    path.write_bytes(b"".join(out))
+    return path
+
+
+def test_gmsh_element_data_meshio_refuses_is_read_past(tmp_path):
+    # libigl's tutorial hand.msh (binary, as libigl's writeMSH writes it) raised "meshio could not
+    # read it (Incompatible cell data ...)": meshlap reads no data, so the file is read once more
+    # without its data sections; its tetrahedra give the .mesh file's spectrum
+    meshio = pytest.importorskip("meshio")
+    V, T = meshlap.samples.cube_tetrahedra(4)
+    ref = meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 5)[0]
+    for binary in (0, 1):
+        path = _gmsh22(tmp_path / f"cube{binary}.msh", V, T, binary)
+        with pytest.raises(ValueError, match="Incompatible cell data"):
+            meshio.read(path)
+        P, cells, k = meshlap.inputs.read_input(path)
+        assert k == 3 and np.array_equal(cells, T) and np.array_equal(P, V)
+        assert np.array_equal(meshlap.io.read_tetrahedra(path)[1], T)
+        np.testing.assert_allclose(meshlap.spectral.eigs(meshlap.laplacian(path), 5)[0], ref, rtol=1e-9,
+                                   atol=1e-12)
+    bad = tmp_path / "bad.msh"
+    bad.write_bytes(b"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n$ElementData\nx\n$EndElementData\n")
+    with pytest.raises(meshlap.MeshError, match="bad.msh: meshio could not read it"):
+        meshlap.inputs.read_input(bad)
+
+
 def test_info_build_and_curvature_of_clouds_and_volumes(capsys, cloud, tets, tmp_path):
     code, out, _ = run(capsys, "info", cloud)
     assert code == 0 and "point cloud (k=2" in out and "1,000" in out
