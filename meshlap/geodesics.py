@@ -202,7 +202,9 @@ class HeatDistance:
     t : float, optional
         Heat time; default ``TIME_FACTOR · ē²`` with ē = ``op.geometry.spacing`` (module notes).
     solver : {"auto", "direct", "cg"}
-        For both solves (:class:`~meshlap.heat.ImplicitHeat`, :class:`~meshlap.solve.PoissonSolver`).
+        For both solves (:class:`~meshlap.heat.ImplicitHeat`, :class:`~meshlap.solve.PoissonSolver`);
+        ``"auto"`` factors the heat step (its far field lies below any iterative residual) and
+        lets the Poisson solve choose (multigrid on a volume of more than 8,000 vertices).
     gradient : {"auto", "simplices", "least squares"}
         See :func:`~meshlap.gradients.gradient_operator`.
 
