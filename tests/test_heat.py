@@ -195,3 +195,25 @@ def test_a_large_volume_steps_and_solves_without_a_factorization(monkeypatch):
     assert np.abs(d - d_ref).max() < 1e-6 * d_ref.max()
     exact = np.linalg.norm(V - V[0], axis=1)
     assert np.abs(d - exact).mean() < 0.015 * exact.max()  # the heat method's own: 1.04%
+
+
+def test_a_volume_kernels_poisson_preconditioner_is_not_factored_above_the_threshold(monkeypatch):
+    # the kernel's dense rows take CG, preconditioned by the P1 stiffness; on a volume above
+    # _multigrid.MIN_VERTICES that stiffness is inverted by a V-cycle, not factored (it fills as
+    # a volume's does). The threshold is lowered here so that a small cloud crosses it.
+    from meshlap import _lobpcg, _multigrid, solve
+
+    P = np.random.default_rng(0).random((700, 3))
+    op = meshlap.point_cloud_laplacian(P, k=3)
+    fixed = np.flatnonzero(P[:, 2] < 0.1)
+    b = -op.mass * np.cos(np.pi * P[:, 0])
+    reference = solve.PoissonSolver(op, fixed, solver="direct").solve(b)
+
+    def no_factor(*args, **kwargs):
+        raise AssertionError("a factorization was made")
+
+    monkeypatch.setattr(_multigrid, "MIN_VERTICES", 100)
+    monkeypatch.setattr(_lobpcg, "BlockFactor", no_factor)
+    poisson = solve.PoissonSolver(op, fixed)
+    assert poisson.solver == "cg"
+    assert np.abs(poisson.solve(b) - reference).max() < 1e-7 * np.abs(reference).max()
