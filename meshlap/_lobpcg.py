@@ -279,7 +279,7 @@ class CotPreconditioner:
     (the cotangent Laplacian's) or None for the diagonal term alone; ``factor`` what inverts it."""
 
     def __init__(self, K: sp.spmatrix | None, m: np.ndarray, diag: np.ndarray, sigma: float,
-                 factor: Any = None) -> None:
+                 factor: Callable[[sp.spmatrix], Any] | None = None) -> None:
         self.K = K
         self.m = m
         self.sigma = sigma

@@ -15,24 +15,13 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from .errors import MeshError
+from .errors import MeshError, first_line
 
-__all__ = ["read", "why"]
+__all__ = ["read"]
 
 # a Gmsh section of data on nodes or elements, from its opening line to its closing one (in a
 # binary file the closing key follows the last value without a line break)
 _DATA = re.compile(rb"(?<=\n)\$(NodeData|ElementData|ElementNodeData)\r?\n.*?\$End\1\r?\n?", re.DOTALL)
-
-
-def why(exc: BaseException) -> str:
-    """The first line of an exception's message, or its type where it has none.
-
-    Examples
-    --------
-    >>> why(ValueError("bad header\\nmore"))
-    'bad header'
-    """
-    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
 
 
 def _read(meshio: Any, path: Path) -> Any:
@@ -41,7 +30,7 @@ def _read(meshio: Any, path: Path) -> Any:
         with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
             return meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio's ReadError, ValueError, KeyError, exit, ...
-        reason = (said.getvalue().strip().splitlines() or [why(exc)])[0]
+        reason = (said.getvalue().strip().splitlines() or [first_line(exc)])[0]
         raise MeshError(f"{path.name}: meshio could not read it ({reason})") from None
 
 
@@ -62,18 +51,15 @@ def read(path: Path) -> Any:
 
     try:
         return _read(meshio, path)
-    except MeshError:
-        if path.suffix.lower() != ".msh":
-            raise
-        data = path.read_bytes()
+    except MeshError as refused:
+        data = path.read_bytes() if path.suffix.lower() == ".msh" else b""
         stripped = _DATA.sub(b"", data)
-        if stripped == data:
+        if stripped == data:  # not Gmsh, or no data sections to leave out
             raise
-    with tempfile.TemporaryDirectory() as folder:
-        copy = Path(folder) / path.name
-        copy.write_bytes(stripped)
-        try:
-            return _read(meshio, copy)
-        except MeshError:
-            pass
-    return _read(meshio, path)  # meshio's reason on the file as given
+        with tempfile.TemporaryDirectory() as folder:
+            copy = Path(folder) / path.name
+            copy.write_bytes(stripped)
+            try:
+                return _read(meshio, copy)
+            except MeshError:
+                raise refused from None  # meshio's reason on the file as given

@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ._ldl import supernodal
+
 __all__ = ["MIN_VERTICES", "Multigrid", "replaces_factor"]
 
 # the coarsest level is solved directly: up to this many unknowns (pyamg's default is 10)
@@ -36,7 +38,7 @@ def replaces_factor(op: object, unknowns: int) -> bool:
     >>> replaces_factor(meshlap.laplacian(*meshlap.shapes.sphere(200, seed=0)), 10**6)
     False
     """
-    return int(getattr(getattr(op, "geometry", None), "dim", 2)) >= 3 and unknowns > MIN_VERTICES
+    return supernodal(op) and unknowns > MIN_VERTICES
 
 
 class Multigrid:

@@ -121,8 +121,6 @@ def laplacian(
     """
     if F is None and not isinstance(V, (Geometry, np.ndarray, list)):  # trimesh, pyvista, meshio, open3d
         V, F, k = _held_input(V, k)
-        if F is None:  # a file or object of points alone: a cloud, as the command line reads it
-            V = point_cloud_geometry(V, 2 if k is None else k)
     geo = as_geometry(V, F, k)
     chosen = decide(geo, operator, h, {**kernel_options, "matrix_free": matrix_free or None,
                                        "denoise": denoise, "mass": None if mass == "lumped" else mass})
@@ -138,10 +136,15 @@ def laplacian(
 
 
 def _held_input(obj: Any, k: int | None) -> tuple[Any, Any, int | None]:
+    # (V, F, k) of a file or an object; one of points alone is a cloud's Geometry, as the command
+    # line reads it
     from .inputs import as_geometry_input
 
     V, F, k_cells = as_geometry_input(obj)
-    return V, F, k if k is not None else k_cells
+    k = k if k is not None else k_cells
+    if F is None:
+        return point_cloud_geometry(V, 2 if k is None else k), None, None
+    return V, F, k
 
 
 def mesh_laplacian(V: Any, F: Any = None, h: float | None = None, tol: float | None = None, *,

@@ -3,7 +3,7 @@
 import os
 import sys
 
-__all__ = ["EigenError", "MeshError", "MeshWarning", "OperatorTooLargeError", "user_stacklevel"]
+__all__ = ["EigenError", "MeshError", "MeshWarning", "OperatorTooLargeError", "first_line", "user_stacklevel"]
 
 
 class MeshError(ValueError):
@@ -50,3 +50,15 @@ def user_stacklevel() -> int:
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(here + os.sep):
         frame, level = frame.f_back, level + 1
     return level
+
+
+def first_line(exc: BaseException) -> str:
+    """The first line of an exception's message, or its type where it has none: a reader's reason,
+    quoted in the :class:`MeshError` that names the file.
+
+    Examples
+    --------
+    >>> first_line(ValueError("bad header\\nmore")), first_line(KeyError())
+    ('bad header', 'KeyError')
+    """
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

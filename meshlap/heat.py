@@ -299,8 +299,10 @@ class ImplicitHeat:
         if solver == "direct" or multigrid:
             S = _restricted_S(op, self.P)
             A = sp.diags(self.m) - tau * 0.5 * (S + S.T)
-            self._lu = Multigrid(A) if multigrid and solver == "cg" else _factor(A, _ldl.supernodal(op))
-            self._a, self._b = 0.0, 1.0  # CG's preconditioner: the V-cycle of the system itself
+            if solver == "direct":
+                self._lu = _factor(A, _ldl.supernodal(op))
+            else:  # CG preconditioned by the V-cycle of the system itself
+                self._lu, self._a, self._b = Multigrid(A), 0.0, 1.0
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             self._jacobi = 1.0 / (self.m + tau * diag)

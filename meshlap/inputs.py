@@ -36,7 +36,7 @@ import numpy as np
 
 from . import _meshio, _ply
 from ._vtk import read_polydata
-from .errors import MeshError
+from .errors import MeshError, first_line
 from .geometry import Polygons
 from .geometry.validation import check_faces, check_vertices, existing_file
 from .io import MESH_FORMATS, POINT_FORMATS, read_mesh, read_points, read_polyline, read_tetrahedra
@@ -260,7 +260,7 @@ def _by_pyvista(path: Path) -> GeometryInput:
             warnings.simplefilter("ignore")
             mesh = pyvista.read(path)
     except Exception as exc:  # pyvista raises ValueError, IOError, VTK errors, ...
-        raise MeshError(f"{path.name}: pyvista could not read it ({_meshio.why(exc)})") from None
+        raise MeshError(f"{path.name}: pyvista could not read it ({first_line(exc)})") from None
     if not mesh.n_points:
         raise MeshError(f"{path.name}: pyvista read no points from it")
     return as_geometry_input(mesh)
@@ -273,7 +273,7 @@ def _by_trimesh(path: Path) -> GeometryInput:
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh raises ValueError, KeyError, NotImplementedError, ...
-        raise MeshError(f"{path.name}: trimesh could not read it ({_meshio.why(exc)})") from None
+        raise MeshError(f"{path.name}: trimesh could not read it ({first_line(exc)})") from None
     V, F, _ = as_geometry_input(mesh)
     return V, F, None if F is None else 2  # trimesh's faces are triangles
 
