@@ -35,6 +35,7 @@ from results_file import write_section  # noqa: E402
 import meshlap  # noqa: E402
 from meshlap import samples, spectral  # noqa: E402
 from meshlap.geometry import pointcloud  # noqa: E402
+from meshlap.solve import PoissonSolver  # noqa: E402
 
 L_SPHERE = np.repeat(np.arange(4), 2 * np.arange(4) + 1)
 EIG_SPHERE = (L_SPHERE * (L_SPHERE + 1)).astype(float)
@@ -243,18 +244,26 @@ def timing(n: int) -> None:
 
 _BEFORE = """
 import sys, time, numpy as np
+import meshlap
 from meshlap.geometry import pointcloud
+from meshlap.solve import PoissonSolver
 P = np.load(sys.argv[1])
 pointcloud.point_masses(np.random.default_rng(0).random((300, 3)), 3)  # compile or load the kernels
 t = time.perf_counter()
 m, _ = pointcloud.point_masses(P, 3)
-print(time.perf_counter() - t)
+t_mass = time.perf_counter() - t
+op = meshlap.point_cloud_laplacian(P, k=3)
+op.S
+t = time.perf_counter()
+PoissonSolver(op)
+print(t_mass, time.perf_counter() - t)
 np.save(sys.argv[2], m)
 """
 
 
-def _masses_before(P: np.ndarray, before: str) -> tuple[float, np.ndarray]:
-    """Seconds of ``point_masses(P, 3)`` and the masses, by the checkout ``before`` in a subprocess."""
+def _masses_before(P: np.ndarray, before: str) -> tuple[float, float, np.ndarray]:
+    """Seconds of ``point_masses(P, 3)`` and of a Neumann ``PoissonSolver``'s set-up, and the
+    masses, by the checkout ``before`` in a subprocess."""
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -266,7 +275,8 @@ def _masses_before(P: np.ndarray, before: str) -> tuple[float, np.ndarray]:
                              capture_output=True, text=True, cwd=tmp)
         if run.returncode:
             raise RuntimeError(f"{before}'s point_masses failed:\n{run.stderr}")
-        return float(run.stdout.split()[-1]), np.load(out)
+        t_mass, t_poisson = map(float, run.stdout.split()[-2:])
+        return t_mass, t_poisson, np.load(out)
 
 
 def _commit(path: str) -> str:
@@ -279,11 +289,11 @@ def _volume_row(name: str, P: np.ndarray, ref: np.ndarray, lapy_err: str, before
     t = time.perf_counter()
     mass, _ = pointcloud.point_masses(P, 3)
     t_mass = time.perf_counter() - t
-    was = "—"
+    was = set_up_before = "—"
     if before:
-        t_before, m_before = _masses_before(P, before)
+        t_before, t_set_up_before, m_before = _masses_before(P, before)
         diff = np.abs(mass - m_before).max() / np.abs(m_before).max()
-        was = f"{t_before:.1f} (masses within {diff:.0e})"
+        was, set_up_before = f"{t_before:.1f} (masses within {diff:.0e})", f"{t_set_up_before:.1f}"
     t = time.perf_counter()
     op = meshlap.point_cloud_laplacian(P, k=3)
     op.S  # noqa: B018  (the matrix is built on first use)
@@ -292,10 +302,18 @@ def _volume_row(name: str, P: np.ndarray, ref: np.ndarray, lapy_err: str, before
     lam = spectral.eigs(op, len(ref) + 1)[0][1:]
     t_eig = time.perf_counter() - t
     err = 100 * np.abs(lam / ref - 1).max()
+    t = time.perf_counter()
+    poisson = PoissonSolver(op)
+    t_set_up = time.perf_counter() - t
+    t = time.perf_counter()
+    f = np.cos(np.pi * (P[:, 0] - P[:, 0].min()) / np.ptp(P[:, 0]))
+    poisson.solve(-op.mass * (f - f @ op.mass / op.mass.sum()))  # integrates to zero
+    t_solve = time.perf_counter() - t
     # linear FEM on the points' own Delaunay tetrahedralization, the obvious alternative
     K, M = real_corpus.p1_fem(P, Delaunay(P).simplices)
     dl = real_corpus.pencil_eigs(K, M, len(ref) + 1)[1:]
     return (f"| {name} | {len(P):,} | {t_mass:.1f} | {was} | {t_build:.1f} | {t_eig:.1f} | "
+            f"{t_set_up:.1f} | {set_up_before} | {t_solve:.1f} | "
             f"{op.S.nnz / len(P):.0f} | {err:.1f}% | {100 * np.abs(dl / ref - 1).max():.0f}% | {lapy_err} |")
 
 
@@ -328,15 +346,17 @@ def volume(before: str | None) -> None:
              "`meshlap.point_cloud_laplacian(P, k=3)`: seconds of the masses (local Delaunay stars: the "
              "stars the first 32 neighbours leave insecure taken from one Delaunay tetrahedralization "
              "of the cloud where secure there, the rest searched by Qhull on threads), the same by the "
-             "commit before that change (each star searched by its compiled O(K⁴) star, K doubling from 32; "
-             "a subprocess, the same points), of the build (`point_cloud_laplacian` and its matrix, the "
-             "masses included) and of 10 eigenpairs; the "
+             "checkout `--before` (a subprocess, the same points), of the build "
+             "(`point_cloud_laplacian` and its matrix, the masses included), of 10 eigenpairs, of a "
+             "Neumann `PoissonSolver(op)`'s set-up (the same by the checkout `--before`) and of one "
+             "solve; the "
              "largest relative error of λ1..λ9 (the cube's Neumann spectrum; a mesh's refined-FEM "
              "reference, bench_real.py's), beside linear FEM on the points' Delaunay tetrahedralization "
              "(scipy's) and LaPy's on the tetrahedra the points came from:", "",
-             "| points | n | masses s | masses s before | build s | eigs s | entries per row | "
-             "error | FEM on the points' Delaunay | LaPy on the mesh |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| points | n | masses s | masses s before | build s | eigs s | Poisson set-up s | "
+             "set-up s before | solve s | entries per row | error | FEM on the points' Delaunay | "
+             "LaPy on the mesh |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     write("Point clouds: a volume's cloud", lines + rows)
 
 
