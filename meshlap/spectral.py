@@ -32,7 +32,7 @@ import scipy.sparse as sp
 
 from . import _eigcheck, _ldl, _lobpcg, _multigrid, _parts, _shiftinvert, quadratic
 from ._jit import in_blocks, jit, one_blas_thread
-from .errors import EigenError, MeshError
+from .errors import MeshError
 from .fem import expand_copies
 from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
@@ -355,6 +355,19 @@ def eigs(
     matrix_free = getattr(op, "matrix_free", False)
     nnz = 0 if matrix_free else symmetric_L(op).nnz
     sparse = not matrix_free and nnz <= _SPARSE_ROW_MAX * op.n_vertices
+    # made on first use: -S on the vertices with mass, and L_sym there in spatial order (for
+    # LOBPCG's products and the check's)
+    S_P = functools.cache(lambda: _restricted_S(op, P))
+    if sparse and (parts := _parts.part_labels(S_P()))[0] > 1:
+        # the spectrum is the union of the parts': each solved and checked at its own scale,
+        # without the other parts' copies of its values (meshlap._parts)
+        solve = functools.partial(eigs, method=method, tol=tol, maxiter=maxiter, extra=extra, seed=seed,
+                                  count=count)
+        report = onward(make_progress(progress))  # a part asked again starts the bar's rest
+        lam, X = _parts.by_part(S_P(), parts[1], m, k, solve, info, report)
+        if report is not None:
+            report(1.0, "done")
+        return lam, _normalize_signs(_extend(op, P, X))
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
     multigrid = sparse and _multigrid.replaces_factor(op, n_p) and method in ("auto", "lobpcg")
     if method == "auto":
@@ -367,9 +380,6 @@ def eigs(
     report = onward(make_progress(progress))  # a retry starts its stages over
     if report is not None and method != "lobpcg":
         report(0.0, method)
-    # made on first use: -S on the vertices with mass, and L_sym there in spatial order (for
-    # LOBPCG's products and the check's)
-    S_P = functools.cache(lambda: _restricted_S(op, P))
     spatial = functools.cache(lambda: None if sparse else _ordered_L(op, P))
 
     def dense(want: int):
@@ -412,9 +422,7 @@ def eigs(
         ladder.insert(1 if method == "lobpcg" and not multigrid else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK:  # matrix-free: n columns cost less than LOBPCG wider
         ladder.insert(1 if matrix_free else len(ladder), exact)
-    # the pencil's connected parts, found where asked: with several, each at its own scale comes next
-    parts = functools.cache(lambda: _parts.part_labels(S_P()) if sparse else (1, None))
-    if method == "shift-invert" and n_p > _DENSE_FALLBACK and parts()[0] == 1:
+    if method == "shift-invert" and n_p > _DENSE_FALLBACK:
         ladder.append(wider)
     counted = (sparse and not multigrid if count is None else count) and not matrix_free  # a count factors
     counter = (lambda sigma: _eigcheck.count_below(-S_P(), m, sigma, volume, report)) if counted else None
@@ -435,21 +443,8 @@ def eigs(
     scale = _scale_shift(m)
     floor = _eigcheck.roundoff_floor(stiff, tol, scale)
     with one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
-        try:
-            lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count),
-                                              info=info)
-            failed = None
-        except EigenError as error:
-            failed = error
-    if (failed or _eigcheck.uncertified(lam, tol, floor, scale) > _eigcheck.UNCERTIFIED) and parts()[0] > 1:
-        # parts of far apart scales: each solved and checked at its own (meshlap._parts)
-        solve = functools.partial(eigs, method=method, tol=tol, maxiter=maxiter, extra=extra, seed=seed,
-                                  count=count)
-        lam, X = _parts.by_part(S_P(), parts()[1], m, k, solve, info)
-    elif failed:
-        raise failed
-    else:
-        _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
+        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count), info=info)
+    _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))

@@ -210,19 +210,63 @@ def test_nearly_coincident_vertices_keep_their_triangles(eps):
 
 
 def test_sparse_pencil_is_counted_and_ties_past_k_are_computed():
-    """The cotangent pencil of four parts, k = 8: four zeros and 4 of the 12 values ≈ 2. The
-    solver runs again until a computed value lies above λ_8's cluster; the count at σ between
-    them finds 16, and the result is shown to be complete."""
-    V, F = parts(4)
+    """The cotangent pencil of a sphere, k = 6: zero, the three values ≈ 2 and 2 of the 5 ≈ 6.
+    The solver runs again until a computed value lies above λ_6's cluster; the count at σ between
+    them finds 9, and the result is shown to be complete."""
+    V, F = shapes.sphere(2000, seed=0)
     cot = cotangent(V, F)
     info = {}
-    lam, phi = spectral.eigs(cot, 8, info=info)
+    lam, phi = spectral.eigs(cot, 6, info=info)
     w = dense_spectrum(cot)
-    assert np.abs(lam - w[:8]).max() < 1e-8
-    # the computed values past λ_8 all tie it: the solver runs again, asked for more, before the
+    assert np.abs(lam - w[:6]).max() < 1e-8
+    # the computed values past λ_6 all tie it: the solver runs again, asked for more, before the
     # count (in 3-D a count costs what the solve does)
-    assert set(info["tried"]) == {"shift-invert"} and info["count"] == 16 and info["complete"]
-    assert 2.0 < info["shift"] < w[16] and int((w < info["shift"]).sum()) == 16
+    assert set(info["tried"]) == {"shift-invert"} and info["count"] == 9 and info["complete"]
+    assert 6.0 < info["shift"] < w[9] and int((w < info["shift"]).sum()) == 9
+
+
+def test_parts_are_solved_each_for_its_share():
+    """Four copies of one sphere, k = 8: each part is asked for twice its share of k and two more
+    (6: its zero, its three values ≈ 2, two ≈ 6), which shows that none holds more of the 8
+    lowest; one solve of the whole would meet every value four times (module notes of
+    meshlap._parts). Beside them a tube 0.01 thick and 20 long, whose values (jπ/20)² lie
+    denser than its area's share: it is asked again, twice as many, until its highest computed
+    value is above the 10th lowest of all."""
+    V, F = shapes.sphere(500, seed=0)
+    Vs, Fs = [V + [3.0 * i, 0, 0] for i in range(4)], [F + 500 * i for i in range(4)]
+    cot = cotangent(np.vstack(Vs), np.vstack(Fs))
+    asked = []
+    solve = spectral.eigs
+
+    def counted(op, k, **kwargs):
+        asked.append((op.n_vertices, k))
+        return solve(op, k, **kwargs)
+
+    info = {}
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(spectral, "eigs", counted)
+        lam, phi = solve(cot, 8, info=info)
+    assert asked == [(500, 6)] * 4 and info["parts"] == 4
+    assert np.abs(lam - dense_spectrum(cot)[:8]).max() < 1e-8
+    assert np.abs(phi.T @ cot.M @ phi - np.eye(8)).max() < 1e-10
+    # a sphere and a thin tube
+    ring, rings = 8, 201
+    theta = 2 * np.pi * np.arange(ring) / ring
+    x = np.linspace(0.0, 20.0, rings)
+    T = np.column_stack([np.repeat(x, ring), 0.01 * np.tile(np.cos(theta), rings),
+                         0.01 * np.tile(np.sin(theta), rings)]) + [0, 5.0, 0]
+    a = np.arange(rings - 1)[:, None] * ring + np.arange(ring)
+    b = np.arange(rings - 1)[:, None] * ring + (np.arange(ring) + 1) % ring
+    tube = np.vstack([np.column_stack([a.ravel(), b.ravel(), b.ravel() + ring]),
+                      np.column_stack([a.ravel(), b.ravel() + ring, a.ravel() + ring])])
+    cot = cotangent(np.vstack([V, T]), np.vstack([F, tube + 500]))
+    asked.clear()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(spectral, "eigs", counted)
+        lam, _ = solve(cot, 10, info=info)
+    tube_asks = [k for n, k in asked if n == len(T)]
+    assert len(tube_asks) > 1 and tube_asks == sorted(tube_asks)
+    assert np.abs(lam - dense_spectrum(cot)[:10]).max() < 1e-8 * lam.max()
 
 
 def test_a_stalled_lobpcg_is_recomputed_or_raises(monkeypatch):
