@@ -29,6 +29,7 @@ nothing.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import tempfile
@@ -211,6 +212,15 @@ class _FirstCompileNotice(event.Listener):
 event.register("numba:compile", _FirstCompileNotice())
 
 
+@functools.cache
+def _blas_pools() -> Any:
+    # the loaded BLAS libraries, found once: each new controller reads /proc/self/maps again
+    # (2 ms, once per part of a 100-part mesh's eigs)
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
 def one_blas_thread() -> contextlib.AbstractContextManager:
     """Keep BLAS on one thread while meshlap's threads share the products' rows.
 
@@ -218,7 +228,7 @@ def one_blas_thread() -> contextlib.AbstractContextManager:
     products competed with their spinning OpenMP workers and was measured 3-10× slower.
     """
     try:
-        from threadpoolctl import threadpool_limits
+        pools = _blas_pools()
     except ImportError:  # optional: without it BLAS keeps its own setting
         return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+    return pools.limit(limits=1, user_api="blas")
