@@ -277,7 +277,7 @@ def eigs(
         ``True`` draws a bar on stderr; a callable gets ``(fraction, stage)`` with the stage
         names "preconditioner", "cotangent start (iteration i)", "LOBPCG (iteration i)",
         "shift-invert", "shift-invert: factoring", "Lanczos", "Lanczos, deflated", "inertia
-        count", "dense" and "done".
+        count", "dense", "part i of n" (several parts) and "done".
     count : bool, optional
         Prove that no eigenvalue below the k-th is missing by counting the eigenvalues below a
         shift σ just above it (Sylvester's inertia of a sparse LDLᵀ of ``-S - σM``). Default:
@@ -290,7 +290,9 @@ def eigs(
         (each eigenvalue's error bound over ``tol`` times its scale, all ≤ 1),
         ``orthogonality`` (largest entry of ``|ΦᵀMΦ - I|``), ``count``, ``shift`` and
         ``complete`` (whether the count, or a dense solve, showed the k values are the lowest),
-        ``elements``, ``uncertified`` (what roundoff left the check, relative: MeshWarning > 1e-3).
+        ``elements``, ``uncertified`` (what roundoff left the check, relative: MeshWarning > 1e-3);
+        on a sparse pencil of several connected parts, solved part by part (:mod:`meshlap._parts`),
+        ``parts`` too.
     elements : {"auto", "linear", "quadratic"}, default "auto"
         "linear": the pairs of ``op``'s pencil (S, M); "quadratic": of the seven-node elements
         on the same triangles (:mod:`meshlap.quadratic`), read at the vertices, M-orthonormal;

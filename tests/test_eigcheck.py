@@ -249,6 +249,10 @@ def test_parts_are_solved_each_for_its_share():
     assert asked == [(500, 6)] * 4 and info["parts"] == 4
     assert np.abs(lam - dense_spectrum(cot)[:8]).max() < 1e-8
     assert np.abs(phi.T @ cot.M @ phi - np.eye(8)).max() < 1e-10
+    stages = []
+    solve(cot, 8, progress=lambda fraction, stage: stages.append((fraction, stage)))
+    assert [s for _, s in stages] == [f"part {p} of 4" for p in range(1, 5)] + ["done"]
+    assert [f for f, _ in stages] == sorted(f for f, _ in stages) and stages[-1][0] == 1.0
     # a sphere and a thin tube
     ring, rings = 8, 201
     theta = 2 * np.pi * np.arange(ring) / ring
