@@ -165,7 +165,8 @@ def _warn_kernel_boundary(op: Any, idx: np.ndarray) -> None:
 class _FreeRows:
     """``-S`` on the free vertices as CG reads it, a product and a diagonal, without a copy of
     S: a heat kernel's S on a volume holds thousands of entries a row, and slicing and
-    symmetrizing it took three times as long as the solve (20,000 points: 26 s against 9 s)."""
+    symmetrizing it took longer than the solve (cube-tet's 9,261 vertices as a cloud: 7.8 s
+    against 2.8 s; ``benchmarks/bench_pointcloud.py --volume``)."""
 
     def __init__(self, S: sp.csr_matrix, free: np.ndarray) -> None:
         self.S, self.free = S, None if len(free) == S.shape[0] else free

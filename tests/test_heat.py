@@ -222,7 +222,7 @@ def test_a_volume_kernels_poisson_preconditioner_is_not_factored_above_the_thres
 def test_a_dense_row_poisson_solve_neither_copies_nor_slices_s(monkeypatch):
     # a volume kernel's S holds about as many entries a row as there are points nearby; CG reads
     # it through products alone, so its set-up must not symmetrize, slice or negate a copy of it
-    # (20,000 points: 26 s and 16 GiB of set-up against 9 s of solve). Neumann and Dirichlet
+    # (bench_pointcloud.py --volume: 7.8 s of set-up against 2.8 s of solve). Neumann and Dirichlet
     # problems, each against the factored solve.
     import scipy.sparse as sp
 
