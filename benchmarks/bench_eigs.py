@@ -7,6 +7,7 @@ the same process.
     python benchmarks/bench_eigs.py                 # full run, updates benchmarks/RESULTS.md
     python benchmarks/bench_eigs.py --quick         # 4,000 vertices, prints, writes nothing
     python benchmarks/bench_eigs.py --n 100000 --no-write
+    python benchmarks/bench_eigs.py --dense-crossover   # where "auto" stops solving densely
 
 Only public calls are timed, so the same script measures an older checkout
 (``PYTHONPATH=/path/to/old python benchmarks/bench_eigs.py --no-write``).
@@ -95,8 +96,39 @@ def rel_err(lam, ref):
 OPERATORS = (("default", {}), ("kernel", {"operator": "kernel"}), ("paper's", {"operator": "paper"}))
 
 
+def dense_crossover(write: bool) -> None:
+    """CPU of ``eigs(method="dense")`` against ``method="shift-invert"`` (each with its check) on
+    the cotangent pencils of small random spheres: where ``method="auto"`` stops solving a
+    sparse pencil densely (``spectral._DENSE_SPARSE``)."""
+    from meshlap.baselines import cotangent
+
+    spectral.eigs(cotangent(*meshlap.shapes.sphere(300, seed=0)), 5, method="shift-invert")  # load
+    ks = (6, 16, 40)
+    rows = []
+    for n in (150, 300, 500, 800, 1100, 1500):
+        op = cotangent(*meshlap.shapes.sphere(n, seed=1))
+        cells = []
+        for k in ks:
+            for method in ("dense", "shift-invert"):
+                t = time.process_time()
+                for _ in range(3):
+                    spectral.eigs(op, k, method=method)
+                cells.append(f"{(time.process_time() - t) / 3 * 1000:.1f}")
+        rows.append(f"| {n:,} | " + " | ".join(cells) + " |")
+        print(rows[-1], flush=True)
+    head = " | ".join(f"k = {k}: dense | shift-invert" for k in ks)
+    lines = ["Command: `python benchmarks/bench_eigs.py --dense-crossover` (CPU ms, mean of 3; "
+             "the cotangent pencil of a random sphere of n vertices, `meshlap.baselines.cotangent`; "
+             "each method with `eigs`' check and, for shift-invert, its count).", "",
+             f"| n | {head} |", "|---|" + "---|" * (2 * len(ks)), *rows]
+    if write:
+        write_section("eigs: dense or shift-invert", lines)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dense-crossover", action="store_true",
+                    help="dense against shift-invert on small sparse pencils; its own section")
     ap.add_argument("--quick", action="store_true", help="4,000 vertices; print only")
     ap.add_argument("--n", type=int, default=16000)
     ap.add_argument("--k", type=int, default=36)
@@ -104,6 +136,9 @@ def main(argv=None) -> None:
     ap.add_argument("--no-write", action="store_true", help="print only")
     ap.add_argument("--fresh-reference", action="store_true")
     args = ap.parse_args(argv)
+    if args.dense_crossover:
+        dense_crossover(not args.no_write)
+        return
     n, k = (4000, args.k) if args.quick else (args.n, args.k)
 
     load_before = os.getloadavg()[0]  # other jobs on the machine inflate the wall times
