@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -302,18 +303,16 @@ class ImplicitHeat:
             if solver == "direct":
                 self._lu = _factor(A, _ldl.supernodal(op))
             else:  # CG preconditioned by the V-cycle of the system itself
-                self._lu, self._a, self._b = Multigrid(A), 0.0, 1.0
+                self._precondition = Multigrid(A).solve
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
-            self._jacobi = 1.0 / (self.m + tau * diag)
             geo = _mesh_of(op, mesh)
             K = None if geo is None else _cot_stiffness(geo[0], geo[1], self.P, geo[2])
-            self._lu = None
-            if K is not None:
-                h = float(np.median(self.m / np.where(diag > 0, diag, np.inf)))
-                c = h + 2.0 * tau
-                self._a, self._b = h / c, 4.0 * tau / c
-                self._lu = _factor(2.0 * sp.diags(self.m) + c * K, _ldl.supernodal(op))
+            if K is None:
+                w = 1.0 / (self.m + tau * diag)
+                self._precondition = lambda R: w[:, None] * R
+            else:
+                self._precondition = self._cotangent(K, diag, op)
         if len(self.Z):
             ind = np.zeros(n)
             ind[self.Z] = 1.0
@@ -328,10 +327,14 @@ class ImplicitHeat:
         LX = apply_block(self.op, X)[self.P]
         return self.m[:, None] * (Xp - self.tau * LX)
 
-    def _precondition(self, R: np.ndarray) -> np.ndarray:
-        if self._lu is None:
-            return self._jacobi[:, None] * R
-        return self._a * R / self.m[:, None] + self._b * self._lu.solve(np.asfortranarray(R))
+    def _cotangent(self, K: sp.spmatrix, diag: np.ndarray, op: Any) -> Callable[[np.ndarray], np.ndarray]:
+        # the heat-kernel symbol's model a M⁻¹ + b (2M + c K)⁻¹ (module notes), one factorization
+        m = self.m
+        h = float(np.median(m / np.where(diag > 0, diag, np.inf)))
+        c = h + 2.0 * self.tau
+        a, b = h / c, 4.0 * self.tau / c
+        inverse = _factor(2.0 * sp.diags(m) + c * K, _ldl.supernodal(op))
+        return lambda R: a * R / m[:, None] + b * inverse.solve(np.asfortranarray(R))
 
     def _pcg(self, B: np.ndarray, X: np.ndarray) -> np.ndarray:
         X, it, converged = block_pcg(self._apply, self._precondition, B, self.rtol, 1000, X)

@@ -38,9 +38,8 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
-from . import _ldl, _lobpcg
+from . import _ldl, _lobpcg, _parts
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
@@ -240,7 +239,7 @@ class PoissonSolver:
             S = 0.5 * (S + S.T)  # a factorization reads one triangle; multigrid needs the matrix
         self._S = S
         # connected parts of the geometry (through S) and those without a Dirichlet vertex
-        ncomp, label = connected_components(S if len(P) == n else S[P][:, P], directed=False)
+        ncomp, label = _parts.part_labels(S if len(P) == n else S[P][:, P])
         lab = np.full(n, -1)
         lab[P] = label
         self.part_label = lab  # each vertex's connected part through S (-1: no mass)

@@ -488,3 +488,40 @@ def test_lobpcg_block_holds_a_cluster_that_outgrows_the_start():
     ref, _ = spectral.eigs(op, 10, method="dense", elements="linear")
     assert np.abs(lam - ref).max() < 1e-8 * ref[-1]
     assert info["iterations"] <= 8
+
+
+@pytest.mark.parametrize("n, method", [(250, "dense"), (600, "shift-invert")])
+def test_auto_solves_a_sparse_pencil_densely_only_up_to_the_crossover(n, method):
+    """A sparse pencil of up to 300 rows is solved densely, a larger one by shift-invert, whose
+    cost is lower there (benchmarks/bench_eigs.py --dense-crossover: 1,100 rows 68-82 ms against
+    12-35 ms); both give the sphere's l = 1 triple near 2, to 1e-8 of the dense spectrum."""
+    op = cotangent(*shapes.sphere(n, seed=1))
+    info = {}
+    lam, phi = spectral.eigs(op, 6, info=info)
+    assert info["method"] == method
+    w = np.linalg.eigvalsh(np.diag(op.mass ** -0.5) @ -op.S.toarray() @ np.diag(op.mass ** -0.5))
+    assert np.abs(lam - w[:6]).max() < 1e-8 * w[5]
+    assert np.abs(lam[1:4] - 2).max() < 0.1 and lam[0] == pytest.approx(0, abs=1e-9)
+
+
+def test_one_blas_thread_limits_and_restores_without_scanning_the_libraries_again():
+    """BLAS runs on one thread inside the context, as many as before after it, nested too; the
+    loaded libraries are found once (each scan read /proc/self/maps: 2 ms per call, half a
+    15-part mesh's eigs)."""
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    from meshlap import _jit
+
+    def blas():
+        return [p["num_threads"] for p in threadpoolctl.threadpool_info() if p["user_api"] == "blas"]
+
+    before = blas()
+    with _jit.one_blas_thread():
+        assert set(blas()) <= {1}
+        with _jit.one_blas_thread():
+            assert set(blas()) <= {1}
+        assert set(blas()) <= {1}
+    assert blas() == before
+    scans = _jit._blas_pools.cache_info().misses
+    with _jit.one_blas_thread():
+        pass
+    assert _jit._blas_pools.cache_info().misses == scans <= 1
