@@ -104,7 +104,8 @@ def _merged(S: sp.csr_matrix, labels: np.ndarray, m: np.ndarray, k: int,
     # asked for twice that and two more, then for twice as many wherever the merge shows that
     # it could hold more of the k lowest (its highest below the k-th of all), up to k
     share = np.add.reduceat(m[order], bounds[:-1]) / m.sum()
-    want = np.minimum(k, np.ceil(2 * k * share).astype(np.int64) + 2)
+    # copies of one part differ in area by roundoff: the same share, the same want
+    want = np.minimum(k, np.ceil(2 * k * share * (1 - 1e-12)).astype(np.int64) + 2)
     parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, dict, bool]] = [None] * n_parts  # type: ignore[list-item]
     todo = list(range(n_parts))
     while todo:
