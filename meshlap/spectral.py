@@ -45,10 +45,13 @@ __all__ = ["eigs", "sphere_eigenvalue", "heat_kernel_signature", "apply_block"]
 _METHODS = ("auto", "lobpcg", "shift-invert", "dense")
 # Largest system solved densely: a sparse pencil's, where shift-invert costs as much (300 rows;
 # above, O(n³) falls behind: 1,100 rows 68-82 ms against 12-35 ms for k = 6-40, RESULTS.md's
-# "eigs: dense or shift-invert", `bench_eigs.py --dense-crossover`), and a dense-row one's,
-# whose alternative is LOBPCG; and the row density above which a sparse LU fills in badly.
+# "eigs: dense or shift-invert", `bench_eigs.py --dense-crossover`). A dense-row pencil's
+# alternative is LOBPCG, whose products cost n² per vector and iteration against eigh's n³, so
+# the crossover grows with the block: _DENSE_PER_VECTOR rows per vector (measured crossovers
+# about 800 rows for 10 vectors, 1,700 for 20, 4,000 for 44; the same section), up to
+# _DENSE_FALLBACK. Then the row density above which a sparse LU fills in badly.
 _DENSE_SPARSE = 300
-_DENSE_MAX = 1200
+_DENSE_PER_VECTOR = 80
 _SPARSE_ROW_MAX = 40
 # the fallbacks after a failed check: dense up to this many vertices with mass, shift-invert
 # for a dense-row operator up to this many entries (5.1 M: 65 s on 2 cores, LOBPCG 18 s)
@@ -262,8 +265,9 @@ def eigs(
         mesh (``op.V``, ``op.faces``) or ``mesh`` is given, otherwise the diagonal alone.
         ``"shift-invert"``: :func:`scipy.sparse.linalg.eigsh` with a sparse LU of ``-S + σM``
         (slow where it fills in: the heat kernel, a volume). ``"dense"``: :func:`scipy.linalg.eigh`.
-        ``"auto"``: dense up to 300 vertices (1,200 where S has more than 40 entries per row),
-        shift-invert up to 40 entries per row, else LOBPCG;
+        ``"auto"``: dense up to 300 vertices (where S has more than 40 entries per row, up to
+        80 per vector of LOBPCG's block, ``k + extra``, at most 4,000), shift-invert up to 40
+        entries per row, else LOBPCG;
         LOBPCG with multigrid on a volume of more than 8,000 vertices (module notes).
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
@@ -377,11 +381,12 @@ def eigs(
         return lam, _normalize_signs(_extend(op, P, X))
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
     multigrid = sparse and _multigrid.replaces_factor(op, n_p) and method in ("auto", "lobpcg")
-    if method == "auto":
-        method = ("dense" if n_p <= (_DENSE_SPARSE if sparse else _DENSE_MAX)
-                  else "shift-invert" if sparse and not multigrid else "lobpcg")
     adapt = extra is None
     extra = max(4, k // 10) if extra is None else int(extra)
+    if method == "auto":
+        dense_max = _DENSE_SPARSE if sparse else min(_DENSE_PER_VECTOR * (k + extra), _DENSE_FALLBACK)
+        method = ("dense" if n_p <= dense_max
+                  else "shift-invert" if sparse and not multigrid else "lobpcg")
     if method == "lobpcg" and 3 * (k + extra) >= n_p:
         method = "dense"
 
