@@ -9,7 +9,8 @@ vertex ``d`` of the way from a corner to the opposite side's midpoint (``shapes.
 200 copies, with needles and caps between each and its corner; at 10⁻⁹ the copies are
 welded). λ₁ of the default's pencil (linear, and quadratic, the default's spectra) beside
 libigl's cotangent pencil (eigsh, shift-invert) on the same triangles, ``eigs``'
-``info["uncertified"]`` (roundoff's yardstick over λ₁: a MeshWarning above 1e-3), its
+``info["uncertified"]`` (each pair's bound with its residual's roundoff, over its eigenvalue:
+a MeshWarning above 1e-3), its
 shift-invert runs and the CPU seconds of build + 6 pairs.
 
 Table 2: a unit sphere (800 vertices) beside one of radius ``s`` (200 vertices): the two zeros,

@@ -44,7 +44,7 @@ from . import _ldl, _lobpcg
 from .errors import MeshWarning, user_stacklevel
 
 __all__ = ["UNCERTIFIED", "Attempt", "Verdict", "count_below", "count_ceiling", "count_shift", "lumped_eigh",
-           "first_verified", "uncertified", "verify", "warn_roundoff"]
+           "certified", "first_verified", "residual_roundoff", "uncertified", "verify", "warn_roundoff"]
 
 # the largest |ΦᵀMΦ - I| entry accepted (rounding leaves ~1e-13; a collapsed block, O(1))
 _ORTHO = 1e-7
@@ -116,12 +116,51 @@ def uncertified(lam: np.ndarray, tol: float, floor: float, scale: float) -> floa
     return float(max(tol, _EPS) * floor / nonzero.min()) if len(nonzero) else 0.0
 
 
+def residual_roundoff(apply_abs: Callable[[np.ndarray], np.ndarray], m: np.ndarray,
+                      X: np.ndarray) -> np.ndarray:
+    """What roundoff can leave in each column's computed residual (:func:`verify`): 4ε ‖|A| |x_i|‖
+    in the M⁻¹ norm, ``apply_abs`` multiplying by |A|. Large only where the vector itself sits on
+    a stiff row (a sliver's vertex, a near copy), where ``roundoff_floor``'s 4ε · max A_ii / m_i
+    assumes it always does.
+
+    Examples
+    --------
+    >>> A = np.diag([1.0, 1e12])                    # a stiff row the vector does not touch
+    >>> float(residual_roundoff(lambda Y: np.abs(A) @ Y, np.ones(2), np.array([[1.0], [0.0]]))[0])
+    8.881784197001252e-16
+    """
+    Y = apply_abs(np.abs(X))
+    return 4 * _EPS * np.sqrt(np.maximum((Y * Y / m[:, None]).sum(axis=0), 0.0))
+
+
+def certified(lam: np.ndarray, residuals: np.ndarray, bounds: np.ndarray, tol: float, floor: float,
+              rho: np.ndarray) -> np.ndarray:
+    """Each eigenvalue's error bound when its computed residual may be off by ``rho``
+    (:func:`residual_roundoff`): Bauer–Fike on ``residual + rho``, or the check's Kato–Temple
+    bound (``bounds`` over ``tol`` times the scale, as :func:`verify` returns it) grown as the
+    square of the residual, whichever is less.
+
+    Examples
+    --------
+    >>> b = certified(np.array([2.0, 6.0]), np.array([1e-6, 1e-6]), np.array([0.5, 1.0]), 1e-8, 0.01,
+    ...               np.array([1e-9, 1e-6]))
+    >>> [float(f"{x:.4g}") for x in b]     # Kato–Temple's 1e-8 and 6e-8, grown
+    [1.002e-08, 2.4e-07]
+    """
+    err = bounds * tol * scales(lam, floor)
+    grown = residuals + rho
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kato = np.where(residuals > 0, err * (grown / residuals) ** 2, np.inf)
+    return np.minimum(grown, kato)
+
+
 def warn_roundoff(lam: np.ndarray, tol: float, floor: float, scale: float, stiff: float,
-                  info: dict | None = None) -> float:
-    """What the check certified of the returned eigenvalues where roundoff, not ``tol``, set it:
-    its absolute yardstick ``tol · floor`` over the smallest returned value above 1% of the
-    scale (a part's zeros are certified absolutely). Beyond ``UNCERTIFIED`` a
-    :class:`meshlap.MeshWarning` names the cause; ``info["uncertified"]`` gets the ratio.
+                  info: dict | None = None, bound: np.ndarray | None = None) -> float:
+    """What the check certified of the returned eigenvalues where roundoff, not ``tol``, set it,
+    relative to the values above 1% of the scale (a part's zeros are certified absolutely): each
+    pair's ``bound`` (:func:`certified`) where given, else the absolute yardstick ``tol · floor``
+    over the smallest. Beyond ``UNCERTIFIED`` a :class:`meshlap.MeshWarning` names the cause;
+    ``info["uncertified"]`` gets the ratio.
 
     Examples
     --------
@@ -129,11 +168,15 @@ def warn_roundoff(lam: np.ndarray, tol: float, floor: float, scale: float, stiff
     5e-11
     """
     ratio, yardstick = uncertified(lam, tol, floor, scale), max(tol, _EPS) * floor
+    nonzero = lam > 0.01 * scale
+    if bound is not None and nonzero.any():
+        share = bound[nonzero] / lam[nonzero]
+        ratio, yardstick = float(share.max()), float(bound[nonzero][share.argmax()])
     if info is not None:
         info["uncertified"] = ratio
     if ratio > UNCERTIFIED:
-        warnings.warn(f"eigs: roundoff limits the check to ±{yardstick:.2g} ({ratio:.1%} of the smallest "
-                      f"nonzero eigenvalue returned, not tol = {tol:g}): a row of this pencil has "
+        warnings.warn(f"eigs: roundoff limits the check to ±{yardstick:.2g} ({ratio:.1%} of a nonzero "
+                      f"eigenvalue returned, not tol = {tol:g}): a row of this pencil has "
                       f"S_ii/m_i = {stiff:.2g}, near-degenerate triangles or nearly coincident vertices; "
                       "weld or remove them for certified eigenvalues", MeshWarning,
                       stacklevel=user_stacklevel())

@@ -8,7 +8,7 @@ digits than a shift-invert solve whose matrix has a condition number of 10¹³ t
 (measured: a unit sphere beside one of radius 10⁻⁵ raised EigenError; 10⁻⁴ passed). And parts
 alike (the gears and screws of an assembly) give the whole every eigenvalue once per copy,
 clusters that a Lanczos solve resolves slowly and its count check rejects (the corpus's gears,
-7 parts: 4.9 s and uncertified whole, 0.4 s part by part; ``benchmarks/bench_degenerate.py``).
+7 parts: 4.1 s whole, 0.5 s part by part; ``benchmarks/bench_degenerate.py``).
 Alone, each part is solved and checked at its own scale.
 
 The k lowest of the whole are among each part's k lowest, but most parts hold few of them. By

@@ -447,20 +447,37 @@ def eigs(
             out[order] = _lobpcg.csr_times(B, X[order], -m[order])
             return out
         # a sparse pencil by scipy's product: no compiled kernel to load for the check alone
+        if sparse:
+            return -m[:, None] * _at(symmetric_L(op), P, X, op.n_vertices)
         full = X if n_p == op.n_vertices else np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
-        LX = symmetric_L(op) @ full if sparse else apply_block(op, full)
-        return -m[:, None] * np.asarray(LX)[P]
+        return -m[:, None] * np.asarray(apply_block(op, full))[P]
 
     stiff = 0.0 if matrix_free else float(np.abs(symmetric_L(op).diagonal()[P]).max())  # max S_ii / m_i
     scale = _scale_shift(m)
     floor = _eigcheck.roundoff_floor(stiff, tol, scale)
+    checked = {} if info is None else info
     with one_blas_thread():  # the check's Gram matrices share rows among meshlap's threads
-        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count), info=info)
-    _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info)
+        lam, X = _eigcheck.first_verified(ladder, k, apply_A, m, tol, floor, counter, bool(count),
+                                          info=checked)
+    bound = None
+    if sparse and floor > 0.01 * scale:  # what roundoff left these pairs' residuals, not any vector's
+        absolute = abs(symmetric_L(op))
+        rho = _eigcheck.residual_roundoff(lambda Y: m[:, None] * _at(absolute, P, Y, op.n_vertices), m, X)
+        bound = _eigcheck.certified(lam, checked["residuals"], checked["bounds"], tol, floor, rho)
+    _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info, bound)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
+
+
+def _at(L: sp.spmatrix, P: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:
+    # (L x)[P] for x = X on P and 0 elsewhere
+    if len(P) == n:
+        return np.asarray(L @ X)
+    full = np.zeros((n, X.shape[1]))
+    full[P] = X
+    return np.asarray(L @ full)[P]
 
 
 def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ₁ = 2)
