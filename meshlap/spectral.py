@@ -271,7 +271,7 @@ def eigs(
         LOBPCG with multigrid on a volume of more than 8,000 vertices (module notes).
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
-        ``√tol``. Passed to eigsh for shift-invert.
+        ``√tol``. Passed to eigsh for shift-invert. 0 asks for machine precision, as for eigsh.
     maxiter : int, default 200
         LOBPCG iterations before its pairs go to the check as they are.
     extra : int, optional
@@ -343,8 +343,7 @@ def eigs(
     """
     if method not in _METHODS:
         raise MeshError(f"method must be one of {', '.join(_METHODS)}; got {method!r}")
-    if not (isinstance(tol, (int, float)) and 0 <= tol < 1):
-        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    tol = _check_tol(tol)
     if count not in (None, True, False):
         raise MeshError(f"count must be None, True or False; got {count!r}")
     if elements not in ("auto", "linear", "quadratic"):
@@ -469,6 +468,13 @@ def eigs(
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
+
+
+def _check_tol(tol: Any) -> float:
+    # the eigenvalues' relative accuracy; 0 is machine precision, as for eigsh
+    if isinstance(tol, bool) or not (isinstance(tol, (int, float)) and 0 <= tol < 1):
+        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    return float(tol) or float(np.finfo(float).eps)
 
 
 def _at(L: sp.spmatrix, P: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:

@@ -523,6 +523,21 @@ def test_auto_solves_a_dense_row_pencil_densely_up_to_80_rows_per_vector(n, k, m
     assert np.abs(lam - ref).max() < 1e-6 * ref[-1]
 
 
+@pytest.mark.parametrize("operator", ["cotangent", "kernel"])
+def test_tol_zero_asks_for_machine_precision_as_eigsh_does(operator):
+    """tol=0, eigsh's machine precision, was accepted and then failed every solver: an EigenError
+    ("error bound up to inf × tol") after three solves. It now checks to ε: shift-invert on the
+    cotangent pencil, LOBPCG on the heat kernel's dense rows; both match the dense spectrum."""
+    V, F = shapes.sphere(1000, seed=0)
+    op = cotangent(V, F) if operator == "cotangent" else meshlap.laplacian(V, F, operator="kernel")
+    info = {}
+    lam, _ = spectral.eigs(op, 6, tol=0, info=info)
+    assert info["method"] == ("shift-invert" if operator == "cotangent" else "lobpcg")
+    S = op.S.toarray()
+    w = np.linalg.eigvalsh(np.diag(op.mass ** -0.5) @ -(S + S.T) / 2 @ np.diag(op.mass ** -0.5))
+    assert np.abs(lam - w[:6]).max() < 1e-10 * w[5]
+
+
 def test_one_blas_thread_limits_and_restores_without_scanning_the_libraries_again():
     """BLAS runs on one thread inside the context, as many as before after it, nested too; the
     loaded libraries are found once (each scan read /proc/self/maps: 2 ms per call, half a

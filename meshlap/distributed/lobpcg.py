@@ -301,7 +301,7 @@ def eigs(
         Number of eigenpairs.
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues, as in :func:`meshlap.spectral.eigs` (a bound
-        from the residuals; eigenvectors then accurate to about √tol).
+        from the residuals; eigenvectors then accurate to about √tol); 0 asks for machine precision.
     maxiter : int, default 300
         Iterations before giving up with a warning.
     extra : int, optional
@@ -362,8 +362,7 @@ def eigs(
     from mpi4py import MPI
 
     comm = op.comm
-    if not (isinstance(tol, (int, float)) and 0 <= tol < 1):
-        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    tol = spectral._check_tol(tol)
     if preconditioner not in ("global", "local"):
         raise MeshError(f"preconditioner must be 'global' or 'local'; got {preconditioner!r}")
     m_all = np.asarray(op.mass, dtype=np.float64)
