@@ -271,7 +271,8 @@ def eigs(
         LOBPCG with multigrid on a volume of more than 8,000 vertices (module notes).
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
-        ``√tol``. Passed to eigsh for shift-invert. 0 asks for machine precision, as for eigsh.
+        ``√tol``. Passed to eigsh for shift-invert. 0 (as for eigsh), or anything below machine
+        precision, asks for machine precision.
     maxiter : int, default 200
         LOBPCG iterations before its pairs go to the check as they are.
     extra : int, optional
@@ -343,7 +344,7 @@ def eigs(
     """
     if method not in _METHODS:
         raise MeshError(f"method must be one of {', '.join(_METHODS)}; got {method!r}")
-    tol = _check_tol(tol)
+    tol = _check_solver(tol, maxiter, extra, seed)
     if count not in (None, True, False):
         raise MeshError(f"count must be None, True or False; got {count!r}")
     if elements not in ("auto", "linear", "quadratic"):
@@ -470,11 +471,17 @@ def eigs(
     return lam, _normalize_signs(_extend(op, P, X))
 
 
-def _check_tol(tol: Any) -> float:
-    # the eigenvalues' relative accuracy; 0 is machine precision, as for eigsh
+def _check_solver(tol: Any, maxiter: Any, extra: Any, seed: Any) -> float:
+    """The solver options of eigs (and the distributed one), checked; returns tol, where 0 (as
+    for eigsh) and anything below machine precision ask for machine precision."""
     if isinstance(tol, bool) or not (isinstance(tol, (int, float)) and 0 <= tol < 1):
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
-    return float(tol) or float(np.finfo(float).eps)
+    for name, value, least in (("maxiter", maxiter, 1), ("extra", extra, 0), ("seed", seed, 0)):
+        if name == "extra" and value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+            raise MeshError(f"{name} must be an integer of at least {least}; got {value!r}")
+    return max(float(tol), float(np.finfo(float).eps))
 
 
 def _at(L: sp.spmatrix, P: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:

@@ -197,6 +197,12 @@ def test_bad_arguments():
         spectral.eigs(op, 4, method="arnoldi")
     with pytest.raises(meshlap.MeshError, match="tol must"):
         spectral.eigs(op, 4, tol=2.0)
+    # these crashed inside LOBPCG (UnboundLocalError, IndexError, TypeError) or numpy's seeding
+    for bad in ({"maxiter": -3}, {"maxiter": 2.5}, {"maxiter": True}, {"extra": -2}, {"seed": -1},
+                {"seed": "a"}):
+        name = next(iter(bad))
+        with pytest.raises(meshlap.MeshError, match=f"{name} must be an integer of at least"):
+            spectral.eigs(op, 4, method="lobpcg", **bad)
     with pytest.raises(meshlap.MeshError, match="mesh has"):
         spectral.eigs(op, 4, method="lobpcg", mesh=(V[:10], F[:2]))
 
@@ -526,8 +532,9 @@ def test_auto_solves_a_dense_row_pencil_densely_up_to_80_rows_per_vector(n, k, m
 @pytest.mark.parametrize("operator", ["cotangent", "kernel"])
 def test_tol_zero_asks_for_machine_precision_as_eigsh_does(operator):
     """tol=0, eigsh's machine precision, was accepted and then failed every solver: an EigenError
-    ("error bound up to inf × tol") after three solves. It now checks to ε: shift-invert on the
-    cotangent pencil, LOBPCG on the heat kernel's dense rows; both match the dense spectrum."""
+    ("error bound up to inf × tol") after three solves; so did 1e-300. Both now check to ε:
+    shift-invert on the cotangent pencil, LOBPCG on the heat kernel's dense rows; both match the
+    dense spectrum."""
     V, F = shapes.sphere(1000, seed=0)
     op = cotangent(V, F) if operator == "cotangent" else meshlap.laplacian(V, F, operator="kernel")
     info = {}
@@ -536,6 +543,8 @@ def test_tol_zero_asks_for_machine_precision_as_eigsh_does(operator):
     S = op.S.toarray()
     w = np.linalg.eigvalsh(np.diag(op.mass ** -0.5) @ -(S + S.T) / 2 @ np.diag(op.mass ** -0.5))
     assert np.abs(lam - w[:6]).max() < 1e-10 * w[5]
+    below, _ = spectral.eigs(op, 6, tol=1e-300)  # below machine precision: the same
+    assert np.abs(below - lam).max() < 1e-10 * w[5]
 
 
 def test_one_blas_thread_limits_and_restores_without_scanning_the_libraries_again():

@@ -362,7 +362,7 @@ def eigs(
     from mpi4py import MPI
 
     comm = op.comm
-    tol = spectral._check_tol(tol)
+    tol = spectral._check_solver(tol, maxiter, extra, seed)
     if preconditioner not in ("global", "local"):
         raise MeshError(f"preconditioner must be 'global' or 'local'; got {preconditioner!r}")
     m_all = np.asarray(op.mass, dtype=np.float64)
