@@ -408,4 +408,6 @@ def harmonic(op: Any, idx: Any, values: Any, *, solver: str = "auto") -> np.ndar
     >>> bool(np.allclose(u, V[:, 0] - 2 * V[:, 1]))
     True
     """
+    if np.asarray(idx).size == 0:  # insulated everywhere: every constant is harmonic
+        raise MeshError("harmonic needs at least one vertex with a value; got none")
     return poisson(op, 0.0, dirichlet=(idx, values), solver=solver)

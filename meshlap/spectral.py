@@ -36,7 +36,7 @@ from .errors import MeshError
 from .fem import expand_copies
 from .geometry import spatial_order
 from .geometry.topology import duplicate_vertices
-from .geometry.validation import check_faces, check_k, check_vertices
+from .geometry.validation import check_faces, check_k, check_solver, check_vertices
 from .progress import ProgressLike, make_progress, onward
 from .samples import sphere_eigenvalue
 
@@ -344,7 +344,7 @@ def eigs(
     """
     if method not in _METHODS:
         raise MeshError(f"method must be one of {', '.join(_METHODS)}; got {method!r}")
-    tol = _check_solver(tol, maxiter, extra, seed)
+    tol = check_solver(tol, maxiter, extra, seed)
     if count not in (None, True, False):
         raise MeshError(f"count must be None, True or False; got {count!r}")
     if elements not in ("auto", "linear", "quadratic"):
@@ -469,19 +469,6 @@ def eigs(
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
-
-
-def _check_solver(tol: Any, maxiter: Any, extra: Any, seed: Any) -> float:
-    """The solver options of eigs (and the distributed one), checked; returns tol, where 0 (as
-    for eigsh) and anything below machine precision ask for machine precision."""
-    if isinstance(tol, bool) or not (isinstance(tol, (int, float)) and 0 <= tol < 1):
-        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
-    for name, value, least in (("maxiter", maxiter, 1), ("extra", extra, 0), ("seed", seed, 0)):
-        if name == "extra" and value is None:
-            continue
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-            raise MeshError(f"{name} must be an integer of at least {least}; got {value!r}")
-    return max(float(tol), float(np.finfo(float).eps))
 
 
 def _at(L: sp.spmatrix, P: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:

@@ -377,6 +377,9 @@ def test_degenerate_neighbourhoods():
     assert np.isfinite(m).all() and (m >= 0).all()
 
 
+_CLOUD50 = np.random.default_rng(0).uniform(size=(50, 3))
+
+
 @pytest.mark.parametrize(
     ("P", "kw", "match"),
     [
@@ -386,6 +389,11 @@ def test_degenerate_neighbourhoods():
         (np.full((10, 3), np.nan), {}, "NaN"),
         (np.zeros(10), {}, r"shape \(n, d\)"),
         (np.ones((10, 3)), {"k": 0}, "positive integer"),
+        # these were accepted: every point an outlier (mass 0), none, nothing merged, a float K
+        (_CLOUD50, {"outlier_ratio": 0}, "outlier_ratio must be a number > 1"),
+        (_CLOUD50, {"outlier_ratio": np.nan}, "outlier_ratio must be a number > 1"),
+        (_CLOUD50, {"merge_tol": -1.0}, "merge_tol must be a finite number >= 0"),
+        (_CLOUD50, {"neighbors": 3.5}, "neighbors must be an integer"),
     ],
 )
 def test_bad_clouds_name_the_problem(P, kw, match):

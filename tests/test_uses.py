@@ -329,6 +329,8 @@ def test_dirichlet_input_checks(disc):
         harmonic(op, [1, 1], [0.0, 1.0])
     with pytest.raises(meshlap.MeshError, match="one finite value"):
         harmonic(op, [1, 2], [0.0, np.nan])
+    with pytest.raises(meshlap.MeshError, match="at least one vertex"):  # it returned zeros
+        harmonic(op, [], [])
     with pytest.raises(meshlap.MeshError, match="geometry"):
         poisson(op, 0.0, neumann=([0], [1.0]))
 

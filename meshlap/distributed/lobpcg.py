@@ -55,7 +55,7 @@ from .. import _eigcheck, _lobpcg, baselines, spectral
 from .._jit import one_blas_thread
 from ..errors import EigenError, MeshError
 from ..geometry.topology import duplicate_vertices
-from ..geometry.validation import check_faces, check_k, check_vertices
+from ..geometry.validation import check_faces, check_k, check_solver, check_vertices
 from ..progress import ProgressLike, make_progress, onward
 from .comm import _has_mumps
 
@@ -362,7 +362,7 @@ def eigs(
     from mpi4py import MPI
 
     comm = op.comm
-    tol = spectral._check_solver(tol, maxiter, extra, seed)
+    tol = check_solver(tol, maxiter, extra, seed)
     if preconditioner not in ("global", "local"):
         raise MeshError(f"preconditioner must be 'global' or 'local'; got {preconditioner!r}")
     m_all = np.asarray(op.mass, dtype=np.float64)

@@ -142,7 +142,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     outlier_ratio : float, default 10
         A point whose nearest neighbour is this many times farther than its neighbours'
         typical distance to their 8 nearest neighbours (the median of the means) is an
-        outlier and gets mass 0.
+        outlier and gets mass 0; above 1, ``math.inf`` for none.
 
     Returns
     -------
@@ -177,6 +177,13 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
         raise MeshError(f"k (the intrinsic dimension) must be a positive integer; got {k!r}")
     k = int(k)
+    if neighbors is not None and (isinstance(neighbors, bool)
+                                  or not isinstance(neighbors, (int, np.integer))):
+        raise MeshError(f"neighbors must be an integer; got {neighbors!r}")
+    if not (isinstance(merge_tol, (int, float)) and 0 <= merge_tol < math.inf):
+        raise MeshError(f"merge_tol must be a finite number >= 0; got {merge_tol!r}")
+    if not (isinstance(outlier_ratio, (int, float)) and outlier_ratio > 1):  # inf: no outliers
+        raise MeshError(f"outlier_ratio must be a number > 1 (math.inf: no outliers); got {outlier_ratio!r}")
     if d < k:
         raise MeshError(f"points in R^{d} cannot sample a {k}-dimensional manifold (k={k} > d={d})")
     rep, shared, spacing0 = _merge_duplicates(P, merge_tol)

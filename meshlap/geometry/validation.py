@@ -27,6 +27,7 @@ __all__ = [
     "check_faces",
     "check_h",
     "check_k",
+    "check_solver",
     "check_positive",
     "check_rows",
     "check_tol",
@@ -240,6 +241,25 @@ def check_h(h: Any, name: str = "h") -> float:
             "stays a finite, non-zero float64; rescale the mesh"
         )
     return value
+
+
+def check_solver(tol: Any, maxiter: Any, extra: Any = None, seed: Any = 0) -> float:
+    """Check an eigensolver's options; return ``tol``, where 0 (as for eigsh) and anything below
+    machine precision ask for machine precision.
+
+    Examples
+    --------
+    >>> check_solver(1e-8, 200), check_solver(0, 200)
+    (1e-08, 2.220446049250313e-16)
+    """
+    if isinstance(tol, (bool, np.bool_)) or not (isinstance(tol, numbers.Real) and 0 <= tol < 1):
+        raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
+    for name, value, least in (("maxiter", maxiter, 1), ("extra", extra, 0), ("seed", seed, 0)):
+        if name == "extra" and value is None:
+            continue
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < least:
+            raise MeshError(f"{name} must be an integer of at least {least}; got {value!r}")
+    return max(float(tol), float(np.finfo(float).eps))
 
 
 def check_k(k: Any, n: int, name: str = "k") -> int:
