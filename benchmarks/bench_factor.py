@@ -60,22 +60,6 @@ def inputs(quick: bool, corpus: Path | None) -> list[tuple[str, np.ndarray, np.n
     return out
 
 
-def nd_row(name: str, op) -> dict:
-    """A larger volume's factorization in the two orderings only (the ND table)."""
-    A = sp.csc_matrix(-0.5 * (op.S + op.S.T) + sp.diags(1e-3 * op.mass))
-    b = np.random.default_rng(0).standard_normal((A.shape[0], 64))
-    row = {"input": name, "pencil": "linear", "n": A.shape[0]}
-    dissected = ("SuperLU ND", lambda A: _ldl._LU(A, _ldl.nested_dissection(A)))
-    for label, make in (("SuperLU", _ldl._LU), dissected):
-        t, f = cpu(lambda make=make: make(A))
-        one, _ = cpu(lambda f=f: f.solve(b[:, 0]), 3)
-        block, x = cpu(lambda f=f: f.solve(b), 3)
-        residual = float(np.abs(A @ x - b).max() / np.abs(b).max())
-        row[label] = (t, f._lu.L.nnz + f._lu.U.nnz, one, block, residual)
-        del f
-    return row
-
-
 def factor_rows(name: str, op) -> list[dict]:
     rows = []
     pencils = [("linear", op.S, op.mass)]
@@ -86,12 +70,9 @@ def factor_rows(name: str, op) -> list[dict]:
         A = sp.csc_matrix(-0.5 * (S + S.T) + sp.diags(1e-3 * m + (m == 0)))
         b = np.random.default_rng(0).standard_normal((A.shape[0], 64))
         row = {"input": name, "pencil": kind, "n": A.shape[0]}
-        makers = [("SuperLU", _ldl._LU), ("LDLᵀ", _ldl._LDL)]
-        if op.dim == 3:  # a volume's: SuperLU in its nested-dissection ordering (ordering timed too)
-            makers.append(("SuperLU ND", lambda A: _ldl._LU(A, _ldl.nested_dissection(A))))
-        for label, make in makers:
+        for label, make in (("SuperLU", _ldl._LU), ("LDLᵀ", _ldl._LDL)):
             t, f = cpu(lambda make=make, A=A: make(A))
-            if label.startswith("SuperLU"):
+            if label == "SuperLU":
                 fill = f._lu.L.nnz + f._lu.U.nnz
             else:
                 fill = 2 * f._factors[0].nnz + A.shape[0]
@@ -174,29 +155,16 @@ def main() -> None:
             erows.append(eigs_row(name, V, F, k, "quadratic"))
         if k == 3:
             srows += solve_rows(name, V, F)
-            if not args.quick and len(V) == 29791:  # then larger cubes, in the ND table only
-                for m in (35, 40):
-                    big = samples.cube_tetrahedra(m)
-                    frows.append(nd_row(f"tetrahedral cube {m}³", meshlap.laplacian(*big, k=3)))
         print(f"{name}: done ({time.time() - start:.0f} s)", file=sys.stderr, flush=True)
     lines = ["Factorizations of −S + 10⁻³M: CPU seconds, stored entries, one "
              "solve and a 64-column block (residual of the block, relative).", "",
              "| input | pencil | n | SuperLU factor s | entries | 1 solve ms | 64 solves ms | "
              "LDLᵀ factor s | entries | 1 solve ms | 64 solves ms | residual |", "|" + "---|" * 12]
-    for r in [r for r in frows if "LDLᵀ" in r]:
+    for r in frows:
         lu, ldl = r["SuperLU"], r["LDLᵀ"]
         lines.append(f"| {r['input']} | {r['pencil']} | {r['n']:,} | {lu[0]:.3f} | {lu[1] / 1e6:.2f} M | "
                      f"{1e3 * lu[2]:.1f} | {1e3 * lu[3]:.0f} | {ldl[0]:.3f} | {ldl[1] / 1e6:.2f} M | "
                      f"{1e3 * ldl[2]:.1f} | {1e3 * ldl[3]:.0f} | {max(lu[4], ldl[4]):.0e} |")
-    nd = [r for r in frows if "SuperLU ND" in r]
-    lines += ["", "A volume's SuperLU in the nested-dissection ordering that `_ldl.factor` gives it "
-              "(`_ldl.nested_dissection`, its time included), beside minimum degree (the table above):", "",
-              "| input | n | minimum degree: factor s | entries | nested dissection: factor s | entries | "
-              "1 solve ms | 64 solves ms | residual |", "|" + "---|" * 9]
-    for r in nd:
-        lu, dis = r["SuperLU"], r["SuperLU ND"]
-        lines.append(f"| {r['input']} | {r['n']:,} | {lu[0]:.3f} | {lu[1] / 1e6:.2f} M | {dis[0]:.3f} | "
-                     f"{dis[1] / 1e6:.2f} M | {1e3 * dis[2]:.1f} | {1e3 * dis[3]:.0f} | {dis[4]:.0e} |")
     lines += ["", "`spectral.eigs(meshlap.laplacian(V, F), 10)`, build + 10 verified pairs (the default's "
               "elements: quadratic up to `QUADRATIC_MAX_UNKNOWNS`, about 16,500 vertices), CPU seconds: "
               "the default's factorizations, every one forced to the other kind, and libigl's "

@@ -12,16 +12,15 @@ where U's diagonal carries the pivots.
 
 A volume's eigenpairs are another matter: its separators are surfaces, so its fronts are dense,
 SuperLU's supernodes (BLAS-3 on those fronts) factor it faster for the same fill, and
-shift-invert solves one vector at a time, where SuperLU is faster too (``benchmarks/bench_factor.py``:
-tetrahedral cube of 29,791 vertices, factor 2.7 s against LDLᵀ's 7.1 s, one solve 25 ms against
-36 ms). ``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
-SuperLU there, in the ordering of :func:`nested_dissection`: minimum degree, which looks one
-vertex ahead, does not find a volume's surface separators, and its fill grows faster (the same
-table: 68,921 vertices, 11.6 s and 71 M stored entries against 68.7 s and 107 M; 46,656: 4.4 s
-against 19.2 s). :func:`meshlap.spectral.eigs`, implicit heat steps, Poisson solves and the heat
-method's step ask for it. LDLᵀ's blocked solves are faster (64 columns of the 9,261-vertex cube
-in 51 ms against SuperLU's 173-215 ms), but the factorization's cost comes first unless
-hundreds of columns are solved.
+shift-invert solves one vector at a time, where SuperLU is faster too (tetrahedral cubes: 9,261
+vertices, factor 0.68 s against 0.78 s, 10 eigenpairs 2.5 s against 2.6 s; 29,791 vertices, factor
+5.8 s against 16.8 s, one solve 30 ms against 45 ms, 10 eigenpairs 16.8 s against 37.0 s).
+``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
+SuperLU there; :func:`meshlap.spectral.eigs`, implicit heat steps and Poisson solves ask for it
+(the larger cube's heat step 5.2 s against 14.0 s, a Poisson solve 5.5 s against 14.4 s). LDLᵀ's
+blocked solves are faster (64 columns of the smaller cube in 57 ms against SuperLU's 303 ms,
+``benchmarks/bench_factor.py``), but the factorization's cost comes first unless hundreds of
+columns are solved.
 """
 
 from __future__ import annotations
@@ -36,7 +35,7 @@ import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 
 from ._jit import jit
 
-__all__ = ["NARROW", "Factor", "factor", "nested_dissection", "supernodal", "triangular_solves"]
+__all__ = ["NARROW", "Factor", "factor", "supernodal", "triangular_solves"]
 
 #: blocks up to this many columns are solved one column after the other; wider ones by
 #: :func:`triangular_solves`, one pass over each factor for all columns (64 columns of a
@@ -155,75 +154,21 @@ class _LDL:
 
 
 class _LU:
-    def __init__(self, A: sp.csc_matrix, order: np.ndarray | None = None) -> None:
-        # ``order``: a symmetric ordering of our own (nested dissection), kept as it is
-        self._p = order
-        if order is not None:
-            A = sp.csc_matrix(A[order][:, order])
-        self._lu = sp.linalg.splu(A, permc_spec="MMD_AT_PLUS_A" if order is None else "NATURAL",
-                                  diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    def __init__(self, A: sp.csc_matrix) -> None:
+        self._lu = sp.linalg.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                                  options={"SymmetricMode": True})
         d = self._lu.U.diagonal()
         symmetric = np.array_equal(self._lu.perm_r, self._lu.perm_c)  # SuperLU did not pivot
         self.negative = (int((d < 0).sum()) if symmetric and not np.iscomplexobj(d)
                          and np.isfinite(d).all() and d.all() else None)
 
     def solve(self, B: np.ndarray) -> np.ndarray:
-        if self._p is None:
-            return self._lu.solve(np.asfortranarray(B))
-        X = np.empty(B.shape, dtype=np.result_type(B, self._lu.U.dtype))
-        X[self._p] = self._lu.solve(np.asfortranarray(B[self._p]))
-        return X
+        return self._lu.solve(np.asfortranarray(B))
 
     def triangles(self):
         U = sp.csr_matrix(self._lu.U)
-        into, out = self._lu.perm_r, self._lu.perm_c
-        if self._p is not None:  # B[p] goes in, the result comes back to p
-            back = np.argsort(self._p)
-            into, out = into[back], out[back]
-        lower, upper = sp.csr_matrix(sp.tril(self._lu.L, k=-1)), sp.csr_matrix(sp.triu(U, k=1))
-        return into, lower, upper, U.diagonal(), out
-
-
-def nested_dissection(A: sp.spmatrix, leaf: int = 64) -> np.ndarray:
-    """A fill-reducing symmetric ordering of ``A``'s graph by recursive bisection (George's
-    nested dissection with level structures): the vertices at the median distance from a
-    pseudo-peripheral vertex separate the rest into two halves, each ordered the same way, the
-    separator last. A volume's separators are surfaces, so minimum degree, which looks one
-    vertex ahead, fills far more (module notes).
-
-    Examples
-    --------
-    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(200, 200))
-    >>> p = nested_dissection(A, leaf=8)
-    >>> sorted(p.tolist()) == list(range(200)), int(p[-1])      # a path: its middle goes last
-    (True, 100)
-    """
-    from scipy.sparse.csgraph import connected_components, dijkstra
-
-    G = sp.csr_matrix(A, dtype=np.float64, copy=True)
-    G.data[:] = 1.0
-    G.setdiag(0.0)
-    G.eliminate_zeros()
-
-    def hops(H: sp.csr_matrix, root: int) -> np.ndarray:
-        return dijkstra(H, directed=False, indices=root, unweighted=True)
-
-    def order(idx: np.ndarray) -> list[np.ndarray]:
-        if len(idx) <= leaf:
-            return [idx]
-        H = G[idx][:, idx]
-        parts, label = connected_components(H, directed=False)
-        if parts > 1:
-            return [o for c in range(parts) for o in order(idx[label == c])]
-        root = int(np.argmax(hops(H, 0)))  # two sweeps: a pseudo-peripheral vertex
-        level = hops(H, root).astype(np.int64)
-        counts = np.bincount(level)
-        middle = int(np.searchsorted(np.cumsum(counts), len(idx) / 2))
-        if middle == 0 or middle >= len(counts) - 1:
-            return [idx]
-        return order(idx[level < middle]) + order(idx[level > middle]) + [idx[level == middle]]
-
-    return np.concatenate(order(np.arange(A.shape[0])))
+        return (self._lu.perm_r, sp.csr_matrix(sp.tril(self._lu.L, k=-1)), sp.csr_matrix(sp.triu(U, k=1)),
+                U.diagonal(), self._lu.perm_c)
 
 
 def supernodal(op: object) -> bool:
@@ -258,4 +203,4 @@ def factor(A: sp.spmatrix, supernodal: bool = False) -> Factor:
             return _LDL(A)
         except RuntimeError:  # a zero pivot (or a diagonal entry not stored): SuperLU's ordering
             pass
-    return _LU(A, nested_dissection(A) if supernodal else None)
+    return _LU(A)

@@ -547,32 +547,6 @@ def test_tol_zero_asks_for_machine_precision_as_eigsh_does(operator):
     assert np.abs(below - lam).max() < 1e-10 * w[5]
 
 
-def test_a_volume_is_factored_in_nested_dissection_order():
-    """A volume's factorization (_ldl.factor, supernodal) takes SuperLU in a nested-dissection
-    ordering, not minimum degree: on the 20³ tetrahedral cube 4.03 M stored entries against
-    4.33 M (benchmarks/bench_factor.py: 68,921 vertices, 11.6 s and 71 M against 68.7 s and
-    107 M). Its solve and its blocked triangular solves (the ordering composed with SuperLU's)
-    give A⁻¹B, its pivots the inertia of a shifted pencil as minimum degree's do."""
-    from meshlap import _ldl, samples
-
-    V, T = samples.cube_tetrahedra(20)
-    op = meshlap.laplacian(V, T, k=3)
-    S = sp.csr_matrix(op.S)
-    A = sp.csc_matrix(-0.5 * (S + S.T) + sp.diags(1e-3 * op.mass))
-    f, plain = _ldl.factor(A, supernodal=True), _ldl._LU(A)
-    assert f._lu.L.nnz + f._lu.U.nnz < 0.95 * (plain._lu.L.nnz + plain._lu.U.nnz)
-    B = np.random.default_rng(0).standard_normal((A.shape[0], 12))
-    X = f.solve(B)
-    assert np.abs(A @ X - B).max() < 1e-9 * np.abs(B).max()
-    into, lower, upper, diag, out = f.triangles()
-    Y = np.empty(B.shape)
-    Y[into] = B
-    _ldl.triangular_solves(lower, upper, diag, Y)
-    assert np.abs(Y[out] - X).max() < 1e-12 * np.abs(X).max()
-    shifted = sp.csc_matrix(-0.5 * (S + S.T) - 30.0 * sp.diags(op.mass))  # eigenvalues below 30
-    assert _ldl.factor(shifted, supernodal=True).negative == _ldl._LU(shifted).negative > 1
-
-
 def test_one_blas_thread_limits_and_restores_without_scanning_the_libraries_again():
     """BLAS runs on one thread inside the context, as many as before after it, nested too; the
     loaded libraries are found once (each scan read /proc/self/maps: 2 ms per call, half a
