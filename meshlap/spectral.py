@@ -366,7 +366,7 @@ def eigs(
     matrix_free = getattr(op, "matrix_free", False)
     nnz = 0 if matrix_free else symmetric_L(op).nnz
     sparse = not matrix_free and nnz <= _SPARSE_ROW_MAX * op.n_vertices
-    # made on first use: -S on the vertices with mass, and L_sym there in spatial order (for
+    # made on first use: S on the vertices with mass, and L_sym there in spatial order (for
     # LOBPCG's products and the check's)
     S_P = functools.cache(lambda: _restricted_S(op, P))
     if sparse and (parts := _parts.part_labels(S_P()))[0] > 1:
@@ -448,7 +448,7 @@ def eigs(
             return out
         # a sparse pencil by scipy's product: no compiled kernel to load for the check alone
         if sparse:
-            return -m[:, None] * _at(symmetric_L(op), P, X, op.n_vertices)
+            return -(S_P() @ X)
         full = X if n_p == op.n_vertices else np.zeros((op.n_vertices, X.shape[1]))
         full[P] = X
         return -m[:, None] * np.asarray(apply_block(op, full))[P]
@@ -462,22 +462,13 @@ def eigs(
                                           info=checked)
     bound = None
     if sparse and floor > 0.01 * scale:  # what roundoff left these pairs' residuals, not any vector's
-        absolute = abs(symmetric_L(op))
-        rho = _eigcheck.residual_roundoff(lambda Y: m[:, None] * _at(absolute, P, Y, op.n_vertices), m, X)
+        absolute = abs(S_P())
+        rho = _eigcheck.residual_roundoff(lambda Y: absolute @ Y, m, X)
         bound = _eigcheck.certified(lam, checked["residuals"], checked["bounds"], tol, floor, rho)
     _eigcheck.warn_roundoff(lam, tol, floor, scale, stiff, info, bound)
     if report is not None:
         report(1.0, "done")
     return lam, _normalize_signs(_extend(op, P, X))
-
-
-def _at(L: sp.spmatrix, P: np.ndarray, X: np.ndarray, n: int) -> np.ndarray:
-    # (L x)[P] for x = X on P and 0 elsewhere
-    if len(P) == n:
-        return np.asarray(L @ X)
-    full = np.zeros((n, X.shape[1]))
-    full[P] = X
-    return np.asarray(L @ full)[P]
 
 
 def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ₁ = 2)

@@ -78,6 +78,7 @@ from .stars import (
     _soup,
     star_pieces,
 )
+from .validation import _real_scalar
 
 __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
            "project_to_tangent"]
@@ -180,9 +181,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if neighbors is not None and (isinstance(neighbors, bool)
                                   or not isinstance(neighbors, (int, np.integer))):
         raise MeshError(f"neighbors must be an integer; got {neighbors!r}")
-    if not (isinstance(merge_tol, (int, float)) and 0 <= merge_tol < math.inf):
+    if not 0 <= _real_scalar(merge_tol, "merge_tol", "a finite number >= 0") < math.inf:
         raise MeshError(f"merge_tol must be a finite number >= 0; got {merge_tol!r}")
-    if not (isinstance(outlier_ratio, (int, float)) and outlier_ratio > 1):  # inf: no outliers
+    if not _real_scalar(outlier_ratio, "outlier_ratio", "a number > 1") > 1:  # inf: no outliers
         raise MeshError(f"outlier_ratio must be a number > 1 (math.inf: no outliers); got {outlier_ratio!r}")
     if d < k:
         raise MeshError(f"points in R^{d} cannot sample a {k}-dimensional manifold (k={k} > d={d})")

@@ -252,7 +252,7 @@ def check_solver(tol: Any, maxiter: Any, extra: Any = None, seed: Any = 0) -> fl
     >>> check_solver(1e-8, 200), check_solver(0, 200)
     (1e-08, 2.220446049250313e-16)
     """
-    if isinstance(tol, (bool, np.bool_)) or not (isinstance(tol, numbers.Real) and 0 <= tol < 1):
+    if not 0 <= _real_scalar(tol, "tol", "a number in [0, 1)") < 1:
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
     for name, value, least in (("maxiter", maxiter, 1), ("extra", extra, 0), ("seed", seed, 0)):
         if name == "extra" and value is None:
