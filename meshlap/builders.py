@@ -59,7 +59,8 @@ def laplacian(
         ``open3d`` mesh, ``meshio.Mesh`` or a file path (:func:`meshlap.inputs.as_geometry_input`);
         one that holds points alone is a point cloud, as :func:`point_cloud_laplacian` reads it.
     F : (m, c) array_like or list of sequences
-        Faces of any size; (m, 2) edges of a curve; tetrahedra with ``k=3``.
+        Faces of any size; (m, 2) edges of a curve; (m, 4) tetrahedra (told from quads by how
+        they meet: :func:`meshlap.geometry.from_mesh`).
     h : float or (n,) array_like, optional
         A kernel width (exp(-d²/4h)): asks for the heat kernel at that width. Near the
         squared spacing the corrected kernel's narrow half h/2 can fall between the samples of
@@ -69,9 +70,8 @@ def laplacian(
         on the vertices; "galerkin" the kernel integrated over the cells; "paper" the paper's
         operator, eq. (1), bit for bit (its ``op.L`` is eq. (1) too). "auto": :mod:`meshlap.policy`.
     k : {1, 2, 3}, optional
-        Intrinsic dimension (inferred from ``F``: 1 for edges, 2 for faces). Pass 3 for
-        tetrahedra given as (m, 4): without it they are read as quads, with a MeshWarning when
-        the cells enclose volume.
+        Intrinsic dimension, inferred from ``F``: 1 for edges, 2 for faces, 3 for (m, 4) cells
+        that meet across triangles as tetrahedra do. Pass it to read (m, 4) cells one way.
     tol : float, optional
         The kernel's tolerance: weights below it are dropped (default 1e-6, 1e-8 for "paper").
     matrix_free : bool, default False

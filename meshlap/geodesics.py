@@ -82,6 +82,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
+from .geometry.validation import check_int
 from .gradients import Gradient, gradient_operator
 from .heat import ImplicitHeat
 from .lumped import SparseLaplacian
@@ -422,8 +423,7 @@ class HeatDistance:
         ((3, 784), True)
         """
         idx = self._sources(sources)
-        if isinstance(batch, bool) or not isinstance(batch, (int, np.integer)) or batch < 1:
-            raise MeshError(f"batch must be a positive integer; got {batch!r}")
+        batch = check_int(batch, "batch", 1)
         report = make_progress(progress)
         out = np.empty((len(idx), self.n))
         for a in range(0, len(idx), batch):

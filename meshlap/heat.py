@@ -36,7 +36,7 @@ from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
 from ._multigrid import Multigrid, replaces_factor
 from .errors import MeshError
-from .geometry.validation import check_function
+from .geometry.validation import check_function, check_int
 from .spectral import (
     _SPARSE_ROW_MAX,
     _check_mass,
@@ -347,8 +347,7 @@ class ImplicitHeat:
     def step(self, f: Any, steps: int = 1) -> np.ndarray:
         """Apply ``steps`` backward-Euler steps to f ((n,) or (n, m)); returns the result."""
         f = check_function(f, self.op.n_vertices)
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-            raise MeshError(f"steps must be a non-negative integer; got {steps!r}")
+        steps = check_int(steps, "steps", 0)
         u = f.reshape(len(f), -1).copy()
         with _one_blas_thread():
             for _ in range(steps):

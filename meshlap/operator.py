@@ -80,8 +80,8 @@ class MeshLaplacian(LumpedLaplacian):
         positions, masses and intrinsic dimension from any source, e.g. a point cloud.
     F : (m, c) array_like, or list of sequences
         Cells: faces of any size (triangles, quads, mixed polygons), each giving
-        Area(t)/#t to each of its #t corners; (m, 2) edges of a curve; tetrahedra with
-        ``k=3`` (see :func:`meshlap.geometry.from_mesh`).
+        Area(t)/#t to each of its #t corners; (m, 2) edges of a curve; (m, 4) tetrahedra,
+        told from quads by how they meet (:func:`meshlap.geometry.from_mesh`; ``k`` overrides).
     h : float or (n,) array_like, optional
         Kernel width; the Gaussian is exp(-d²/4h). An explicit value always wins; an array
         gives each vertex its own width (pair width (h_w + h_p)/2; not with

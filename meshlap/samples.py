@@ -292,9 +292,9 @@ def sphere_eigenvalue(l: int, h: float) -> float:  # noqa: E741 - l is the harmo
     >>> round(sphere_eigenvalue(3, 0.01), 3)     # below l(l+1) = 12: the O(h) bias
     11.412
     """
-    if isinstance(l, (bool, np.bool_)) or not isinstance(l, (int, np.integer)) or l < 0:
-        raise MeshError(f"l must be a non-negative integer; got {l!r}")
-    from .geometry.validation import check_h
+    from .geometry.validation import check_h, check_int
+
+    check_int(l, "l", 0)
 
     h = check_h(h)
     if l == 0:

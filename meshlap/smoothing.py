@@ -23,7 +23,7 @@ import numpy as np
 from .errors import MeshError
 from .geometry.frames import vertex_normals
 from .geometry.mass import _mean_edge_length, paper_width
-from .geometry.validation import check_faces, check_vertices
+from .geometry.validation import check_faces, check_int, check_vertices
 from .heat import ImplicitHeat
 from .policy import decide
 from .tuned import DENOISE_DT, DENOISE_H, DENOISE_STEPS
@@ -60,8 +60,7 @@ def smooth_function(op: Any, f: Any, t: float, steps: int = 1, **kwargs: Any) ->
     >>> bool(np.abs(u - clean).std() < 0.5 * np.abs(noisy - clean).std())
     True
     """
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise MeshError(f"steps must be a positive integer; got {steps!r}")
+    steps = check_int(steps, "steps", 1)
     try:
         t = float(t)
     except (TypeError, ValueError) as exc:
@@ -193,8 +192,7 @@ def mean_curvature_flow(
     if dt is not None and not (isinstance(dt, (int, float, np.number)) and np.isfinite(dt) and dt > 0):
         raise MeshError(f"dt must be a positive number; got {dt!r}")
     steps = (DENOISE_STEPS if denoise else 1) if steps is None else steps
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise MeshError(f"steps must be a non-negative integer; got {steps!r}")
+    steps = check_int(steps, "steps", 0)
     normal = denoise if normal is None else bool(normal)
     rebuild = not denoise if rebuild is None else bool(rebuild)
     if laplacian is None:

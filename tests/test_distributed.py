@@ -162,7 +162,7 @@ def test_lobpcg_clear_errors():
         distributed_eigs.eigs(op, 4, mesh=V)
     with pytest.raises(meshlap.MeshError, match="tol"):
         distributed_eigs.eigs(op, 4, tol=2.0)
-    with pytest.raises(meshlap.MeshError, match="maxiter must be an integer of at least 1"):
+    with pytest.raises(meshlap.MeshError, match="maxiter must be a positive integer"):
         distributed_eigs.eigs(op, 4, maxiter=0)
     with pytest.raises(meshlap.MeshError, match="preconditioner"):
         distributed_eigs.eigs(op, 4, mesh=(V, F), preconditioner="jacobi")

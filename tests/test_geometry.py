@@ -77,16 +77,23 @@ def test_normalization_depends_on_k():
     assert normalization(0.01, 1) == pytest.approx(1 / (0.01 * math.sqrt(4 * math.pi * 0.01)))
 
 
-def test_quads_stay_quads_and_tets_need_k3():
-    V, T = samples.cube_tetrahedra(2)
-    with pytest.warns(meshlap.MeshWarning, match="pass k=3"):
-        g = geometry.from_mesh(V, T)
-    assert g.dim == 2
-    assert geometry.from_mesh(V, T, k=3).dim == 3
+def test_tetrahedra_are_read_as_tetrahedra_and_quads_as_quads():
+    """A (m, 4) array whose cells meet across triangles from opposite sides is a tetrahedral mesh,
+    without ``k=3``; curved quads, and a quad given twice, stay a surface."""
+    V, T = samples.cube_tetrahedra(4)
+    g = geometry.from_mesh(V, T)
+    assert g.dim == 3
+    np.testing.assert_array_equal(g.mass, geometry.from_mesh(V, T, k=3).mass)
+    lam = meshlap.spectral.eigs(meshlap.laplacian(V, T), 4)[0]
+    np.testing.assert_allclose(lam, meshlap.spectral.eigs(meshlap.laplacian(V, T, k=3), 4)[0], atol=1e-9)
+    assert lam[1] == pytest.approx(np.pi**2, rel=0.15)  # the unit cube's first Neumann value, coarse
+    assert geometry.from_mesh(V, T, k=2).dim == 2
     V, F = meshlap.io.read_mesh("tests/data/spot-quads.obj")
     with warnings.catch_warnings():
         warnings.simplefilter("error", meshlap.MeshWarning)
         assert geometry.from_mesh(V, F).dim == 2  # curved quads are not mistaken for tets
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.2]], float)
+    assert geometry.from_mesh(square, [[0, 1, 2, 3], [0, 1, 2, 3]]).dim == 2
 
 
 @pytest.mark.parametrize(

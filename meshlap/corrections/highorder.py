@@ -41,6 +41,7 @@ from scipy.spatial import cKDTree
 from .._jit import in_blocks
 from ..errors import MeshError
 from ..geometry import check_points
+from ..geometry.validation import check_int
 from ._fit_kernel import _rows, gather_columns
 
 __all__ = ["RowFit", "fewest_points", "fit_rows", "knn_pattern", "mean_curvature", "mean_curvature_normal",
@@ -188,10 +189,8 @@ def knn_pattern(P: Any, K: int, centers: Any = None, tree: cKDTree | None = None
 def _check_inputs(P: Any, k: int, degree: int, normals: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     d = P.shape[1]
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= d:
-        raise MeshError(f"k must be an integer between 1 and the dimension {d}; got {k!r}")
-    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not 2 <= degree <= MAX_DEGREE:
-        raise MeshError(f"degree must be an integer from 2 to {MAX_DEGREE}; got {degree!r}")
+    check_int(k, "k", 1, d)
+    check_int(degree, "degree", 2, MAX_DEGREE)
     if normals is None:
         return P, np.zeros((1, d)), False
     if k != d - 1:

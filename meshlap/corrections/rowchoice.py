@@ -89,6 +89,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import MeshError, MeshWarning
 from ..geometry import check_points
+from ..geometry.validation import check_int
 from ..tuned import (
     ROW_BETA,
     ROW_C_COMPACT,
@@ -343,16 +344,13 @@ def choose_rows(P: Any, normals: Any = None, *, k: int = 2, max_degree: int = 6,
     """
     P = np.ascontiguousarray(check_points(P, "P"), dtype=np.float64)
     n, d = P.shape
-    if isinstance(max_degree, bool) or not isinstance(max_degree, (int, np.integer)) \
-            or not 2 <= max_degree <= 6:
-        raise MeshError(f"max_degree must be an integer from 2 to 6; got {max_degree!r}")
+    max_degree = check_int(max_degree, "max_degree", 2, 6)
     if noise is not None and not (math.isfinite(noise) and noise >= 0):
         raise MeshError(f"noise must be a finite level >= 0; got {noise!r}")
     count = monomials(k, max_degree)[1] if 1 <= k <= d else None
     if count is None:
         raise MeshError(f"k must be between 1 and the dimension {d}; got {k!r}")
-    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) or sample < int(count[-1]) + 2:
-        raise MeshError(f"sample must be an integer of at least {int(count[-1]) + 2}; got {sample!r}")
+    sample = check_int(sample, "sample", int(count[-1]) + 2)
     own = np.ones(n, dtype=bool) if rows is None else np.zeros(n, dtype=bool)
     if rows is not None:
         own[np.asarray(rows, dtype=np.int64)] = True

@@ -18,21 +18,20 @@ in any ambient dimension d ≥ k. Point clouds get their masses from
 in R^d", SODA 2009) depends on k alone.
 
 Which k an index array means: 2 columns are edges (k = 1), 3 or more columns and lists of
-polygons are faces (k = 2). A (m, 4) array is read as quads, as it always was; pass
-``k=3`` for tetrahedra (a :class:`~meshlap.validation.MeshWarning` says so when 4-corner
-cells enclose volume like tetrahedra do).
+polygons are faces (k = 2). A (m, 4) array is tetrahedra (k = 3) when most of its cells
+meet another across a triangle, their fourth corners on opposite sides of it, as a tetrahedral
+mesh's cells do (two quads of a surface share at most an edge); else quads. ``k`` overrides.
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..errors import MeshError, MeshWarning
+from ..errors import MeshError
 from . import frames
 from .mass import _face_areas, _mean_edge_length, _vertex_mass, paper_width
 from .polygons import Polygons
@@ -53,10 +52,6 @@ __all__ = [
 
 # Beyond this magnitude squared distances leave the float64 range (as for meshes).
 _MAX_COORD = 1e150
-# Median |volume| / (mean edge)³ of 4-corner cells above which they look like tetrahedra
-# (a regular tetrahedron has 0.118; a quad bent by 10° about a diagonal about 0.01).
-_SOLID_QUADS = 0.03
-
 
 @dataclass(frozen=True)
 class Geometry:
@@ -469,13 +464,24 @@ def surface(V: Any, F: Any) -> Geometry:
                             source="surface"), e)
 
 
-def _looks_solid(V: Any, F: np.ndarray) -> bool:
+def _tetrahedral(V: Any, F: np.ndarray) -> bool:
+    # (m, 4) cells are tetrahedra when most of them meet another across a triangle with the two
+    # fourth corners on opposite sides of it, as the cells of a tetrahedral mesh do. Two quads of a
+    # surface share at most an edge; copies of one quad share their corners (the same side).
     P = check_points(V, "V")
-    if P.shape[1] < 3 or F.min() < 0 or F.max() >= len(P):
+    if P.shape[1] != 3 or len(F) < 2 or F.min() < 0 or F.max() >= len(P):
         return False
-    vol = simplex_volumes(P, F)
-    edge = _mean_cell_edge(P, F)
-    return edge > 0 and float(np.median(vol)) / edge**3 > _SOLID_QUADS
+    facet = np.sort(np.stack([np.delete(F, c, axis=1) for c in range(4)], axis=1), axis=2).reshape(-1, 3)
+    apex = F.ravel()  # the corner opposite facet c of cell i is F[i, c]
+    a, b, c = (P[facet[:, j]] for j in range(3))
+    side = np.sign(np.einsum("ij,ij->i", np.cross(b - a, c - a), P[apex] - a))
+    _, inverse, count = np.unique(facet, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    twice = count[inverse] == 2
+    other = np.zeros(len(count))
+    np.add.at(other, inverse, side)  # the two sides cancel when opposite
+    meets = twice & (other[inverse] == 0) & (side != 0)
+    return bool(np.count_nonzero(meets.reshape(-1, 4).any(axis=1)) * 2 >= len(F))
 
 
 def cell_columns(F: Any) -> int | None:
@@ -504,9 +510,10 @@ def from_mesh(V: Any, F: Any, k: int | None = None) -> Geometry:
         Vertex positions.
     F : (m, c) array_like, list of polygons or Polygons
         Cells. Without ``k``: c = 2 edges, c ≥ 3 and lists of polygons faces. A (m, 4)
-        array is read as quads unless ``k=3`` (a MeshWarning when its cells look solid).
+        array is tetrahedra when most cells meet another across a triangle from its other side,
+        else quads.
     k : {1, 2, 3}, optional
-        Intrinsic dimension, for (m, 4) tetrahedra or to check the cells.
+        Intrinsic dimension, to read (m, 4) cells one way or to check the cells.
 
     Examples
     --------
@@ -520,9 +527,8 @@ def from_mesh(V: Any, F: Any, k: int | None = None) -> Geometry:
     cols = cell_columns(F)
     if k is None:
         k = 1 if cols == 2 else 2
-        if cols == 4 and _looks_solid(V, np.asarray(F, dtype=np.int64)):
-            warnings.warn("the (m, 4) cells enclose volume like tetrahedra but are read as quads; pass "
-                          "k=3 for a tetrahedral mesh", MeshWarning, stacklevel=3)
+        if cols == 4 and _tetrahedral(V, np.asarray(F, dtype=np.int64)):
+            k = 3
     if k == 1:
         return polyline(V, F)
     if k == 3:

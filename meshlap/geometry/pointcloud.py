@@ -78,7 +78,7 @@ from .stars import (
     _soup,
     star_pieces,
 )
-from .validation import _real_scalar
+from .validation import _real_scalar, check_int
 
 __all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
            "project_to_tangent"]
@@ -175,12 +175,9 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     """
     P = check_points(P)
     n, d = P.shape
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise MeshError(f"k (the intrinsic dimension) must be a positive integer; got {k!r}")
-    k = int(k)
-    if neighbors is not None and (isinstance(neighbors, bool)
-                                  or not isinstance(neighbors, (int, np.integer))):
-        raise MeshError(f"neighbors must be an integer; got {neighbors!r}")
+    k = check_int(k, "k (the intrinsic dimension)", 1)
+    if neighbors is not None:
+        check_int(neighbors, "neighbors")
     if not 0 <= _real_scalar(merge_tol, "merge_tol", "a finite number >= 0") < math.inf:
         raise MeshError(f"merge_tol must be a finite number >= 0; got {merge_tol!r}")
     if not _real_scalar(outlier_ratio, "outlier_ratio", "a number > 1") > 1:  # inf: no outliers

@@ -26,6 +26,7 @@ __all__ = [
     "check_vertices",
     "check_faces",
     "check_h",
+    "check_int",
     "check_k",
     "check_solver",
     "check_positive",
@@ -243,6 +244,32 @@ def check_h(h: Any, name: str = "h") -> float:
     return value
 
 
+def check_int(value: Any, name: str, least: int | None = None, most: int | None = None) -> int:
+    """Return ``value`` as an int in [least, most] (None: unbounded), or raise a MeshError that
+    names the option and what it must be. Booleans are refused.
+
+    Examples
+    --------
+    >>> check_int(3, "steps", 1)
+    3
+    >>> check_int(True, "steps", 1)
+    Traceback (most recent call last):
+        ...
+    meshlap.errors.MeshError: steps must be a positive integer; got True
+    """
+    ok = not isinstance(value, (bool, np.bool_)) and isinstance(value, numbers.Integral)
+    if ok and (least is None or value >= least) and (most is None or value <= most):
+        return int(value)
+    if most is not None:
+        what = f"an integer from {least} to {most}"
+    elif least is None:
+        what = "an integer"
+    else:
+        named = {0: "a non-negative integer", 1: "a positive integer"}
+        what = named.get(least, f"an integer of at least {least}")
+    raise MeshError(f"{name} must be {what}; got {value!r}")
+
+
 def check_solver(tol: Any, maxiter: Any, extra: Any = None, seed: Any = 0) -> float:
     """Check an eigensolver's options; return ``tol``, where 0 (as for eigsh) and anything below
     machine precision ask for machine precision.
@@ -254,11 +281,10 @@ def check_solver(tol: Any, maxiter: Any, extra: Any = None, seed: Any = 0) -> fl
     """
     if not 0 <= _real_scalar(tol, "tol", "a number in [0, 1)") < 1:
         raise MeshError(f"tol must be a number in [0, 1); got {tol!r}")
-    for name, value, least in (("maxiter", maxiter, 1), ("extra", extra, 0), ("seed", seed, 0)):
-        if name == "extra" and value is None:
-            continue
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < least:
-            raise MeshError(f"{name} must be an integer of at least {least}; got {value!r}")
+    check_int(maxiter, "maxiter", 1)
+    check_int(seed, "seed", 0)
+    if extra is not None:
+        check_int(extra, "extra", 0)
     return max(float(tol), float(np.finfo(float).eps))
 
 
