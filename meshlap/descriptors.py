@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .errors import MeshError
-from .geometry.validation import check_function
+from .geometry.validation import check_function, check_int
 from .spectral import eigs, heat_kernel_signature
 
 __all__ = ["heat_kernel_signature", "project", "reconstruct", "shape_dna", "wave_kernel_signature"]
@@ -144,8 +144,7 @@ def wave_kernel_signature(op: Any = None, n_energies: int = 100, k: int = 100, *
     >>> w.shape, bool((w.std(axis=0) < 0.01 * w.mean(axis=0)).all())    # alike everywhere
     ((1500, 10), True)
     """
-    if isinstance(n_energies, bool) or not isinstance(n_energies, (int, np.integer)) or n_energies < 1:
-        raise MeshError(f"n_energies must be a positive integer; got {n_energies!r}")
+    check_int(n_energies, "n_energies", 1)
     lam, phi = _eig(op, k, eig)
     if op is not None or measure is not None:
         d = getattr(op, "dim", 2)
