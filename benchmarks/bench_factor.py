@@ -60,6 +60,28 @@ def inputs(quick: bool, corpus: Path | None) -> list[tuple[str, np.ndarray, np.n
     return out
 
 
+def _chosen(A: sp.csc_matrix) -> _ldl._LU:
+    return _ldl._LU(A, _ldl.volume_order(A))
+
+
+def nd_row(name: str, op) -> dict:
+    """A volume's factorization in minimum degree and in the ordering ``_ldl.factor`` chooses
+    (the ordering table), with both orderings' counted work."""
+    A = sp.csc_matrix(-0.5 * (op.S + op.S.T) + sp.diags(1e-3 * op.mass))
+    b = np.random.default_rng(0).standard_normal((A.shape[0], 64))
+    row = {"input": name, "pencil": "linear", "n": A.shape[0]}
+    md, nd = _ldl.minimum_degree(A), _ldl.nested_dissection(A)
+    row["work"] = (_ldl.factor_work(A, md), _ldl.factor_work(A, nd))
+    for label, make in (("SuperLU", _ldl._LU), ("SuperLU chosen", _chosen)):
+        t, f = cpu(lambda make=make: make(A))
+        one, _ = cpu(lambda f=f: f.solve(b[:, 0]), 3)
+        block, x = cpu(lambda f=f: f.solve(b), 3)
+        residual = float(np.abs(A @ x - b).max() / np.abs(b).max())
+        row[label] = (t, f._lu.L.nnz + f._lu.U.nnz, one, block, residual)
+        del f
+    return row
+
+
 def factor_rows(name: str, op) -> list[dict]:
     rows = []
     pencils = [("linear", op.S, op.mass)]
@@ -70,9 +92,14 @@ def factor_rows(name: str, op) -> list[dict]:
         A = sp.csc_matrix(-0.5 * (S + S.T) + sp.diags(1e-3 * m + (m == 0)))
         b = np.random.default_rng(0).standard_normal((A.shape[0], 64))
         row = {"input": name, "pencil": kind, "n": A.shape[0]}
-        for label, make in (("SuperLU", _ldl._LU), ("LDLᵀ", _ldl._LDL)):
+        makers = [("SuperLU", _ldl._LU), ("LDLᵀ", _ldl._LDL)]
+        if op.dim == 3:  # a volume's: SuperLU in the ordering factor() chooses (choice timed too)
+            makers.append(("SuperLU chosen", _chosen))
+            orders = (_ldl.minimum_degree(A), _ldl.nested_dissection(A))
+            row["work"] = tuple(_ldl.factor_work(A, p) for p in orders)
+        for label, make in makers:
             t, f = cpu(lambda make=make, A=A: make(A))
-            if label == "SuperLU":
+            if label.startswith("SuperLU"):
                 fill = f._lu.L.nnz + f._lu.U.nnz
             else:
                 fill = 2 * f._factors[0].nnz + A.shape[0]
@@ -155,16 +182,40 @@ def main() -> None:
             erows.append(eigs_row(name, V, F, k, "quadratic"))
         if k == 3:
             srows += solve_rows(name, V, F)
+            if not args.quick and len(V) == 29791:  # then larger cubes, in the ordering table only
+                for m in (35, 40):
+                    big = samples.cube_tetrahedra(m)
+                    frows.append(nd_row(f"tetrahedral cube {m}³", meshlap.laplacian(*big, k=3)))
         print(f"{name}: done ({time.time() - start:.0f} s)", file=sys.stderr, flush=True)
+    if folder.exists():  # the corpus's tetrahedral meshes, in the ordering table
+        for e in rc.manifest():
+            if "tet" in e["name"] and (folder / e["file"]).exists():
+                m = rc.load(folder / e["file"], e["format"])
+                if m.tet:
+                    frows.append(nd_row(f"{e['name']} (corpus)", meshlap.laplacian(m.Vw, m.Cw)))
     lines = ["Factorizations of −S + 10⁻³M: CPU seconds, stored entries, one "
              "solve and a 64-column block (residual of the block, relative).", "",
              "| input | pencil | n | SuperLU factor s | entries | 1 solve ms | 64 solves ms | "
              "LDLᵀ factor s | entries | 1 solve ms | 64 solves ms | residual |", "|" + "---|" * 12]
-    for r in frows:
+    for r in [r for r in frows if "LDLᵀ" in r]:
         lu, ldl = r["SuperLU"], r["LDLᵀ"]
         lines.append(f"| {r['input']} | {r['pencil']} | {r['n']:,} | {lu[0]:.3f} | {lu[1] / 1e6:.2f} M | "
                      f"{1e3 * lu[2]:.1f} | {1e3 * lu[3]:.0f} | {ldl[0]:.3f} | {ldl[1] / 1e6:.2f} M | "
                      f"{1e3 * ldl[2]:.1f} | {1e3 * ldl[3]:.0f} | {max(lu[4], ldl[4]):.0e} |")
+    nd = [r for r in frows if "work" in r]
+    lines += ["", "A volume's SuperLU in the ordering `_ldl.factor` chooses (`_ldl.volume_order`: minimum "
+              "degree or nested dissection, whichever `_ldl.factor_work` counts the fewer multiply-adds "
+              "for; both orderings and both counts included in its time), beside minimum degree alone "
+              "(SuperLU's own):", "",
+              "| input | n | minimum degree: factor s | entries | work G | nested dissection: work G | "
+              "chosen | factor s | entries | 1 solve ms | 64 solves ms | residual |", "|" + "---|" * 12]
+    for r in nd:
+        lu, dis = r["SuperLU"], r["SuperLU chosen"]
+        wm, wn = r["work"]
+        lines.append(f"| {r['input']} | {r['n']:,} | {lu[0]:.3f} | {lu[1] / 1e6:.2f} M | {wm / 1e9:.3g} | "
+                     f"{wn / 1e9:.3g} | {'nested dissection' if wn < wm else 'minimum degree'} | "
+                     f"{dis[0]:.3f} | "
+                     f"{dis[1] / 1e6:.2f} M | {1e3 * dis[2]:.1f} | {1e3 * dis[3]:.0f} | {dis[4]:.0e} |")
     lines += ["", "`spectral.eigs(meshlap.laplacian(V, F), 10)`, build + 10 verified pairs (the default's "
               "elements: quadratic up to `QUADRATIC_MAX_UNKNOWNS`, about 16,500 vertices), CPU seconds: "
               "the default's factorizations, every one forced to the other kind, and libigl's "

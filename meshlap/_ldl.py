@@ -12,15 +12,19 @@ where U's diagonal carries the pivots.
 
 A volume's eigenpairs are another matter: its separators are surfaces, so its fronts are dense,
 SuperLU's supernodes (BLAS-3 on those fronts) factor it faster for the same fill, and
-shift-invert solves one vector at a time, where SuperLU is faster too (tetrahedral cubes: 9,261
-vertices, factor 0.68 s against 0.78 s, 10 eigenpairs 2.5 s against 2.6 s; 29,791 vertices, factor
-5.8 s against 16.8 s, one solve 30 ms against 45 ms, 10 eigenpairs 16.8 s against 37.0 s).
-``supernodal=True`` (:func:`supernodal`: true for an operator on a volume) takes
-SuperLU there; :func:`meshlap.spectral.eigs`, implicit heat steps and Poisson solves ask for it
-(the larger cube's heat step 5.2 s against 14.0 s, a Poisson solve 5.5 s against 14.4 s). LDLᵀ's
-blocked solves are faster (64 columns of the smaller cube in 57 ms against SuperLU's 303 ms,
-``benchmarks/bench_factor.py``), but the factorization's cost comes first unless hundreds of
-columns are solved.
+shift-invert solves one vector at a time, where SuperLU is faster too
+(``benchmarks/bench_factor.py``: tetrahedral cube of 29,791 vertices, factor 2.6 s against
+LDLᵀ's 6.7 s, one solve 24 ms against 33 ms, both in minimum degree). ``supernodal=True``
+(:func:`supernodal`: true for an operator on a volume) takes SuperLU there, in the ordering
+:func:`volume_order` chooses: minimum degree, which looks one vertex ahead and misses a bulky
+volume's surface separators, or :func:`nested_dissection`, whose level structures fill more on
+small irregular volumes, whichever needs fewer multiply-adds as :func:`factor_work` counts them
+from the structure alone (the same benchmark: a 68,921-vertex tetrahedral cube in 8.5 s and 66 M
+stored entries against minimum degree's 68.1 s and 107 M; the corpus's real tetrahedral meshes
+keep minimum degree). :func:`meshlap.spectral.eigs`, implicit heat steps, Poisson solves and the
+heat method's step ask for it. LDLᵀ's blocked solves are faster (64 columns of the 9,261-vertex
+cube in 51 ms against SuperLU's 173-215 ms), but the factorization's cost comes first unless
+hundreds of columns are solved.
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ import scipy.sparse.linalg  # noqa: F401 - sp.linalg
 
 from ._jit import jit
 
-__all__ = ["NARROW", "Factor", "factor", "supernodal", "triangular_solves"]
+__all__ = ["NARROW", "Factor", "factor", "factor_work", "minimum_degree", "nested_dissection", "supernodal",
+           "triangular_solves", "volume_order"]
 
 #: blocks up to this many columns are solved one column after the other; wider ones by
 #: :func:`triangular_solves`, one pass over each factor for all columns (64 columns of a
@@ -154,21 +159,173 @@ class _LDL:
 
 
 class _LU:
-    def __init__(self, A: sp.csc_matrix) -> None:
-        self._lu = sp.linalg.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                                  options={"SymmetricMode": True})
+    def __init__(self, A: sp.csc_matrix, order: np.ndarray | None = None) -> None:
+        # ``order``: a symmetric ordering of our own (nested dissection), kept as it is
+        self._p = order
+        if order is not None:
+            A = sp.csc_matrix(A[order][:, order])
+        self._lu = sp.linalg.splu(A, permc_spec="MMD_AT_PLUS_A" if order is None else "NATURAL",
+                                  diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         d = self._lu.U.diagonal()
         symmetric = np.array_equal(self._lu.perm_r, self._lu.perm_c)  # SuperLU did not pivot
         self.negative = (int((d < 0).sum()) if symmetric and not np.iscomplexobj(d)
                          and np.isfinite(d).all() and d.all() else None)
 
     def solve(self, B: np.ndarray) -> np.ndarray:
-        return self._lu.solve(np.asfortranarray(B))
+        if self._p is None:
+            return self._lu.solve(np.asfortranarray(B))
+        X = np.empty(B.shape, dtype=np.result_type(B, self._lu.U.dtype))
+        X[self._p] = self._lu.solve(np.asfortranarray(B[self._p]))
+        return X
 
     def triangles(self):
         U = sp.csr_matrix(self._lu.U)
-        return (self._lu.perm_r, sp.csr_matrix(sp.tril(self._lu.L, k=-1)), sp.csr_matrix(sp.triu(U, k=1)),
-                U.diagonal(), self._lu.perm_c)
+        into, out = self._lu.perm_r, self._lu.perm_c
+        if self._p is not None:  # B[p] goes in, the result comes back to p
+            back = np.argsort(self._p)
+            into, out = into[back], out[back]
+        lower, upper = sp.csr_matrix(sp.tril(self._lu.L, k=-1)), sp.csr_matrix(sp.triu(U, k=1))
+        return into, lower, upper, U.diagonal(), out
+
+
+def nested_dissection(A: sp.spmatrix, leaf: int = 256) -> np.ndarray:
+    """A fill-reducing symmetric ordering of ``A``'s graph by recursive bisection (George's
+    nested dissection with level structures): among the levels of distance from a
+    pseudo-peripheral vertex that leave at least a third on either side, the smallest separates
+    the rest into two parts, each ordered the same way, the separator last.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(200, 200))
+    >>> p = nested_dissection(A, leaf=8)
+    >>> sorted(p.tolist()) == list(range(200)), 66 <= int(p[-1]) <= 133   # a path: a middle vertex last
+    (True, True)
+    """
+    from scipy.sparse.csgraph import connected_components, dijkstra
+
+    G = sp.csr_matrix(A, dtype=np.float64, copy=True)
+    G.data[:] = 1.0
+    G.setdiag(0.0)
+    G.eliminate_zeros()
+
+    def hops(H: sp.csr_matrix, root: int) -> np.ndarray:
+        return dijkstra(H, directed=False, indices=root, unweighted=True)
+
+    def order(idx: np.ndarray) -> list[np.ndarray]:
+        if len(idx) <= leaf:
+            return [idx]
+        H = G[idx][:, idx]
+        parts, label = connected_components(H, directed=False)
+        if parts > 1:
+            return [o for c in range(parts) for o in order(idx[label == c])]
+        root = int(np.argmax(hops(H, 0)))  # two sweeps: a pseudo-peripheral vertex
+        level = hops(H, root).astype(np.int64)
+        counts = np.bincount(level)
+        below = np.cumsum(counts) - counts  # vertices on the near side of each level
+        above = len(idx) - below - counts
+        balanced = np.flatnonzero((3 * below >= len(idx)) & (3 * above >= len(idx)))
+        if not len(balanced):
+            return [idx]
+        middle = int(balanced[np.argmin(counts[balanced])])
+        return order(idx[level < middle]) + order(idx[level > middle]) + [idx[level == middle]]
+
+    return np.concatenate(order(np.arange(A.shape[0])))
+
+
+def minimum_degree(A: sp.spmatrix) -> np.ndarray | None:
+    """SuperLU's multiple-minimum-degree ordering of A + Aᵀ as an ordering of ``A``'s rows (the
+    one ``splu`` would take), from an incomplete factorization that drops all but the diagonal;
+    None where even that meets a zero pivot.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(50, 50), format="csc")
+    >>> sorted(minimum_degree(A).tolist()) == list(range(50))
+    True
+    """
+    try:
+        ilu = sp.linalg.spilu(sp.csc_matrix(A), drop_tol=1.0, fill_factor=1.0, permc_spec="MMD_AT_PLUS_A",
+                              diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    except RuntimeError:
+        return None
+    return np.argsort(ilu.perm_c)
+
+
+@jit()
+def _column_counts(indptr, indices, order, where):  # pragma: no cover - compiled
+    # entries below the diagonal in each column of the Cholesky factor of A[order][:, order]:
+    # the elimination tree (Liu, with path compression), then each row's subtree walked up
+    # from its entries to the marks the row leaves
+    n = len(order)
+    parent = np.full(n, -1, dtype=np.int64)
+    ancestor = np.full(n, -1, dtype=np.int64)
+    for k in range(n):
+        old = order[k]
+        for p in range(indptr[old], indptr[old + 1]):
+            i = where[indices[p]]
+            while i != -1 and i < k:
+                nxt = ancestor[i]
+                ancestor[i] = k
+                if nxt == -1:
+                    parent[i] = k
+                i = nxt
+    count = np.zeros(n, dtype=np.int64)
+    mark = np.full(n, -1, dtype=np.int64)
+    for k in range(n):
+        mark[k] = k
+        old = order[k]
+        for p in range(indptr[old], indptr[old + 1]):
+            i = where[indices[p]]
+            while i < k and mark[i] != k:
+                count[i] += 1
+                mark[i] = k
+                i = parent[i]
+    return count
+
+
+def factor_work(A: sp.spmatrix, order: np.ndarray) -> float:
+    """The multiply-adds of a Cholesky factorization of ``A[order][:, order]``, counted exactly
+    from its structure before any factoring: Σ_j c_j², c_j the entries below the diagonal in
+    column j of the factor.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(5, 5))
+    >>> factor_work(A, np.arange(5)), factor_work(A, np.array([0, 2, 4, 1, 3]))  # a path, two orders
+    (4.0, 7.0)
+    """
+    S = sp.csr_matrix(A)
+    S = (S + S.T).tocsr()
+    where = np.empty(len(order), dtype=np.int64)
+    where[order] = np.arange(len(order))
+    count = _column_counts(S.indptr.astype(np.int64), S.indices.astype(np.int64),
+                           np.asarray(order, dtype=np.int64), where)
+    return float(np.sum(count.astype(np.float64) ** 2))
+
+
+def volume_order(A: sp.spmatrix) -> np.ndarray | None:
+    """The ordering a volume's factorization takes: minimum degree or nested dissection,
+    whichever :func:`factor_work` counts the fewer operations for (minimum degree looks one
+    vertex ahead and misses a bulky volume's surface separators; nested dissection's level
+    structures fill more on small, irregular ones). None: SuperLU's own.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(300, 300), format="csc")
+    >>> sorted(volume_order(A).tolist()) == list(range(300))
+    True
+    """
+    A = sp.csc_matrix(A)
+    key = (A.shape, A.nnz, hash(A.indptr.tobytes()), hash(A.indices.tobytes()))
+    if key not in _ORDERS:  # shift-invert and its inertia count factor one structure twice
+        candidates = [p for p in (minimum_degree(A), nested_dissection(A)) if p is not None]
+        _ORDERS[key] = min(candidates, key=lambda p: factor_work(A, p))
+        while len(_ORDERS) > 4:
+            _ORDERS.pop(next(iter(_ORDERS)))
+    return _ORDERS[key]
+
+
+_ORDERS: dict[tuple, np.ndarray] = {}
 
 
 def supernodal(op: object) -> bool:
@@ -203,4 +360,4 @@ def factor(A: sp.spmatrix, supernodal: bool = False) -> Factor:
             return _LDL(A)
         except RuntimeError:  # a zero pivot (or a diagonal entry not stored): SuperLU's ordering
             pass
-    return _LU(A)
+    return _LU(A, volume_order(A) if supernodal else None)

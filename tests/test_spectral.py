@@ -547,6 +547,47 @@ def test_tol_zero_asks_for_machine_precision_as_eigsh_does(operator):
     assert np.abs(below - lam).max() < 1e-10 * w[5]
 
 
+def test_a_volume_is_factored_in_the_ordering_whose_work_is_counted_smaller():
+    """A volume's factorization (_ldl.factor, supernodal) takes minimum degree or nested
+    dissection, whichever factor_work counts fewer operations for; the count is exact (a dense
+    Cholesky's pattern). A thin irregular bar keeps minimum degree; the 20³ tetrahedral cube takes
+    nested dissection, with fewer stored entries. Its solves, its blocked triangular solves (the
+    ordering composed with SuperLU's) and its pivots' inertia are those of minimum degree."""
+    from scipy.spatial import Delaunay
+
+    from meshlap import _ldl, samples
+
+    axes = np.meshgrid(np.arange(60.0), np.arange(4.0), np.arange(4.0), indexing="ij")
+    g = np.stack(axes, -1).reshape(-1, 3)
+    P = g + 0.1 * np.random.default_rng(0).uniform(-1, 1, g.shape)
+    bar = meshlap.laplacian(P, Delaunay(P).simplices)
+    A = sp.csc_matrix(-sp.csr_matrix(bar.S) + sp.diags(1e-3 * bar.mass))
+    order = _ldl.minimum_degree(A)
+    L = np.linalg.cholesky(A.toarray()[np.ix_(order, order)])
+    assert _ldl.factor_work(A, order) == float(np.sum((np.abs(np.tril(L, -1)) > 0).sum(axis=0) ** 2.0))
+    np.testing.assert_array_equal(_ldl.volume_order(A), order)
+
+    V, T = samples.cube_tetrahedra(20)
+    op = meshlap.laplacian(V, T)
+    S = sp.csr_matrix(op.S)
+    A = sp.csc_matrix(-0.5 * (S + S.T) + sp.diags(1e-3 * op.mass))
+    dissected = _ldl.nested_dissection(A)
+    assert _ldl.factor_work(A, dissected) < 0.8 * _ldl.factor_work(A, _ldl.minimum_degree(A))
+    np.testing.assert_array_equal(_ldl.volume_order(A), dissected)
+    f, plain = _ldl.factor(A, supernodal=True), _ldl._LU(A)
+    assert f._lu.L.nnz + f._lu.U.nnz < 0.95 * (plain._lu.L.nnz + plain._lu.U.nnz)
+    B = np.random.default_rng(0).standard_normal((A.shape[0], 12))
+    X = f.solve(B)
+    assert np.abs(A @ X - B).max() < 1e-9 * np.abs(B).max()
+    into, lower, upper, diag, out = f.triangles()
+    Y = np.empty(B.shape)
+    Y[into] = B
+    _ldl.triangular_solves(lower, upper, diag, Y)
+    assert np.abs(Y[out] - X).max() < 1e-12 * np.abs(X).max()
+    shifted = sp.csc_matrix(-0.5 * (S + S.T) - 30.0 * sp.diags(op.mass))  # eigenvalues below 30
+    assert _ldl.factor(shifted, supernodal=True).negative == _ldl._LU(shifted).negative > 1
+
+
 def test_one_blas_thread_limits_and_restores_without_scanning_the_libraries_again():
     """BLAS runs on one thread inside the context, as many as before after it, nested too; the
     loaded libraries are found once (each scan read /proc/self/maps: 2 ms per call, half a
