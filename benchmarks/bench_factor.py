@@ -5,6 +5,7 @@ all in one process.
 
     python benchmarks/bench_factor.py                 # RESULTS.md; the corpus's camelhead if present
     python benchmarks/bench_factor.py --quick --no-write
+    python benchmarks/bench_factor.py --volumes carotid.vtk dataset.vtu   # more volumes, ordering table
 
 Table 1, the factorizations themselves (meshlap._ldl): factor time, stored entries of the
 factors (SuperLU: L + U; LDLᵀ: L twice plus D, the LU it stands for), one solve and a 64-column
@@ -168,6 +169,8 @@ def main() -> None:
     ap.add_argument("--corpus", default=None,
                     help="corpus folder (default: $MESHLAP_CORPUS, benchmarks/corpus)")
     ap.add_argument("--no-write", action="store_true", help="print; leave RESULTS.md")
+    ap.add_argument("--volumes", nargs="*", default=[], help="volume files (any meshlap reads): rows of "
+                    "the ordering table")
     args = ap.parse_args()
     folder = rc.corpus_dir(args.corpus)
     warnings.simplefilter("ignore")
@@ -193,6 +196,9 @@ def main() -> None:
                 m = rc.load(folder / e["file"], e["format"])
                 if m.tet:
                     frows.append(nd_row(f"{e['name']} (corpus)", meshlap.laplacian(m.Vw, m.Cw)))
+    for path in args.volumes:
+        frows.append(nd_row(Path(path).name, meshlap.laplacian(path)))
+        print(f"{path}: done ({time.time() - start:.0f} s)", file=sys.stderr, flush=True)
     lines = ["Factorizations of −S + 10⁻³M: CPU seconds, stored entries, one "
              "solve and a 64-column block (residual of the block, relative).", "",
              "| input | pencil | n | SuperLU factor s | entries | 1 solve ms | 64 solves ms | "
@@ -240,8 +246,12 @@ def main() -> None:
     print("\n".join(lines))
     if not args.no_write and not args.quick:
         took = time.time() - start
-        write_section("bench_factor.py", [f"Command: `python benchmarks/bench_factor.py` ({took:.0f} s; "
-                                          "camelhead from $MESHLAP_CORPUS).", "", *lines])
+        extra = "".join(f" {Path(v).name}" for v in args.volumes)
+        write_section("bench_factor.py", [f"Command: `python benchmarks/bench_factor.py"
+                                          f"{' --volumes' + extra if extra else ''}` ({took:.0f} s; "
+                                          "camelhead and the tetrahedral meshes from $MESHLAP_CORPUS; "
+                                          "--volumes: pyvista/vtk-data's Data/ files of those names, "
+                                          "Data/fea/kiefer/dataset.vtu for dataset.vtu).", "", *lines])
 
 
 if __name__ == "__main__":

@@ -19,12 +19,13 @@ LDLᵀ's 6.7 s, one solve 24 ms against 33 ms, both in minimum degree). ``supern
 :func:`volume_order` chooses: minimum degree, which looks one vertex ahead and misses a bulky
 volume's surface separators, or :func:`nested_dissection`, whose level structures fill more on
 small irregular volumes, whichever needs fewer multiply-adds as :func:`factor_work` counts them
-from the structure alone (the same benchmark: a 68,921-vertex tetrahedral cube in 8.5 s and 66 M
-stored entries against minimum degree's 68.1 s and 107 M; the corpus's real tetrahedral meshes
-keep minimum degree). :func:`meshlap.spectral.eigs`, implicit heat steps, Poisson solves and the
-heat method's step ask for it. LDLᵀ's blocked solves are faster (64 columns of the 9,261-vertex
-cube in 51 ms against SuperLU's 173-215 ms), but the factorization's cost comes first unless
-hundreds of columns are solved.
+from the structure alone (the same benchmark: a 68,921-vertex tetrahedral cube in 8.7 s and 66 M
+stored entries against minimum degree's 67.9 s and 107 M, VTK's 167,580-vertex carotid volume
+28.8 s and 196 M against 232 s and 454 M; the corpus's real tetrahedral meshes and a
+102,578-vertex FEA jaw keep minimum degree). :func:`meshlap.spectral.eigs`, implicit heat steps,
+Poisson solves and the heat method's step ask for it. LDLᵀ's blocked solves are faster (64
+columns of the 9,261-vertex cube in 51 ms against SuperLU's 173-215 ms), but the factorization's
+cost comes first unless hundreds of columns are solved.
 """
 
 from __future__ import annotations
