@@ -467,20 +467,28 @@ def surface(V: Any, F: Any) -> Geometry:
 def _tetrahedral(V: Any, F: np.ndarray) -> bool:
     # (m, 4) cells are tetrahedra when most of them meet another across a triangle with the two
     # fourth corners on opposite sides of it, as the cells of a tetrahedral mesh do. Two quads of a
-    # surface share at most an edge; copies of one quad share their corners (the same side).
+    # surface share at most an edge (no triangle comes twice: the common case ends there); copies
+    # of one quad share their corners (the same side).
     P = check_points(V, "V")
-    if P.shape[1] != 3 or len(F) < 2 or F.min() < 0 or F.max() >= len(P):
+    n = len(P)
+    if P.shape[1] != 3 or len(F) < 2 or F.min() < 0 or F.max() >= n:
         return False
     facet = np.sort(np.stack([np.delete(F, c, axis=1) for c in range(4)], axis=1), axis=2).reshape(-1, 3)
-    apex = F.ravel()  # the corner opposite facet c of cell i is F[i, c]
-    a, b, c = (P[facet[:, j]] for j in range(3))
+    if n < 2**21:  # a triangle as one integer
+        key = (facet[:, 0] * n + facet[:, 1]) * n + facet[:, 2]
+        _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
+    else:
+        _, inverse, count = np.unique(facet, axis=0, return_inverse=True, return_counts=True)
+    twice = np.flatnonzero(count[inverse.ravel()] == 2)
+    if not len(twice):
+        return False
+    a, b, c = (P[facet[twice, j]] for j in range(3))
+    apex = F.ravel()[twice]  # the corner opposite facet c of cell i is F[i, c]
     side = np.sign(np.einsum("ij,ij->i", np.cross(b - a, c - a), P[apex] - a))
-    _, inverse, count = np.unique(facet, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    twice = count[inverse] == 2
     other = np.zeros(len(count))
-    np.add.at(other, inverse, side)  # the two sides cancel when opposite
-    meets = twice & (other[inverse] == 0) & (side != 0)
+    np.add.at(other, inverse.ravel()[twice], side)  # the two sides cancel when opposite
+    meets = np.zeros(len(facet), dtype=bool)
+    meets[twice] = (other[inverse.ravel()[twice]] == 0) & (side != 0)
     return bool(np.count_nonzero(meets.reshape(-1, 4).any(axis=1)) * 2 >= len(F))
 
 

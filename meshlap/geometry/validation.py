@@ -299,9 +299,7 @@ def check_k(k: Any, n: int, name: str = "k") -> int:
     >>> check_k(10, 500)
     10
     """
-    if isinstance(k, (bool, np.bool_)) or not isinstance(k, numbers.Integral):
-        raise MeshError(f"{name} must be an integer number of eigenpairs; got {k!r}")
-    k = int(k)
+    k = check_int(k, name)
     if n < 2:
         raise MeshError(f"the eigenproblem has size {n}: eigenpairs need at least 2 vertices with mass")
     if not 1 <= k <= n - 1:
