@@ -3,13 +3,16 @@
 libigl's reader aborts the whole process on a file cut inside its faces (a double free in C++)
 and reads a malformed ASCII vertex as zeros; this one says what is wrong and where. Elements
 other than ``vertex`` and ``face`` (edges, materials, ...) and properties other than the
-coordinates and the face's ``vertex_indices`` (colours, normals, ...) are read past.
+coordinates and the face's ``vertex_indices`` (colours, normals, ...) are read past. A file
+without faces whose ``tristrips`` element holds triangle strips (-1 between strips, as some
+scanners' tools wrote them: common-3d-test-models' igea.ply) is read as their triangles.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ._vtk import strip_triangles
 from .errors import MeshError
 from .geometry.validation import check_rows
 
@@ -67,13 +70,18 @@ def read(data: bytes, name: str, faces: bool = True) -> tuple[np.ndarray, list |
         raise MeshError(f"{name}: no vertex element with x, y, z properties")
     if any(isinstance(kind, tuple) for _, kind in props["vertex"]):
         raise MeshError(f"{name}: a list property in the vertex element")
-    if faces and "face" in props and not any(p in _CORNERS for p, _ in props["face"]):
-        raise MeshError(f"{name}: the face element has no vertex_indices list")
+    cells = "face" if "face" in props or "tristrips" not in props else "tristrips"
+    if faces and cells in props and not any(p in _CORNERS for p, _ in props[cells]):
+        raise MeshError(f"{name}: the {cells} element has no vertex_indices list")
     read_element = _ascii_elements if fmt == "ascii" else _binary_elements
     got = read_element(data[start:], elements, "<" if fmt == "binary_little_endian" else ">", name,
-                       {"vertex", "face"} if faces else {"vertex"})
+                       {"vertex", cells} if faces else {"vertex"})
     V = np.column_stack([got["vertex"][c] for c in "xyz"]).astype(np.float64)
-    return V, got.get("face")
+    if cells == "tristrips" and cells in got:
+        rows = [np.asarray(r, dtype=np.int64).ravel() for r in got[cells]]
+        flat = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+        return V, strip_triangles([s[s >= 0] for s in np.split(flat, np.flatnonzero(flat < 0))])
+    return V, got.get(cells)
 
 
 def _ascii_elements(body: bytes, elements: list, order: str, name: str, wanted: set) -> dict:

@@ -112,7 +112,7 @@ def read_polydata(path: Path) -> tuple[np.ndarray, np.ndarray | list, int] | Non
                 block = _offset_cells(cur, int(words[1]), key) if offsets else \
                     _cells(cur.array(int(words[2]), "int", key), path.name, key)
                 if key in ("POLYGONS", "TRIANGLE_STRIPS"):  # vertices bound nothing, lines no surface
-                    cells += block if key == "POLYGONS" else _strip_triangles(block)
+                    cells += block if key == "POLYGONS" else strip_triangles(block).tolist()
                 elif key == "LINES":
                     lines += [[a, b] for c in block for a, b in zip(c[:-1], c[1:], strict=False)]
             elif key == "METADATA":  # field names and information keys, up to a blank line
@@ -148,10 +148,23 @@ def _offset_cells(cur: _Cursor, n_offsets: int, what: str) -> list[list[int]]:
     return [flat[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _strip_triangles(strips: list[list[int]]) -> list[list[int]]:
-    # a strip's i-th triangle is (s[i], s[i+1], s[i+2]), every other one flipped to keep the orientation
-    return [[s[i], s[i + 1], s[i + 2]] if i % 2 == 0 else [s[i + 1], s[i], s[i + 2]]
-            for s in strips for i in range(len(s) - 2)]
+def strip_triangles(strips: list[list[int]]) -> np.ndarray:
+    """The triangles of triangle strips, (m, 3): a strip's i-th triangle is (s[i], s[i+1], s[i+2]),
+    every other one flipped to keep the orientation; those with a repeated corner, which strips
+    use to turn or to change parity, cover nothing and are left out.
+
+    >>> strip_triangles([[0, 1, 2, 3], [4, 5, 5, 6, 7]]).tolist()
+    [[0, 1, 2], [2, 1, 3], [5, 6, 7]]
+    """
+    out = []
+    for s in strips:
+        s = np.asarray(s, dtype=np.int64)
+        if len(s) < 3:
+            continue
+        a, b, odd = s[:-2], s[1:-1], np.arange(len(s) - 2) % 2 == 1
+        out.append(np.column_stack([np.where(odd, b, a), np.where(odd, a, b), s[2:]]))
+    T = np.concatenate(out) if out else np.zeros((0, 3), dtype=np.int64)
+    return T[(T[:, 0] != T[:, 1]) & (T[:, 1] != T[:, 2]) & (T[:, 0] != T[:, 2])]
 
 
 def _cells(flat: np.ndarray, name: str, what: str) -> list[list[int]]:

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _meshio, _ply
+from . import _meshio, _mni, _ply
 from ._vtk import read_polydata
 from .errors import MeshError, first_line
 from .geometry import Polygons
@@ -70,7 +70,10 @@ def _has_faces(path: Path) -> bool:
 
 
 def _obj_kind(path: Path) -> str:
-    keys = {ln.split(maxsplit=1)[0] for ln in path.read_text(errors="replace").splitlines() if ln.strip()}
+    text = path.read_text(errors="replace")
+    if _mni.is_mni(text):  # an MNI polygon object
+        return "surface"
+    keys = {ln.split(maxsplit=1)[0] for ln in text.splitlines() if ln.strip()}
     return "surface" if "f" in keys else ("polyline" if "l" in keys else "points")
 
 

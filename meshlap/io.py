@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _meshio, _pcd, _ply
+from . import _meshio, _mni, _pcd, _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -281,7 +281,7 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
             text = path.read_text(encoding="utf-8", errors="replace")
         except UnicodeError as exc:  # pragma: no cover - errors="replace" makes this rare
             raise MeshError(f"{path.name}: not a text file ({exc})") from exc
-        parse = parse_obj if suffix == ".obj" else _parse_off
+        parse = _parse_off if suffix == ".off" else _mni.read if _mni.is_mni(text) else parse_obj
         V, F = parse(text, path.name)
     elif suffix == ".ply":  # meshlap's own reader: libigl's aborts the process on a file cut in its faces
         V, F = _ply.read(path.read_bytes(), path.name)
@@ -376,12 +376,13 @@ def read_points(path: PathLike, *, columns: Any = None) -> np.ndarray:
         P = read_mesh(path)[0]
     elif suffix == ".obj":  # the 'v' lines, with or without faces
         text = path.read_text(encoding="utf-8", errors="replace")
-        rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
-        if not rows:  # an MNI surface (its first line "P ...") shares the suffix
-            mni = " (its first line starts with 'P': an MNI surface, another format)" \
-                if text.lstrip().startswith("P ") else ""
-            raise MeshError(f"{path.name}: no 'v' lines, so no points: not a Wavefront OBJ file{mni}")
-        P = check_rows(rows, 3, f"{path.name}: vertex")
+        if _mni.is_mni(text):  # an MNI surface shares the suffix
+            P = _mni.read(text, path.name)[0]
+        else:
+            rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
+            if not rows:
+                raise MeshError(f"{path.name}: no 'v' lines, so no points: not a Wavefront OBJ file")
+            P = check_rows(rows, 3, f"{path.name}: vertex")
     else:
         P = _text_columns(path, columns)
     return check_points(P, name=f"points of {path.name}")

@@ -172,7 +172,9 @@ MALFORMED = {
     "lonely.node": ({"node": "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"}, "no such TetGen file"),
     "bad.vtk": (b"garbage", "meshio could not read it (Illegal VTK header)"),
     "mni.obj": (b"P 0.3 0.3 0.4 10 1 3\n 0 0 0\n 1 0 0\n 0 1 0\n",
-                "not a Wavefront OBJ file (its first line starts with 'P': an MNI surface"),
+                "mni.obj: the file ends inside its normals (an MNI surface)"),
+    "words.obj": (b"P 0.3 0.3 0.4 10 1 3\n 0 0 0\n 1 0 0\n 0 1 0\n0 0 1 0 0 1 0 0 1\n1 0 1 1 1 1\n3\n0 1 x\n",
+                  "words.obj: a value of its index list is not a number"),
     **{f"empty.{suffix}": (b"", "the file is empty") for suffix in ("obj", "off", "ply", "stl", "xyz", "npy",
                                                                    "vtk", "vtu", "vtp", "glb", "npz")},
 }

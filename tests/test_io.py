@@ -209,6 +209,61 @@ def test_ply_meshes_read_their_vertices_or_name_the_bad_row(tmp_path):
     assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
 
 
+def test_ply_triangle_strips_are_read_as_their_triangles(tmp_path):
+    """Some scans (igea, from common-3d-test-models) store triangle strips in a ``tristrips``
+    element, -1 between strips; meshlap said "a PLY file without faces" (trimesh and pyvista read
+    no faces either). A 5 × 4 grid in row strips, two joined by repeated corners, reads as the grid's
+    24 triangles, every one turning the same way, ASCII and binary alike."""
+    nx, ny = 5, 4
+    X, Y = np.meshgrid(np.arange(nx, dtype=float), np.arange(ny, dtype=float))
+    V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nx * ny)])
+    strips = [np.column_stack([r * nx + np.arange(nx), (r + 1) * nx + np.arange(nx)]).ravel()
+              for r in range(ny - 1)]
+    # the last two rows joined into one strip by repeated corners (4 empty triangles), the first apart
+    flat = np.r_[strips[0], -1, strips[1], strips[1][-1], strips[2][0], strips[2]]
+    head = (f"element vertex {len(V)}\nproperty float x\nproperty float y\nproperty float z\n"
+            "element tristrips 1\nproperty list int int vertex_indices\nend_header\n")
+    rows = "".join(f"{x} {y} {z}\n" for x, y, z in V)
+    (tmp_path / "a.ply").write_text("ply\nformat ascii 1.0\n" + head + rows + f"{len(flat)} "
+                                    + " ".join(map(str, flat)) + "\n")
+    body = V.astype("<f4").tobytes() + np.r_[len(flat), flat].astype("<i4").tobytes()
+    (tmp_path / "b.ply").write_bytes(("ply\nformat binary_little_endian 1.0\n" + head).encode() + body)
+    corner = np.arange(nx * ny).reshape(ny, nx)[:-1, :-1].ravel()
+    grid = np.vstack([np.column_stack([corner, corner + nx, corner + 1]),
+                      np.column_stack([corner + 1, corner + nx, corner + nx + 1])])
+    cells = {tuple(sorted(t)) for t in grid.tolist()}
+    for name in ("a.ply", "b.ply"):
+        Vr, F = io.read_mesh(tmp_path / name)
+        assert np.array_equal(Vr, V) and F.shape == (24, 3)
+        assert {tuple(sorted(t)) for t in F.tolist()} == cells
+        turn = np.cross(Vr[F[:, 1]] - Vr[F[:, 0]], Vr[F[:, 2]] - Vr[F[:, 0]])[:, 2]
+        assert np.all(turn < 0) or np.all(turn > 0)
+    (tmp_path / "c.ply").write_text("ply\nformat ascii 1.0\n" + head.split("element tristrips")[0]
+                                    + "end_header\n" + rows)
+    with pytest.raises(meshlap.MeshError, match="c.ply: a PLY file without faces"):
+        io.read_mesh(tmp_path / "c.ply")
+
+
+def test_mni_surfaces_are_read_as_vtk_reads_them(tmp_path):
+    """MNI's and CIVET's brain surfaces are ``.obj`` files of another format (``P`` and a stream of
+    numbers: pyvista's mni-surface-mesh.obj); meshlap read no points from them. A sphere written
+    in it reads back exactly (points, triangles; one colour per point), and mixed polygons (one
+    colour) as polygons; ``laplacian`` and ``read_points`` take the path."""
+    V, F = meshlap.shapes.sphere(200, seed=0)
+    normals = V / np.linalg.norm(V, axis=1, keepdims=True)
+    words = ["P 0.3 0.3 0.4 10 1", len(V), *V.ravel(), *normals.ravel(), len(F), 2, *np.ones(4 * len(V)),
+             *range(3, 3 * len(F) + 1, 3), *F.ravel()]
+    (tmp_path / "s.obj").write_text(" ".join(map(str, words)))
+    Vr, Fr = io.read_mesh(tmp_path / "s.obj")
+    assert np.array_equal(Vr, V) and np.array_equal(Fr, F)
+    assert np.array_equal(io.read_points(tmp_path / "s.obj"), V)
+    assert meshlap.laplacian(tmp_path / "s.obj").n_vertices == len(V)
+    quad = "P 0 0 0 1 1 5 0 0 0 1 0 0 1 1 0 0 1 0 2 0 -1 " + "0 0 1 " * 5 + "2 0 1 1 1 1 4 7 0 1 2 3 1 4 2"
+    (tmp_path / "q.obj").write_text(quad)
+    V2, F2 = io.read_mesh(tmp_path / "q.obj")
+    assert V2.shape == (5, 3) and isinstance(F2, meshlap.Polygons) and F2.sizes.tolist() == [4, 3]
+
+
 def test_files_cut_short_end_in_one_line_naming_where(tmp_path):
     """A PLY mesh cut inside its faces aborted the whole process in libigl's reader (a double free);
     meshlap reads PLY itself. Every cut names where the file ends or which row is short."""
