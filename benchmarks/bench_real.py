@@ -17,8 +17,8 @@ Columns: meshlap's default (``spectral.eigs(meshlap.laplacian(V, F), 10 + parts)
 as published), libigl's cotangent Laplacian with the Voronoi mass (COT), LaPy (linear FEM)
 and robust-laplacian, the peers on the welded, triangulated mesh; each with the CPU time of
 its build and eigenpairs (process time: all threads). Also: the vertices alone as a point
-cloud (meshlap.point_cloud_laplacian against robust-laplacian's), tetrahedral meshes (meshlap
-with k=3 against LaPy's TetMesh, Neumann), and Gaussian noise along the normals of a few
+cloud (meshlap.point_cloud_laplacian against robust-laplacian's), tetrahedral meshes (meshlap's
+default against LaPy's TetMesh, Neumann), and Gaussian noise along the normals of a few
 meshes (0.1 and 0.3 mean edges, seeded) against the clean mesh's reference, with the paper's
 operator beside the peers.
 """
@@ -248,7 +248,7 @@ def extent_reading(V: np.ndarray, F: np.ndarray) -> float:
 
 def tet_row(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) -> dict:
     R = np.array(ref["ref"])
-    lam, cpu, warn, dec, unc = meshlap_default(mesh.Vw, mesh.Cw, k, k=3)
+    lam, cpu, warn, dec, unc = meshlap_default(mesh.Vw, mesh.Cw, k)  # (m, 4) cells: read as tetrahedra
     plam, pcpu, _ = timed(lambda: lapy_tet(mesh.Vw, mesh.Cw, k))
     row = {"name": entry["name"], "kind": entry["kind"], "n": len(mesh.Vw), "parts": n_parts,
            "err_default": err(lam, R, n_parts), "cpu_default": cpu, "decision": dec, "warnings": warn,
@@ -381,7 +381,7 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
                    f"{pct(x['err_default'])} | "
                    f"{pct(x['err_robust'])} | {x['ratio']:.3g} | {x['cpu_default']:.2f} | "
                    f"{x['cpu_robust']:.3f} | {x['warnings']} |")
-    out += ["", "### Tetrahedral meshes (Neumann): meshlap (k=3) against LaPy's TetMesh", "",
+    out += ["", "### Tetrahedral meshes (Neumann): meshlap's default against LaPy's TetMesh", "",
             "Summary: " + summary(tets, "LaPy") + " (CPU against LaPy's).", "", roundoff(tets), "",
             "| mesh | n | ref | ref Δ | default | LaPy | ratio | CPU default s | CPU LaPy s | decision | "
             "warnings |", "|" + "---|" * 11]

@@ -209,6 +209,8 @@ SOURCES: list[tuple[str, str, str, str, str, int]] = [
     ("nurse-shark", VD, "Data/grey_nurse_shark/Grey_Nurse_Shark.stl", "multi-part decimated holdout5",
      "Thingiverse, via VTK's examples (its README)", 9000),
     ("ball-b", T, "models/ballB.off", "closed holdout5", "trimesh test model", 0),
+    ("notch-tet", VD, "Data/notch_stress.vtk", "tet holdout5", VTK, 0),
+    ("can-tet", VD, "Data/can.vtu", "tet holdout5", VTK, 0),
 ]
 
 
@@ -240,6 +242,19 @@ def _fetch(mirrors: Path, repo: str, path: str, out: Path) -> str:
     return ""
 
 
+def _tetrahedralize(src: Path) -> Path:
+    """A VTK volume of hexahedra and wedges as tetrahedra (VTK's split), in MEDIT .mesh beside it."""
+    import meshio
+    import pyvista as pv
+
+    grid = pv.read(str(src)).triangulate()
+    out = src.with_suffix(".mesh")
+    tets = grid.cells_dict[pv.CellType.TETRA]
+    meshio.write(str(out), meshio.Mesh(np.asarray(grid.points), [("tetra", tets)]))
+    src.unlink()
+    return out
+
+
 def _decimate(src: Path, out: Path, target: int) -> None:
     import pyvista as pv
 
@@ -268,6 +283,9 @@ def main() -> None:
         fetched = _fetch(Path(args.mirrors), repo, path, raw)
         fmt = "lapy-tet" if repo == LP else ""
         file = raw
+        if repo == VD and "tet" in kinds.split():  # VTK's FEA volumes: hexahedra, wedges
+            file = _tetrahedralize(raw)
+            fetched = "hexahedra and wedges split into tetrahedra by VTK (pyvista), as MEDIT .mesh by meshio"
         if target:
             file = out / f"{name}.obj"
             _decimate(raw, file, target)

@@ -135,7 +135,8 @@ def triangulate(faces: list[np.ndarray] | np.ndarray) -> np.ndarray:
 
 def weld(V: np.ndarray, C: np.ndarray, rtol: float = WELD_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices within ``rtol`` of the bounding-box diagonal, drop cells that collapse
-    and vertices no cell uses."""
+    (tetrahedra also where flat: 10⁻¹² of their longest edge cubed, the zero-volume pieces a
+    degenerate hexahedron splits into) and vertices no cell uses."""
     diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
     pairs = cKDTree(V).query_pairs(rtol * diag, output_type="ndarray")
     n = len(V)
@@ -146,6 +147,11 @@ def weld(V: np.ndarray, C: np.ndarray, rtol: float = WELD_RTOL) -> tuple[np.ndar
     C = first[label][C]
     s = np.sort(C, axis=1)
     C = C[np.all(s[:, 1:] != s[:, :-1], axis=1)]
+    if C.shape[1] == 4:
+        E = V[C[:, 1:]] - V[C[:, :1]]
+        sides = V[C[:, [1, 2, 3, 2, 3, 3]]] - V[C[:, [0, 0, 0, 1, 1, 2]]]
+        longest = np.linalg.norm(sides, axis=2).max(axis=1)
+        C = C[np.abs(np.linalg.det(E)) > 1e-12 * longest**3]
     used, C = np.unique(C, return_inverse=True)
     return V[used], C.reshape(-1, s.shape[1])
 

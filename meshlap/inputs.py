@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _meshio, _mni, _ply
+from . import _freesurfer, _meshio, _mni, _ply
 from ._vtk import read_polydata
 from .errors import MeshError, first_line
 from .geometry import Polygons
@@ -188,7 +188,8 @@ def as_geometry_input(obj: Any) -> GeometryInput:
 def read_input(path: str | os.PathLike) -> GeometryInput:
     """Read any geometry file the command line takes, as ``(points, cells, k)``.
 
-    Surface meshes (.obj, .off, .ply with faces, .stl), point clouds (.ply without faces, .pcd,
+    Surface meshes (.obj, .off, .ply with faces, .stl; FreeSurfer's ``lh.pial`` and the like, told
+    by their first bytes; GIfTI .surf.gii with nibabel), point clouds (.ply without faces, .pcd,
     .xyz, .csv, .txt, .pts, .npy; an .obj without faces), curves (an .obj with only ``l``
     lines), TetGen's .node/.ele, legacy VTK POLYDATA, ASCII or binary (pyvista's ``save``; LaPy's
     tetrahedra: polygons of 4 corners spanning a volume), and with meshio installed every format
@@ -213,6 +214,9 @@ def read_input(path: str | os.PathLike) -> GeometryInput:
         return V, T, 3
     existing_file(path, "mesh" if suffix in MESH_FORMATS else
                   "point cloud" if suffix in POINT_FORMATS else "input")
+    with open(path, "rb") as fh:
+        if _freesurfer.is_surface(fh.read(3)):  # lh.pial, rh.white, ...: no suffix tells them
+            return (*read_mesh(path), 2)
     if suffix == ".obj" and _obj_kind(path) != "surface":
         if _obj_kind(path) == "polyline":
             V, E = read_polyline(path)
@@ -298,8 +302,24 @@ def _quiet_stderr() -> Any:
 
 
 #: suffixes meshio does not read: VTK's XML formats (pyvista) and scene formats (trimesh)
+def _by_nibabel(path: Path) -> GeometryInput:
+    # GIfTI (.surf.gii): the array of intent NIFTI_INTENT_POINTSET (1008), its triangles the one of
+    # NIFTI_INTENT_TRIANGLE (1009); a .gii of other intents holds data on a surface, not the surface
+    import nibabel
+
+    arrays = {int(a.intent): a.data for a in nibabel.load(str(path)).darrays}
+    if 1008 not in arrays:
+        raise MeshError(f"{path.name}: a GIfTI file without a point set (NIFTI_INTENT_POINTSET): data on a "
+                        "surface, not the surface; pass the .surf.gii")
+    P = check_vertices(np.asarray(arrays[1008], dtype=np.float64), name=f"points of {path.name}")
+    if 1009 not in arrays:
+        return P, None, None
+    return P, check_faces(np.asarray(arrays[1009], dtype=np.int64), len(P), name=f"faces of {path.name}"), 2
+
+
 _OTHER_READERS = {suffix: ("pyvista", _by_pyvista) for suffix in (".vtp", ".vts", ".vtr", ".vti", ".vtm")} | \
-    {suffix: ("trimesh", _by_trimesh) for suffix in (".glb", ".gltf", ".3mf", ".dae")}
+    {suffix: ("trimesh", _by_trimesh) for suffix in (".glb", ".gltf", ".3mf", ".dae")} | \
+    {".gii": ("nibabel", _by_nibabel)}
 
 
 def boundary_triangles(T: Any) -> np.ndarray:

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _meshio, _mni, _pcd, _ply
+from . import _freesurfer, _meshio, _mni, _pcd, _ply
 from ._vtk import read_polydata
 from .errors import MeshError
 from .geometry import Polygons
@@ -230,12 +230,14 @@ def _suffix(path: Path, formats: Sequence[str], what: str, verb: str = "reads") 
 
 
 def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray, np.ndarray | Polygons]:
-    """Read a surface mesh from an OBJ, OFF, PLY or STL file.
+    """Read a surface mesh from an OBJ, OFF, PLY or STL file, or a FreeSurfer surface.
 
     Parameters
     ----------
     path : str or path-like
-        The file; its suffix picks the reader.
+        The file; its suffix picks the reader, except for FreeSurfer's triangle surfaces
+        (``lh.pial``, ``rh.white``, ...), told by their first bytes. An ``.obj`` may be an MNI
+        surface, a ``.ply`` may hold triangle strips.
     triangulate : bool, default False
         Split polygons into fans of triangles (for code that needs triangles, such as the
         cotangent Laplacian). By default OBJ, OFF and PLY polygons are kept.
@@ -271,10 +273,12 @@ def read_mesh(path: PathLike, *, triangulate: bool = False) -> tuple[np.ndarray,
     ((4, 3), [[0, 1, 2, 3]])
     """
     path = existing_file(path, "mesh")
-    suffix = _suffix(path, MESH_FORMATS, "mesh")
     with open(path, "rb") as fh:
-        binary = suffix == ".off" and fh.read(64).split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]
-    if binary:
+        head = fh.read(64)
+    suffix = "" if _freesurfer.is_surface(head) else _suffix(path, MESH_FORMATS, "mesh")
+    if not suffix:  # lh.pial, rh.white, ...: FreeSurfer's names carry no format
+        V, F = _freesurfer.read(path.read_bytes(), path.name)
+    elif suffix == ".off" and head.split(b"\n", 1)[0].split()[1:2] == [b"BINARY"]:
         V, F = _parse_off_binary(path.read_bytes(), path.name)
     elif suffix in (".obj", ".off"):
         try:

@@ -10,6 +10,7 @@ import scipy.sparse as sp
 import meshlap
 from meshlap import io
 from meshlap.baselines import cotangent
+from meshlap.inputs import read_input
 
 DATA = Path(__file__).parent / "data"
 
@@ -262,6 +263,44 @@ def test_mni_surfaces_are_read_as_vtk_reads_them(tmp_path):
     (tmp_path / "q.obj").write_text(quad)
     V2, F2 = io.read_mesh(tmp_path / "q.obj")
     assert V2.shape == (5, 3) and isinstance(F2, meshlap.Polygons) and F2.sizes.tolist() == [4, 3]
+
+
+def test_freesurfer_and_gifti_surfaces_are_read(tmp_path):
+    """Brain surfaces, LaPy's main inputs: FreeSurfer's (``lh.pial``: no suffix tells the format;
+    meshlap said "unknown mesh format") are told by their first bytes and read as nibabel writes
+    them, with one more blank line too; GIfTI's ``.surf.gii`` through nibabel. A cut file, an old
+    quad surface and a GIfTI file of data without its surface each say what they are."""
+    nibabel = pytest.importorskip("nibabel", reason="nibabel absent (pip install nibabel)")
+    from nibabel.freesurfer import write_geometry
+    from nibabel.gifti import GiftiDataArray, GiftiImage
+
+    V, F = meshlap.shapes.sphere(300, seed=0)
+    write_geometry(str(tmp_path / "lh.sphere"), V, F, create_stamp="created by meshlap's tests")
+    Vr, Fr = io.read_mesh(tmp_path / "lh.sphere")
+    assert np.array_equal(Vr, V.astype(np.float32)) and np.array_equal(Fr, F)
+    P, cells, k = read_input(tmp_path / "lh.sphere")
+    assert k == 2 and np.array_equal(P, Vr) and np.array_equal(cells, F)
+    lam = meshlap.spectral.eigs(meshlap.laplacian(tmp_path / "lh.sphere"), 4)[0]
+    assert np.allclose(lam[1:], 2.0, rtol=0.02)  # the unit sphere's l = 1
+    data = (tmp_path / "lh.sphere").read_bytes()
+    cut = data.index(b"\n\n") + 2
+    (tmp_path / "rh.blank").write_bytes(data[:cut] + b"\n" + data[cut:])
+    assert np.array_equal(io.read_mesh(tmp_path / "rh.blank")[1], F)
+    (tmp_path / "lh.cut").write_bytes(data[:len(data) // 2])
+    with pytest.raises(meshlap.MeshError, match="lh.cut: the file ends before its 300 vertices and 596 tri"):
+        io.read_mesh(tmp_path / "lh.cut")
+    (tmp_path / "lh.quad").write_bytes(b"\xff\xff\xff" + data[3:])
+    with pytest.raises(meshlap.MeshError, match="lh.quad: a FreeSurfer quad surface"):
+        read_input(tmp_path / "lh.quad")
+    surf = GiftiImage(darrays=[GiftiDataArray(V.astype(np.float32), intent="NIFTI_INTENT_POINTSET"),
+                               GiftiDataArray(F.astype(np.int32), intent="NIFTI_INTENT_TRIANGLE")])
+    nibabel.save(surf, str(tmp_path / "lh.surf.gii"))
+    P, cells, k = read_input(tmp_path / "lh.surf.gii")
+    assert k == 2 and np.array_equal(P, Vr) and np.array_equal(cells.as_array(), F)
+    thickness = GiftiDataArray(V[:, 0].astype(np.float32), intent="NIFTI_INTENT_SHAPE")
+    nibabel.save(GiftiImage(darrays=[thickness]), str(tmp_path / "lh.thickness.shape.gii"))
+    with pytest.raises(meshlap.MeshError, match="without a point set"):
+        read_input(tmp_path / "lh.thickness.shape.gii")
 
 
 def test_files_cut_short_end_in_one_line_naming_where(tmp_path):
