@@ -8,7 +8,8 @@ on a sparse factorization, and LaPy's solver beside them.
 
 Each row is ``spectral.eigs(meshlap.laplacian(V, T, k=3), 10)`` (linear FEM, verified pairs) with
 ``method="lobpcg"`` (meshlap._multigrid's V-cycle as preconditioner, above
-``meshlap._multigrid.MIN_VERTICES`` vertices) and ``method="shift-invert"`` (SuperLU), and LaPy's
+``meshlap._multigrid.MAX_FACTOR_WORK`` counted multiply-adds of factoring) and
+``method="shift-invert"`` (SuperLU), and LaPy's
 ``Solver(TetMesh).eigs`` (its own linear FEM, scipy's or CHOLMOD's factorization), each in a
 process of its own so that its peak memory is its own: wall seconds of the solve (the build
 apart), peak resident memory, and the largest relative error of eigenvalues 1-9 against the
@@ -20,7 +21,7 @@ pyvista/vtk-data's voxel images, split into tetrahedra by VTK) get a table of th
 ``--solves`` times, on the same cubes, a Poisson solve (Δφ = f, φ = 0 on the face z = 0,
 insulated elsewhere; φ = cos πx cos πy sin(πz/2) exactly) and an implicit heat step
 (``(M - τS) u = M f``, τ = 0.01), each with its set-up: ``solver="auto"`` (conjugate gradient
-with multigrid above ``MIN_VERTICES``), ``solver="direct"`` (SuperLU), and LaPy's
+with multigrid above ``MAX_FACTOR_WORK``), ``solver="direct"`` (SuperLU), and LaPy's
 ``Solver.poisson`` and ``heat.diffusion`` (a step of the same kind, its own factorization).
 Error: the Poisson solution's largest error against the exact φ, relative to its largest value;
 the heat step's largest difference from the direct step's, relative.
@@ -199,7 +200,8 @@ def main() -> None:
     extra = f" --extra {' '.join(Path(x).name for x in args.extra)}" if args.extra else ""
     head = [f"Command: `python benchmarks/bench_volume_eigs.py{' --quick' if args.quick else ''}"
             f" --limit {args.limit:g}{extra}` ({started}, 2 shared cores). `method=\"lobpcg\"` is "
-            f"preconditioned by multigrid above {_multigrid.MIN_VERTICES:,} vertices (the default there), "
+            f"preconditioned by multigrid above {_multigrid.MAX_FACTOR_WORK:.0e} counted multiply-adds of "
+            "factoring (the default there), "
             "by the exact factor below. Seconds of the solve (wall), peak resident GiB of its process, "
             "largest relative error of eigenvalues 1-9 (the cube's exact Neumann values; elsewhere "
             "shift-invert's, or LaPy's where shift-invert ran out of time).", "",
@@ -249,7 +251,8 @@ def solves(args: argparse.Namespace) -> None:
             print(rows[-1], flush=True)
     head = [f"Command: `python benchmarks/bench_volume_eigs.py --solves{' --quick' if args.quick else ''}"
             f" --limit {args.limit:g}` ({started}, 2 shared cores). `solver=\"auto\"` is conjugate "
-            f"gradient with multigrid above {_multigrid.MIN_VERTICES:,} vertices, SuperLU below. Seconds "
+            f"gradient with multigrid above {_multigrid.MAX_FACTOR_WORK:.0e} counted multiply-adds, SuperLU "
+            "below. Seconds "
             "of the set-up and one solve (wall), peak resident GiB of its process; error: the Poisson "
             "solution's largest against the exact φ (relative), the heat step's largest difference "
             "from the direct step's (relative).", "",

@@ -31,6 +31,7 @@ cost comes first unless hundreds of columns are solved.
 from __future__ import annotations
 
 import functools
+import math
 from typing import Protocol
 
 import numpy as np
@@ -347,10 +348,10 @@ def minimum_degree(A: sp.spmatrix) -> np.ndarray | None:
 
 
 @jit()
-def _column_counts(indptr, indices, order, where):  # pragma: no cover - compiled
+def _column_counts(indptr, indices, order, where, most):  # pragma: no cover - compiled
     # entries below the diagonal in each column of the Cholesky factor of A[order][:, order]:
     # the elimination tree (Liu, with path compression), then each row's subtree walked up
-    # from its entries to the marks the row leaves
+    # from its entries to the marks the row leaves; None once more than ``most`` entries are met
     n = len(order)
     parent = np.full(n, -1, dtype=np.int64)
     ancestor = np.full(n, -1, dtype=np.int64)
@@ -366,6 +367,7 @@ def _column_counts(indptr, indices, order, where):  # pragma: no cover - compile
                 i = nxt
     count = np.zeros(n, dtype=np.int64)
     mark = np.full(n, -1, dtype=np.int64)
+    entries = 0
     for k in range(n):
         mark[k] = k
         old = order[k]
@@ -375,6 +377,9 @@ def _column_counts(indptr, indices, order, where):  # pragma: no cover - compile
                 count[i] += 1
                 mark[i] = k
                 i = parent[i]
+                entries += 1
+        if entries > most:
+            return None
     return count
 
 
@@ -392,11 +397,15 @@ def factor_work(A: sp.spmatrix, order: np.ndarray) -> float:
     return _work(_graph(A), order)
 
 
-def _work(graph: tuple[np.ndarray, np.ndarray], order: np.ndarray) -> float:
-    where = np.empty(len(order), dtype=np.int64)
-    where[order] = np.arange(len(order))
-    count = _column_counts(*graph, np.asarray(order, dtype=np.int64), where)
-    return float(np.sum(count.astype(np.float64) ** 2))
+def _work(graph: tuple[np.ndarray, np.ndarray], order: np.ndarray, most: float = math.inf) -> float:
+    # Σ c_j², or inf once it must exceed ``most``: Σ c_j² ≥ (Σ c_j)² / n, so the count stops
+    # after √(n·most) entries
+    n = len(order)
+    where = np.empty(n, dtype=np.int64)
+    where[order] = np.arange(n)
+    bound = math.sqrt(n * max(most, 0.0)) if math.isfinite(most) else math.inf
+    count = _column_counts(*graph, np.asarray(order, dtype=np.int64), where, min(bound, 2.0**62))
+    return math.inf if count is None else float(np.sum(count.astype(np.float64) ** 2))
 
 
 def volume_order(A: sp.spmatrix) -> np.ndarray:
@@ -424,6 +433,41 @@ def volume_order(A: sp.spmatrix) -> np.ndarray:
 
 
 _ORDERS: dict[tuple, np.ndarray] = {}
+
+
+def factors_within(A: sp.spmatrix, most: float) -> bool:
+    """Whether the cheaper of :func:`volume_order`'s two orderings factors ``A`` in at most
+    ``most`` multiply-adds (:func:`factor_work`). Each count stops as soon as it must exceed
+    ``most``, and nested dissection (compiled, O(n log n)) is counted before minimum degree is
+    ordered, so a volume too large to factor is told so at little cost; before either, the
+    factor's pattern holds A's own, so Σ c_j² ≥ (Σ c_j)² / n ≥ (A's entries below the diagonal)²
+    / n rules out a matrix of dense rows (a kernel's) at once.
+
+    Examples
+    --------
+    >>> A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(300, 300), format="csc")
+    >>> factors_within(A, 1e3), factors_within(A, 1.0)
+    (True, False)
+    """
+    if (0.5 * (A.nnz - A.shape[0])) ** 2 / max(A.shape[0], 1) > most:
+        return False
+    A = sp.csc_matrix(A)
+    key = (A.shape, A.nnz, hash(A.indptr.tobytes()), hash(A.indices.tobytes()))
+    if (key, most) not in _WITHIN:  # eigs, a Poisson solver and heat steps on one volume ask once
+        graph = _graph(A)
+        if key in _ORDERS:
+            within = _work(graph, _ORDERS[key], most) <= most
+        else:
+            order = _dissect(*graph, _LEAF)
+            within = _work(graph, order, most) <= most or \
+                (order := minimum_degree(A)) is not None and _work(graph, order, most) <= most
+        _WITHIN[(key, most)] = within
+        while len(_WITHIN) > 4:
+            _WITHIN.pop(next(iter(_WITHIN)))
+    return _WITHIN[(key, most)]
+
+
+_WITHIN: dict[tuple, bool] = {}
 
 
 def supernodal(op: object) -> bool:

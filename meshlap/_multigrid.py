@@ -15,30 +15,38 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._ldl import supernodal
+from ._ldl import factors_within, supernodal
 
-__all__ = ["MIN_VERTICES", "Multigrid", "replaces_factor"]
+__all__ = ["MAX_FACTOR_WORK", "Multigrid", "replaces_factor"]
 
 # the coarsest level is solved directly: up to this many unknowns (pyamg's default is 10)
 _COARSE = 500
-#: a volume's unknowns above which multigrid replaces its factorization. Tetrahedral cubes:
-#: eigs, 4,913 vertices 0.47 s against shift-invert's 0.14 s, 9,261 0.78 s against 1.49 s
-#: (bench_volume_eigs.py); a Poisson solve with its set-up, 9,261 vertices 0.09 s
-#: against 0.38 s, 68,921 0.41 s against 110 s (bench_volume_eigs.py --solves)
-MIN_VERTICES = 8000
+#: multiply-adds of a volume's factorization (:func:`meshlap._ldl.factor_work`, in the cheaper
+#: of its two orderings) up to which it is factored rather than preconditioned by multigrid. A
+#: factorization's cost is counted before it is made; LOBPCG's iterations with a V-cycle are not
+#: known until it runs: 20-33 on tetrahedral cubes and a 102,578-vertex FEA jaw, 149-252 on the
+#: graded bunny-tet, notch_stress and can volumes (10 pairs, CPU by hand: 2.3 s, 14.7 s, 5.6 s
+#: against shift-invert's 0.27 s, 0.43 s, 0.14 s). 10⁹ multiply-adds factor in under a second, about
+#: what multigrid takes where it converges well at that size (the 9,261-vertex cube: 0.85 G,
+#: shift-invert 0.81 s against multigrid's 0.61 s; the 12,167-vertex one, 1.6 G: 1.25 s against
+#: 0.75 s), so a volume is factored where that bounded cost is small and multigrid runs beyond.
+MAX_FACTOR_WORK = 1e9
 
 
-def replaces_factor(op: object, unknowns: int) -> bool:
-    """Whether ``op``'s systems of ``unknowns`` unknowns are solved by multigrid rather than
-    factored: a volume's (whose factor fills as n^(4/3)) above :data:`MIN_VERTICES`.
+def replaces_factor(op: object, A: sp.spmatrix | None = None) -> bool:
+    """Whether ``op``'s systems of matrix ``A`` (default ``op.S``'s pattern) are solved by
+    multigrid rather than factored: a volume's whose factorization
+    :func:`meshlap._ldl.factors_within` counts above :data:`MAX_FACTOR_WORK` multiply-adds. A
+    bulky volume's factor fills as n^(4/3) and costs about n² operations, a V-cycle O(n); a thin
+    or graded volume's factor stays cheap where a V-cycle converges slowly.
 
     Examples
     --------
     >>> import meshlap
-    >>> replaces_factor(meshlap.laplacian(*meshlap.shapes.sphere(200, seed=0)), 10**6)
+    >>> replaces_factor(meshlap.laplacian(*meshlap.shapes.sphere(200, seed=0)))
     False
     """
-    return supernodal(op) and unknowns > MIN_VERTICES
+    return supernodal(op) and not factors_within(op.S if A is None else A, MAX_FACTOR_WORK)
 
 
 class Multigrid:

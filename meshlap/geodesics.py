@@ -205,7 +205,8 @@ class HeatDistance:
     solver : {"auto", "direct", "cg"}
         For both solves (:class:`~meshlap.heat.ImplicitHeat`, :class:`~meshlap.solve.PoissonSolver`);
         ``"auto"`` factors the heat step (its far field lies below any iterative residual) and
-        lets the Poisson solve choose (multigrid on a volume of more than 8,000 vertices).
+        lets the Poisson solve choose (multigrid on a volume too costly to factor:
+        :mod:`meshlap._multigrid`).
     gradient : {"auto", "simplices", "least squares"}
         See :func:`~meshlap.gradients.gradient_operator`.
 

@@ -13,7 +13,7 @@ models the heat-kernel symbol g(x) ≈ 2x / (2 + h x) in terms of the cotangent 
     (M + τ A)⁻¹ ≈ a M⁻¹ + b (2M + c K)⁻¹,   c = h + 2τ,  a = h / c,  b = 4τ / c,
 
 with K the cotangent stiffness of the same mesh (one sparse factorization per τ). A sparse
-volume of more than 8,000 vertices, whose factor fills as n^(4/3), takes conjugate gradient
+volume too costly to factor (:data:`meshlap._multigrid.MAX_FACTOR_WORK`) takes conjugate gradient
 preconditioned by one multigrid V-cycle of ``M - τS`` itself (:mod:`meshlap._multigrid`): a step
 on a 68,921-vertex tetrahedral cube in 0.47 s instead of 42 s.
 """
@@ -87,7 +87,7 @@ def heat_flow(
         Time(s) ≥ 0, in any order.
     method : {"auto", "chebyshev", "rational", "krylov", "spectral"}
         ``"auto"`` (default): ``"chebyshev"`` while it needs at most 2,000 products with L, else
-        ``"rational"``, except on a volume of more than 8,000 vertices, whose factorizations cost
+        ``"rational"``, except on a volume too costly to factor, whose factorizations cost
         more than any series (:mod:`meshlap._multigrid`). ``"chebyshev"``: the Chebyshev series of
         exp(tx) on the interval [-ρ, 0] that holds the spectrum of L (ρ = max row sum of |L|,
         Gershgorin), with modified Bessel coefficients; about sqrt(2tρ·37) + 10 products with L
@@ -140,10 +140,10 @@ def heat_flow(
             L = sp.csr_matrix(symmetric_L(op), dtype=np.float64)
             rho = float(abs(L).sum(axis=1).max())  # Gershgorin: the spectrum of L lies in [-rho, 0]
         if method == "auto":
-            every_mass = bool((np.asarray(op.mass) > 0).all())
-            # a large volume is not factored (meshlap._multigrid): the series, however long
-            contour = every_mass and not replaces_factor(op, len(F))
-            method = "rational" if contour and _chebyshev_terms(rho, tt) > _CHEBYSHEV_MAX else "chebyshev"
+            long = _chebyshev_terms(rho, tt) > _CHEBYSHEV_MAX
+            # a volume too costly to factor (meshlap._multigrid) keeps the series, however long
+            contour = long and bool((np.asarray(op.mass) > 0).all()) and not replaces_factor(op)
+            method = "rational" if contour else "chebyshev"
         out = _chebyshev_heat(op, F, tt, rho) if method == "chebyshev" else _rational_heat(op, F, tt)
     elif method == "krylov":
         if getattr(op, "matrix_free", False):
@@ -253,8 +253,8 @@ class ImplicitHeat:
         ``"direct"``: sparse LU of ``M - τS`` (fine for the cotangent Laplacian, slow for
         dense rows). ``"cg"``: block preconditioned conjugate gradient (module notes); the
         preconditioner needs the mesh (``op.V``/``op.faces`` or ``mesh``), else it is the
-        diagonal. ``"auto"``: direct up to 40 entries per row, CG otherwise and on a volume of more
-        than 8,000 vertices (with multigrid: module notes).
+        diagonal. ``"auto"``: direct up to 40 entries per row, CG otherwise and on a volume too
+        costly to factor (with multigrid: module notes).
     rtol : float, default 1e-10
         Relative residual at which CG stops.
     mesh : (V, F), optional
@@ -293,7 +293,7 @@ class ImplicitHeat:
         self.Z = np.setdiff1d(np.arange(n), self.P)
         matrix_free = getattr(op, "matrix_free", False)
         sparse = not matrix_free and symmetric_L(op).nnz <= _SPARSE_ROW_MAX * n
-        multigrid = sparse and replaces_factor(op, len(self.P))  # a large volume's: not factored
+        multigrid = sparse and replaces_factor(op)  # a large volume's: not factored
         if solver == "auto":
             solver = "direct" if sparse and not multigrid else "cg"
         self.solver = solver

@@ -232,7 +232,7 @@ class PoissonSolver:
             raise MeshError("every vertex with mass is a Dirichlet vertex: nothing is left to solve for")
         S = sp.csr_matrix(op.S, dtype=np.float64)
         sparse = S.nnz <= _SPARSE_ROW_MAX * n
-        multigrid = sparse and replaces_factor(op, len(self.free))  # a large volume's: not factored
+        multigrid = sparse and replaces_factor(op)  # a large volume's: not factored
         if solver == "auto":
             solver = "direct" if sparse and not multigrid else "cg"
         if sparse or solver == "direct":
@@ -272,7 +272,7 @@ class PoissonSolver:
         if geo is not None:
             K = sp.csc_matrix(gradient_operator(op).stiffness()[self.free][:, self.free])
         sigma = 1e-3 * 4.0 * math.pi / float(m.sum())
-        inverse = Multigrid if replaces_factor(op, len(m)) else None  # a large volume's K: not factored
+        inverse = Multigrid if replaces_factor(op, K) else None  # a large volume's K: not factored
         return _lobpcg.CotPreconditioner(K, m, np.asarray(A.diagonal()), sigma, inverse)
 
     def solve(self, b: Any, values: Any = None, *, compatible: bool = False) -> np.ndarray:

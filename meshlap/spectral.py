@@ -5,14 +5,15 @@ and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 200
 :class:`~meshlap.baselines.SparseLaplacian` such as the cotangent scheme. The problem is
 ``-S φ = λ M φ`` with ``S = M L`` symmetric negative semidefinite: λ ≥ 0, φ M-orthonormal.
 
-On a sparse pencil :func:`eigs` factors it (shift-invert); on a volume of more than
-``_multigrid.MIN_VERTICES`` vertices, whose factor fills as n^(4/3), it runs LOBPCG (Knyazev 2001)
-preconditioned by multigrid (:mod:`meshlap._multigrid`). The heat-kernel operator keeps hundreds
-to thousands of entries per row, whose LU fills in badly (94 s for 36 pairs of a 16,000-vertex
-sphere at h = 0.0025); there LOBPCG is preconditioned by the same mesh's cotangent Laplacian,
-equal to the kernel at low frequencies. At high frequencies the kernel's symbol saturates,
-(1 - exp(-hω²))/h ≤ 1/h, while the cotangent one grows like ω²; 1/g(x) = 1/x + h/2 + O(h²x), g
-the symbol as a function of the cotangent eigenvalue x, gives the preconditioner
+On a sparse pencil :func:`eigs` factors it (shift-invert); on a volume whose factorization
+counts more than ``_multigrid.MAX_FACTOR_WORK`` multiply-adds (a bulky one's fills as n^(4/3)),
+it runs LOBPCG (Knyazev 2001) preconditioned by multigrid (:mod:`meshlap._multigrid`). The
+heat-kernel operator keeps hundreds to thousands of entries per row, whose LU fills in badly
+(94 s for 36 pairs of a 16,000-vertex sphere at h = 0.0025); there LOBPCG is preconditioned by
+the same mesh's cotangent Laplacian, equal to the kernel at low frequencies. At high
+frequencies the kernel's symbol saturates, (1 - exp(-hω²))/h ≤ 1/h, while the cotangent one
+grows like ω²; 1/g(x) = 1/x + h/2 + O(h²x), g the symbol as a function of the cotangent
+eigenvalue x, gives the preconditioner
 
     T = (K + σM)⁻¹ + ½ D⁻¹,    K = -C (cotangent stiffness),  D = diag(-S) ≈ M/h,
 
@@ -268,7 +269,8 @@ def eigs(
         ``"auto"``: dense up to 300 vertices (where S has more than 40 entries per row, up to
         80 per vector of LOBPCG's block, ``k + extra``, at most 4,000), shift-invert up to 40
         entries per row, else LOBPCG;
-        LOBPCG with multigrid on a volume of more than 8,000 vertices (module notes).
+        LOBPCG with multigrid on a volume whose factorization would cost more than
+        ``_multigrid.MAX_FACTOR_WORK`` multiply-adds (module notes).
     tol : float, default 1e-8
         Relative accuracy of the eigenvalues (Notes); eigenvectors are then accurate to about
         ``√tol``. Passed to eigsh for shift-invert. 0 (as for eigsh), or anything below machine
@@ -380,7 +382,7 @@ def eigs(
             report(1.0, "done")
         return lam, _normalize_signs(_extend(op, P, X))
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
-    multigrid = sparse and _multigrid.replaces_factor(op, n_p) and method in ("auto", "lobpcg")
+    multigrid = sparse and _multigrid.replaces_factor(op) and method in ("auto", "lobpcg")
     adapt = extra is None
     extra = max(4, k // 10) if extra is None else int(extra)
     if method == "auto":

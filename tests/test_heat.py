@@ -157,15 +157,16 @@ def test_smoothing_a_noisy_function(sphere_op):
 
 
 def test_a_large_volume_steps_and_solves_without_a_factorization(monkeypatch):
-    # above _multigrid.MIN_VERTICES vertices a volume's implicit steps and Poisson solves run CG
+    # where factoring would cost more than _multigrid.MAX_FACTOR_WORK a volume's implicit steps and
+    # Poisson solves run CG
     # preconditioned by a multigrid V-cycle of their own matrix (a 68,921-vertex cube: a step
     # 0.6 s instead of 50 s, a solve 0.8 s instead of 103 s), to the direct solution's accuracy;
     # the heat method's step stays factored, its far field being below any residual
     from meshlap import _multigrid, geodesics, samples, solve
 
     V, T = samples.cube_tetrahedra(21)  # 10,648 vertices
-    assert len(V) > _multigrid.MIN_VERTICES
     op = meshlap.laplacian(V, T, k=3)
+    assert _multigrid.replaces_factor(op)
     f = np.cos(np.pi * V[:, 0]) * np.cos(np.pi * V[:, 1])
     bottom = np.flatnonzero(V[:, 2] < 1e-9)
     u_ref = heat.implicit_heat(op, f, 0.01, solver="direct")
@@ -199,8 +200,8 @@ def test_a_large_volume_steps_and_solves_without_a_factorization(monkeypatch):
 
 def test_a_volume_kernels_poisson_preconditioner_is_not_factored_above_the_threshold(monkeypatch):
     # the kernel's dense rows take CG, preconditioned by the P1 stiffness; on a volume above
-    # _multigrid.MIN_VERTICES that stiffness is inverted by a V-cycle, not factored (it fills as
-    # a volume's does). The threshold is lowered here so that a small cloud crosses it.
+    # _multigrid.MAX_FACTOR_WORK that stiffness is inverted by a V-cycle, not factored (it fills as
+    # a volume's does). The bound is lowered here so that a small cloud crosses it.
     from meshlap import _lobpcg, _multigrid, solve
 
     P = np.random.default_rng(0).random((700, 3))
@@ -212,7 +213,7 @@ def test_a_volume_kernels_poisson_preconditioner_is_not_factored_above_the_thres
     def no_factor(*args, **kwargs):
         raise AssertionError("a factorization was made")
 
-    monkeypatch.setattr(_multigrid, "MIN_VERTICES", 100)
+    monkeypatch.setattr(_multigrid, "MAX_FACTOR_WORK", 0.0)
     monkeypatch.setattr(_lobpcg, "BlockFactor", no_factor)
     poisson = solve.PoissonSolver(op, fixed)
     assert poisson.solver == "cg"

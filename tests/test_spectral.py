@@ -308,14 +308,15 @@ def test_block_factor_solves_like_splu():
 
 
 def test_a_large_volume_is_solved_by_multigrid_without_a_factorization(monkeypatch):
-    # above _multigrid.MIN_VERTICES vertices a volume's LOBPCG is preconditioned by a multigrid V-cycle:
+    # where factoring costs more than _multigrid.MAX_FACTOR_WORK, a volume's LOBPCG is preconditioned
+    # by a multigrid V-cycle:
     # nothing is factored (shift-invert and the count held 5.5 GiB for 136 s on the 68,921-vertex
     # cube, multigrid 0.55 GiB and 5.0 s); the pairs are those shift-invert finds, verified
     from meshlap import _ldl, samples
 
     V, T = samples.cube_tetrahedra(21)  # 10,648 vertices
-    assert len(V) > _multigrid.MIN_VERTICES
     op = meshlap.laplacian(V, T, k=3)
+    assert _multigrid.replaces_factor(op)
     reference = spectral.eigs(op, 10, method="shift-invert")[0]
 
     def no_factor(*args, **kwargs):
@@ -329,6 +330,43 @@ def test_a_large_volume_is_solved_by_multigrid_without_a_factorization(monkeypat
     assert np.allclose(phi.T @ (op.mass[:, None] * phi), np.eye(10), atol=1e-8)
     exact = samples.cube_eigenvalues(10)
     assert np.abs(lam[1:] / exact[1:] - 1).max() < 0.01  # linear FEM's own error at 20 cells a side
+
+
+def _box_tetrahedra(nx: int, ny: int, nz: int) -> tuple[np.ndarray, np.ndarray]:
+    # an nx × ny × nz grid of unit cubes, each cut as samples.cube_tetrahedra cuts its cube
+    from meshlap import samples
+
+    corners, tets = samples.cube_tetrahedra(1)
+    idx = np.arange((nx + 1) * (ny + 1) * (nz + 1)).reshape(nx + 1, ny + 1, nz + 1)
+    grid = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    cells = np.stack(grid, -1).reshape(-1, 3)
+    at = cells[:, None, :] + corners.astype(np.int64)[None, :, :]
+    local = idx[at[..., 0], at[..., 1], at[..., 2]]
+    V = np.stack(np.meshgrid(*(np.arange(m + 1.0) for m in (nx, ny, nz)), indexing="ij"), -1).reshape(-1, 3)
+    return V, local[:, tets].reshape(-1, 4)
+
+
+def test_a_volume_is_factored_where_its_counted_work_is_small_whatever_its_size():
+    """Multigrid replaced a volume's factorization above 8,000 vertices; a thin or graded volume
+    factors cheaply where the V-cycle converges slowly (pyvista's 12,472-vertex notch_stress FEA
+    mesh: 252 LOBPCG iterations, 14.7 s, against shift-invert's 0.43 s). The choice now reads the
+    factorization's counted work: a 12,675-vertex plate, two cells thick, is factored; the
+    10,648-vertex cube is not."""
+    from meshlap import _ldl, _multigrid, samples
+
+    V, T = _box_tetrahedra(64, 64, 2)
+    plate = meshlap.laplacian(V, T)
+    assert plate.n_vertices == 12675 and plate.dim == 3
+    assert _ldl.factor_work(-plate.S, _ldl.volume_order(-plate.S)) < 0.2 * _multigrid.MAX_FACTOR_WORK
+    assert not _multigrid.replaces_factor(plate)
+    info = {}
+    lam = spectral.eigs(plate, 6, info=info)[0]
+    assert info["method"] == "shift-invert"
+    # the 64 × 64 × 2 box's Neumann values (π m / 64)², to linear FEM's accuracy
+    assert np.allclose(lam[1:], np.pi**2 / 64**2 * np.array([1, 1, 2, 4, 4]), rtol=0.01)
+    cube = meshlap.laplacian(*samples.cube_tetrahedra(21))
+    assert _multigrid.replaces_factor(cube)
+    assert not _ldl.factors_within(-cube.S, _multigrid.MAX_FACTOR_WORK)
 
 
 def test_eigs_progress_reports_stages_in_order():
@@ -575,6 +613,10 @@ def test_a_volume_is_factored_in_the_ordering_whose_work_is_counted_smaller():
     dissected = _ldl.nested_dissection(A)
     assert _ldl.factor_work(A, dissected) < 0.8 * _ldl.factor_work(A, _ldl.minimum_degree(A))
     np.testing.assert_array_equal(_ldl.volume_order(A), dissected)
+    work = _ldl.factor_work(A, dissected)  # the bounded count stops early, on the right side
+    assert _ldl.factors_within(A, work) and not _ldl.factors_within(A, 0.999 * work)
+    _ldl._ORDERS.clear(), _ldl._WITHIN.clear()
+    assert _ldl.factors_within(A, work) and not _ldl.factors_within(A, 0.01 * work)
     f, plain = _ldl.factor(A, supernodal=True), _ldl._LU(A)
     assert f._lu.L.nnz + f._lu.U.nnz < plain._lu.L.nnz + plain._lu.U.nnz
     B = np.random.default_rng(0).standard_normal((A.shape[0], 12))
