@@ -78,7 +78,8 @@ def read(data: bytes, name: str, faces: bool = True) -> tuple[np.ndarray, list |
                        {"vertex", cells} if faces else {"vertex"})
     V = np.column_stack([got["vertex"][c] for c in "xyz"]).astype(np.float64)
     if cells == "tristrips" and cells in got:
-        rows = [np.asarray(r, dtype=np.int64).ravel() for r in got[cells]]
+        # one row of strips parted by -1, or one strip a row: either way -1 parts them
+        rows = [np.r_[np.asarray(r, dtype=np.int64).ravel(), -1] for r in got[cells]]
         flat = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
         return V, strip_triangles([s[s >= 0] for s in np.split(flat, np.flatnonzero(flat < 0))])
     return V, got.get(cells)

@@ -239,6 +239,11 @@ def test_ply_triangle_strips_are_read_as_their_triangles(tmp_path):
         assert {tuple(sorted(t)) for t in F.tolist()} == cells
         turn = np.cross(Vr[F[:, 1]] - Vr[F[:, 0]], Vr[F[:, 2]] - Vr[F[:, 0]])[:, 2]
         assert np.all(turn < 0) or np.all(turn > 0)
+    second = np.r_[strips[1], strips[1][-1], strips[2][0], strips[2]]  # the same strips, one a row
+    rows_of_strips = head.replace("element tristrips 1", "element tristrips 2")
+    lists = "".join(f"{len(s)} " + " ".join(map(str, s)) + "\n" for s in (strips[0], second))
+    (tmp_path / "d.ply").write_text("ply\nformat ascii 1.0\n" + rows_of_strips + rows + lists)
+    assert {tuple(sorted(t)) for t in io.read_mesh(tmp_path / "d.ply")[1].tolist()} == cells
     (tmp_path / "c.ply").write_text("ply\nformat ascii 1.0\n" + head.split("element tristrips")[0]
                                     + "end_header\n" + rows)
     with pytest.raises(meshlap.MeshError, match="c.ply: a PLY file without faces"):
