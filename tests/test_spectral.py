@@ -310,8 +310,8 @@ def test_block_factor_solves_like_splu():
 def test_a_large_volume_is_solved_by_multigrid_without_a_factorization(monkeypatch):
     # where factoring costs more than _multigrid.MAX_FACTOR_WORK, a volume's LOBPCG is preconditioned
     # by a multigrid V-cycle:
-    # nothing is factored (shift-invert and the count held 5.5 GiB for 136 s on the 68,921-vertex
-    # cube, multigrid 0.55 GiB and 5.0 s); the pairs are those shift-invert finds, verified
+    # nothing is factored (shift-invert held 3.1 GiB for 26 s on the 68,921-vertex cube, multigrid
+    # 0.56 GiB and 5.3 s); the pairs are those shift-invert finds, verified
     from meshlap import _ldl, samples
 
     V, T = samples.cube_tetrahedra(21)  # 10,648 vertices
