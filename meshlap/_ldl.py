@@ -408,12 +408,55 @@ def _work(graph: tuple[np.ndarray, np.ndarray], order: np.ndarray, most: float =
     return math.inf if count is None else float(np.sum(count.astype(np.float64) ** 2))
 
 
+class _Structure:
+    """What is known of one sparsity pattern: its graph, its two orderings (each made on first
+    use) and their counted work (exact, or only known to exceed a bound), so that deciding
+    whether to factor and then factoring order and count it once."""
+
+    def __init__(self, A: sp.csc_matrix) -> None:
+        self.A, self.graph = A, _graph(A)
+        self.orders: dict[str, np.ndarray | None] = {}
+        self.work: dict[str, float] = {}  # exact Σ c_j²
+        self.above: dict[str, float] = {}  # a bound Σ c_j² is known to exceed
+
+    def order(self, kind: str) -> np.ndarray | None:
+        if kind not in self.orders:
+            self.orders[kind] = _dissect(*self.graph, _LEAF) if kind == "nd" else minimum_degree(self.A)
+        return self.orders[kind]
+
+    def within(self, kind: str, most: float) -> bool:
+        if kind in self.work:
+            return self.work[kind] <= most
+        if most <= self.above.get(kind, -math.inf) or (order := self.order(kind)) is None:
+            return False
+        work = _work(self.graph, order, most)
+        if math.isfinite(work) or not math.isfinite(most):
+            self.work[kind] = work
+        else:
+            self.above[kind] = max(most, self.above.get(kind, -math.inf))
+        return work <= most
+
+
+def _structure(A: sp.spmatrix) -> _Structure:
+    # kept for the last four patterns: shift-invert and its inertia count factor one twice, and
+    # eigs, a Poisson solver and heat steps on one volume ask whether to factor it
+    A = sp.csc_matrix(A)
+    key = (A.shape, A.nnz, hash(A.indptr.tobytes()), hash(A.indices.tobytes()))
+    if key not in _STRUCTURES:
+        _STRUCTURES[key] = _Structure(A)
+        while len(_STRUCTURES) > 4:
+            _STRUCTURES.pop(next(iter(_STRUCTURES)))
+    return _STRUCTURES[key]
+
+
+_STRUCTURES: dict[tuple, _Structure] = {}
+
+
 def volume_order(A: sp.spmatrix) -> np.ndarray:
     """The ordering a volume's factorization takes: minimum degree or nested dissection,
     whichever :func:`factor_work` counts the fewer operations for (minimum degree looks one
     vertex ahead and misses a bulky volume's surface separators; nested dissection's level
-    structures fill more on small, irregular ones). The choice is kept for the last four
-    structures: shift-invert and its inertia count factor one structure twice.
+    structures fill more on small, irregular ones).
 
     Examples
     --------
@@ -421,18 +464,11 @@ def volume_order(A: sp.spmatrix) -> np.ndarray:
     >>> sorted(volume_order(A).tolist()) == list(range(300))
     True
     """
-    A = sp.csc_matrix(A)
-    key = (A.shape, A.nnz, hash(A.indptr.tobytes()), hash(A.indices.tobytes()))
-    if key not in _ORDERS:
-        graph = _graph(A)
-        candidates = [p for p in (minimum_degree(A), _dissect(*graph, _LEAF)) if p is not None]
-        _ORDERS[key] = min(candidates, key=lambda p: _work(graph, p))
-        while len(_ORDERS) > 4:
-            _ORDERS.pop(next(iter(_ORDERS)))
-    return _ORDERS[key]
-
-
-_ORDERS: dict[tuple, np.ndarray] = {}
+    known = _structure(A)
+    kinds = [k for k in ("md", "nd") if known.order(k) is not None]
+    for k in kinds:
+        known.within(k, math.inf)  # exact counts
+    return known.order(min(kinds, key=lambda k: known.work[k]))
 
 
 def factors_within(A: sp.spmatrix, most: float) -> bool:
@@ -441,7 +477,8 @@ def factors_within(A: sp.spmatrix, most: float) -> bool:
     ``most``, and nested dissection (compiled, O(n log n)) is counted before minimum degree is
     ordered, so a volume too large to factor is told so at little cost; before either, the
     factor's pattern holds A's own, so Σ c_j² ≥ (Σ c_j)² / n ≥ (A's entries below the diagonal)²
-    / n rules out a matrix of dense rows (a kernel's) at once.
+    / n rules out a matrix of dense rows (a kernel's) at once. The orderings and counts made are
+    those :func:`volume_order` then uses.
 
     Examples
     --------
@@ -451,23 +488,8 @@ def factors_within(A: sp.spmatrix, most: float) -> bool:
     """
     if (0.5 * (A.nnz - A.shape[0])) ** 2 / max(A.shape[0], 1) > most:
         return False
-    A = sp.csc_matrix(A)
-    key = (A.shape, A.nnz, hash(A.indptr.tobytes()), hash(A.indices.tobytes()))
-    if (key, most) not in _WITHIN:  # eigs, a Poisson solver and heat steps on one volume ask once
-        graph = _graph(A)
-        if key in _ORDERS:
-            within = _work(graph, _ORDERS[key], most) <= most
-        else:
-            order = _dissect(*graph, _LEAF)
-            within = _work(graph, order, most) <= most or \
-                (order := minimum_degree(A)) is not None and _work(graph, order, most) <= most
-        _WITHIN[(key, most)] = within
-        while len(_WITHIN) > 4:
-            _WITHIN.pop(next(iter(_WITHIN)))
-    return _WITHIN[(key, most)]
-
-
-_WITHIN: dict[tuple, bool] = {}
+    known = _structure(A)
+    return known.within("nd", most) or known.within("md", most)
 
 
 def supernodal(op: object) -> bool:

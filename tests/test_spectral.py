@@ -615,7 +615,7 @@ def test_a_volume_is_factored_in_the_ordering_whose_work_is_counted_smaller():
     np.testing.assert_array_equal(_ldl.volume_order(A), dissected)
     work = _ldl.factor_work(A, dissected)  # the bounded count stops early, on the right side
     assert _ldl.factors_within(A, work) and not _ldl.factors_within(A, 0.999 * work)
-    _ldl._ORDERS.clear(), _ldl._WITHIN.clear()
+    _ldl._STRUCTURES.clear()
     assert _ldl.factors_within(A, work) and not _ldl.factors_within(A, 0.01 * work)
     f, plain = _ldl.factor(A, supernodal=True), _ldl._LU(A)
     assert f._lu.L.nnz + f._lu.U.nnz < plain._lu.L.nnz + plain._lu.U.nnz
