@@ -8,7 +8,9 @@ on a sparse factorization, and LaPy's solver beside them.
 
 Each row is ``spectral.eigs(meshlap.laplacian(V, T, k=3), 10)`` (linear FEM, verified pairs) with
 ``method="lobpcg"`` (meshlap._multigrid's V-cycle as preconditioner, above
-``meshlap._multigrid.MAX_FACTOR_WORK`` counted multiply-adds of factoring) and
+``meshlap._multigrid.MAX_FACTOR_WORK`` counted multiply-adds of factoring, and shift-invert after
+all where the V-cycle stalls: ``_multigrid.Stall``; the corpus's notch_stress and can volumes are
+also refined once, 8 tetrahedra each, past the bound) and
 ``method="shift-invert"`` (SuperLU), and LaPy's
 ``Solver(TetMesh).eigs`` (its own linear FEM, scipy's or CHOLMOD's factorization), each in a
 process of its own so that its peak memory is its own: wall seconds of the solve (the build
@@ -51,6 +53,8 @@ K = 10
 def _volume(spec: str) -> tuple[np.ndarray, np.ndarray]:
     import meshlap
 
+    if spec.startswith("refined:"):  # each tetrahedron split into 8 at its edges' midpoints
+        return rc.refine(*_volume(spec[8:]), 1)
     if spec.startswith("cube:"):
         return meshlap.samples.cube_tetrahedra(int(spec[5:]))
     if spec.startswith("corpus:"):
@@ -175,6 +179,8 @@ def main() -> None:
     specs = [f"cube:{n}" for n in cubes]
     if not args.quick and rc.corpus_dir(None) is not None:
         specs += [f"corpus:{e['name']}" for e in rc.manifest() if "tet" in e["kind"].split()]
+        # graded FEA volumes refined past the factoring bound, where the V-cycle stalls
+        specs += ["refined:corpus:notch-tet", "refined:corpus:can-tet"]
     started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     rows, extra_rows = [], []
     for spec in specs + args.extra:
@@ -193,16 +199,18 @@ def main() -> None:
             else:
                 err = "–" if ref is None else f"{100 * error(r['lam'], ref):.3g}%"
                 cells.append(f"{r['seconds']:.2f} | {r['rss']:.2f} | {err}")
-        name = f"cube {spec[5:]}³" if spec.startswith("cube:") else spec.split(":", 1)[1] if ":" in spec \
+        name = f"cube {spec[5:]}³" if spec.startswith("cube:") else spec.split(":")[-1] if ":" in spec \
             else Path(spec).name
+        name += " refined" if spec.startswith("refined:") else ""
         (rows if spec in specs else extra_rows).append(f"| {name} | {n:,} | " + " | ".join(cells) + " |")
         print((rows + extra_rows)[-1], flush=True)
     extra = f" --extra {' '.join(Path(x).name for x in args.extra)}" if args.extra else ""
     head = [f"Command: `python benchmarks/bench_volume_eigs.py{' --quick' if args.quick else ''}"
             f" --limit {args.limit:g}{extra}` ({started}, 2 shared cores). `method=\"lobpcg\"` is "
             f"preconditioned by multigrid above {_multigrid.MAX_FACTOR_WORK:.0e} counted multiply-adds of "
-            "factoring (the default there), "
-            "by the exact factor below. Seconds of the solve (wall), peak resident GiB of its process, "
+            "factoring (the default there; shift-invert after all where the V-cycle stalls, "
+            "`_multigrid.Stall`), by the exact factor below; \"refined\": each tetrahedron split into 8. "
+            "Seconds of the solve (wall), peak resident GiB of its process, "
             "largest relative error of eigenvalues 1-9 (the cube's exact Neumann values; elsewhere "
             "shift-invert's, or LaPy's where shift-invert ran out of time).", "",
             "| volume | vertices | lobpcg s | GiB | error | shift-invert s | GiB | error "

@@ -11,11 +11,12 @@ __all__ = ["block_pcg"]
 
 
 def block_pcg(apply: Callable[[np.ndarray], np.ndarray], precondition: Callable[[np.ndarray], np.ndarray],
-              B: np.ndarray, rtol: float, maxiter: int, X: np.ndarray | None = None
-              ) -> tuple[np.ndarray, int, bool]:
+              B: np.ndarray, rtol: float, maxiter: int, X: np.ndarray | None = None, *,
+              give_up: Callable[[int, float], bool] | None = None) -> tuple[np.ndarray, int, bool]:
     """Solve A X = B (A symmetric positive definite, or semidefinite with B in its range) from
     ``X`` (zero if not given; overwritten), every column until its residual is within ``rtol``
-    of its right-hand side.
+    of its right-hand side; ``give_up(iteration, worst residual over its goal)`` True stops it
+    unconverged (:class:`meshlap._multigrid.Stall`).
 
     Returns
     -------
@@ -41,10 +42,11 @@ def block_pcg(apply: Callable[[np.ndarray], np.ndarray], precondition: Callable[
     rz = np.sum(R * Z, axis=0)
     it = 0
     while True:
-        active = np.linalg.norm(R, axis=0) > goal
+        ratio = np.linalg.norm(R, axis=0) / goal
+        active = ratio > 1.0
         if not active.any():
             return X, it, True
-        if it == maxiter:
+        if it == maxiter or (give_up is not None and give_up(it, float(ratio.max()))):
             return X, it, False
         it += 1
         AD = apply(D[:, active])

@@ -315,11 +315,13 @@ def lumped_eigh(A: np.ndarray, m: np.ndarray, subset: list[int] | None = None,
 class Attempt(NamedTuple):
     """One solver of the ladder: ``run(want)`` returns at least ``want`` eigenvalues (ascending,
     more where it computed them: guards, the next pair), their M-orthonormal vectors and its
-    iterations; ``exact``: the lowest ones by construction (a dense solve), no count needed."""
+    iterations; ``exact``: the lowest ones by construction (a dense solve), no count needed;
+    ``when()``: whether it runs at all, asked when its turn comes (what the earlier ones found)."""
 
     name: str
     run: Callable[[int], tuple[np.ndarray, np.ndarray, int]]
     exact: bool = False
+    when: Callable[[], bool] | None = None
 
 
 def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarray], np.ndarray],
@@ -354,6 +356,8 @@ def first_verified(attempts: list[Attempt], k: int, apply_A: Callable[[np.ndarra
     queue = list(attempts)
     while queue:
         attempt = queue.pop(0)
+        if attempt.when is not None and not attempt.when():
+            continue
         tried.append(attempt.name)
         try:
             lam, X, iterations = attempt.run(want)

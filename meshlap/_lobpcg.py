@@ -65,7 +65,6 @@ __all__ = ["BlockFactor", "CotPreconditioner", "Ritz", "combine", "cotangent_sta
 
 # the relative width of the k-th eigenvalue's cluster that LOBPCG's block must hold
 _CLUSTER = 0.1
-
 # the relative half-width of the window of Ritz values counted as one cluster by the bound
 _WINDOW = 0.05
 # rows per block of the products over the long dimension (module notes)
@@ -73,7 +72,6 @@ _ROWS = 4096
 # every this many iterations the basis' M-orthonormality is audited; beyond _DRIFT, a restart
 _AUDIT = 10
 _DRIFT = 1e-8
-
 
 # entries summed per pass over a row's accumulator (module notes): 37% less time for 40 columns
 # of the 16k default than one a pass, the same sums to the bit
@@ -412,9 +410,8 @@ def eig_error(theta: np.ndarray, res: np.ndarray, gram: np.ndarray | None = None
 
 def lobpcg_progress(report: Callable[[float, str], None] | None, stage: str, lo: float,
                     hi: float) -> Callable[[int, float], None] | None:
-    """``report(fraction, stage)`` from LOBPCG's (iteration, worst error ratio): the fraction
-    of the way, on a log scale, from the first ratio down to 1 (converged). The fraction never
-    goes back: a ratio that rises (a column that stalls, a restart) holds it where it was.
+    """``report(fraction, stage)`` from LOBPCG's (iteration, worst error ratio): the fraction of the way,
+    on a log scale, from the first ratio down to 1 (converged); a ratio that rises holds it where it was.
 
     Examples
     --------
@@ -454,21 +451,23 @@ class Ritz(NamedTuple):
 def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, X0: np.ndarray, k: int,
            tol: float, maxiter: int, allsum=_local, *, on_values: bool = True,
            report: Callable[[int, float], None] | None = None, floor: float | None = None,
-           cheap: bool = False, least: float = 0.0, ceiling: Callable | None = None) -> Ritz:
+           cheap: bool = False, least: float = 0.0, ceiling: Callable | None = None,
+           give_up: Callable[[int, float], bool] | None = None) -> Ritz:
     """Locally optimal block preconditioned CG for A x = λ M x, M = diag(m) > 0.
 
     Columns whose error measure is below ``tol · max(|θ|, θ_k / 100, least)`` stop receiving new directions
-    (``least``: the scale of a block whose first k values are all zero, as on a mesh of k parts or
-    more); the iteration ends when the first k have. The measure is the eigenvalue bound of
-    :func:`eig_error` (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``. The rows may be a share
-    of the problem's (an MPI rank's): ``allsum`` then adds the small Gram matrices and norms over the
-    shares, so every share solves the same small problems. ``report(iteration, worst ratio)`` is called
-    once per iteration. With ``floor``, the iteration also ends as soon as the smallest Ritz value is
-    below it: a Ritz value bounds an eigenvalue from above (Courant–Fischer), so that proves an
-    eigenvalue below ``floor``. ``cheap`` is for a rough answer with a sparse A (a start): one
-    Gram–Schmidt pass instead of two, and A X, A P recomputed by products rather than combined from the
-    basis. ``ceiling(θ)``: a count's (σ, j) (:func:`meshlap._eigcheck.count_ceiling`); the first j then
-    converge against the gap up to σ, as the check will read it.
+    (``least``: the scale of a block whose first k values are all zero, as on a mesh of k parts or more); the
+    iteration ends when the first k have. The measure is the eigenvalue bound of :func:`eig_error`
+    (``on_values``) or the residual ``‖A x - θ M x‖_{M⁻¹}``. The rows may be a share of the problem's (an MPI
+    rank's): ``allsum`` then adds the small Gram matrices and norms over the shares, so every share solves the
+    same small problems. ``report(iteration, worst ratio)`` is called once per iteration. With ``floor``, the
+    iteration also ends as soon as the smallest Ritz value is below it: a Ritz value bounds an eigenvalue from
+    above (Courant–Fischer), so that proves an eigenvalue below ``floor``. ``cheap`` is for a rough answer
+    with a sparse A (a start): one Gram–Schmidt pass instead of two, and A X, A P recomputed by products
+    rather than combined from the basis. ``ceiling(θ)``: a count's (σ, j)
+    (:func:`meshlap._eigcheck.count_ceiling`); the first j then converge against the gap up to σ, as the check
+    will read it. ``give_up(iteration, worst ratio)``: True ends the iteration unconverged
+    (:class:`meshlap._multigrid.Stall`).
 
     Examples
     --------
@@ -512,7 +511,8 @@ def lobpcg(apply_A: Callable[[np.ndarray], np.ndarray], m: np.ndarray, precond, 
         if report is not None:
             report(it, float(ratio[:k].max()))
         active = ratio > 1.0
-        if not active[:max(k, last)].any() or it == maxiter or (floor is not None and lam[0] < floor):
+        if not active[:max(k, last)].any() or it == maxiter or (floor is not None and lam[0] < floor) or \
+                (give_up is not None and give_up(it, float(ratio[:k].max()))):
             break
         W = precond(R[:, active])
         W = W[:, _orthogonalize(W, XP, mc, allsum, not cheap)]

@@ -12,12 +12,15 @@ without factoring either.
 
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
 import scipy.sparse as sp
 
 from ._ldl import factors_within, supernodal
 
-__all__ = ["MAX_FACTOR_WORK", "Multigrid", "replaces_factor"]
+__all__ = ["FACTOR_RATE", "MAX_FACTOR_WORK", "Multigrid", "Stall", "replaces_factor"]
 
 # the coarsest level is solved directly: up to this many unknowns (pyamg's default is 10)
 _COARSE = 500
@@ -31,6 +34,14 @@ _COARSE = 500
 #: shift-invert 0.81 s against multigrid's 0.61 s; the 12,167-vertex one, 1.6 G: 1.25 s against
 #: 0.75 s), so a volume is factored where that bounded cost is small and multigrid runs beyond.
 MAX_FACTOR_WORK = 1e9
+#: multiply-adds per second of the factorization's way to 10 eigenpairs (factor, then
+#: shift-invert's solves), counted work over seconds here: a 102,578-vertex FEA jaw 14.4 G in 18 s,
+#: the notch_stress volume refined to 110,266 vertices 8.4 G in 7.6 s, the 68,921-vertex cube 46 G
+#: in 25 s; the same equivalence MAX_FACTOR_WORK states
+FACTOR_RATE = 1e9
+# LOBPCG's error measure first rises before it falls (the jaw's: 1.2e8 at iteration 0, 1.3e10 at
+# 3, 3e8 at 9): its rate is read from the 5th iteration on, and first judged at the 10th
+_SETTLED = 5
 
 
 def replaces_factor(op: object, A: sp.spmatrix | None = None) -> bool:
@@ -81,3 +92,43 @@ class Multigrid:
 
     def _cycle(self, r: np.ndarray) -> np.ndarray:
         return self._ml.solve(r, maxiter=1, cycle="V", tol=1e-300)
+
+
+class Stall:
+    """Whether an iteration preconditioned by a V-cycle (LOBPCG, conjugate gradient) should stop
+    and give way to the factorization whose work ``work`` (multiply-adds,
+    :func:`meshlap._ldl.least_work`) was counted before it ran: ``stall(iteration, worst error
+    ratio)`` is True once the iterations still to go, at the rate the ratio fell since the 5th
+    iteration and at the run's measured seconds per iteration, would take longer than the
+    factorization's way (``work`` / :data:`FACTOR_RATE`). A V-cycle converges at a rate
+    independent of the size on a quasi-uniform volume (20-33 LOBPCG iterations for 10 pairs) and
+    stalls on a graded or anisotropic one, whose counted factorization is cheap for its size
+    (notch_stress refined once: 264 s for 10 pairs against shift-invert's 7.6 s,
+    ``benchmarks/bench_volume_eigs.py``). ``fired`` stays True once it has said so.
+
+    Examples
+    --------
+    >>> stall = Stall(work=1e9)   # about a second of factoring
+    >>> [stall(it, 1e10) for it in range(12)][-1]   # no progress in 11 iterations
+    True
+    >>> stall.fired
+    True
+    """
+
+    def __init__(self, work: float) -> None:
+        self.budget = work / FACTOR_RATE
+        self.fired = False
+        self._log: list[float] = []
+        self._start = 0.0
+
+    def __call__(self, it: int, ratio: float) -> bool:
+        if it == 0:  # a new run
+            self._log, self._start = [], time.perf_counter()
+        self._log.append(math.log(max(ratio, 1.0)))
+        if self.fired or it < 2 * _SETTLED:
+            return self.fired
+        rate = (self._log[_SETTLED] - self._log[it]) / (it - _SETTLED)  # log ratio fallen per iteration
+        per = (time.perf_counter() - self._start) / it
+        to_go = math.inf if rate <= 0 else self._log[it] / rate
+        self.fired = to_go * per > self.budget
+        return self.fired

@@ -34,7 +34,7 @@ from . import _ldl
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
-from ._multigrid import Multigrid, replaces_factor
+from ._multigrid import Multigrid, Stall, replaces_factor
 from .errors import MeshError
 from .geometry.validation import check_function, check_int
 from .spectral import (
@@ -254,7 +254,8 @@ class ImplicitHeat:
         dense rows). ``"cg"``: block preconditioned conjugate gradient (module notes); the
         preconditioner needs the mesh (``op.V``/``op.faces`` or ``mesh``), else it is the
         diagonal. ``"auto"``: direct up to 40 entries per row, CG otherwise and on a volume too
-        costly to factor (with multigrid: module notes).
+        costly to factor (with multigrid: module notes; factored after all where the V-cycle
+        stalls, :class:`meshlap._multigrid.Stall`).
     rtol : float, default 1e-10
         Relative residual at which CG stops.
     mesh : (V, F), optional
@@ -294,16 +295,20 @@ class ImplicitHeat:
         matrix_free = getattr(op, "matrix_free", False)
         sparse = not matrix_free and symmetric_L(op).nnz <= _SPARSE_ROW_MAX * n
         multigrid = sparse and replaces_factor(op)  # a large volume's: not factored
-        if solver == "auto":
+        chosen = solver == "auto"
+        if chosen:
             solver = "direct" if sparse and not multigrid else "cg"
         self.solver = solver
+        self._stall = None
         if solver == "direct" or multigrid:
             S = _restricted_S(op, self.P)
             A = sp.diags(self.m) - tau * 0.5 * (S + S.T)
             if solver == "direct":
                 self._lu = _factor(A, _ldl.supernodal(op))
-            else:  # CG preconditioned by the V-cycle of the system itself
-                self._precondition = Multigrid(A).solve
+            else:  # CG preconditioned by the V-cycle of the system itself; factored if it stalls
+                self._A = sp.csr_matrix(A)
+                self._precondition = Multigrid(self._A).solve
+                self._stall = Stall(_ldl.least_work(self._A)) if chosen else None
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             geo = _mesh_of(op, mesh)
@@ -337,11 +342,15 @@ class ImplicitHeat:
         return lambda R: a * R / m[:, None] + b * inverse.solve(np.asfortranarray(R))
 
     def _pcg(self, B: np.ndarray, X: np.ndarray) -> np.ndarray:
-        X, it, converged = block_pcg(self._apply, self._precondition, B, self.rtol, 1000, X)
+        X, it, converged = block_pcg(self._apply, self._precondition, B, self.rtol, 1000, X,
+                                     give_up=self._stall)
+        self.iterations.append(it)
+        if self._stall is not None and self._stall.fired:  # this step and the next ones
+            self._lu, self.solver = _factor(self._A, _ldl.supernodal(self.op)), "direct"
+            return self._lu.solve(np.asfortranarray(B))
         if not converged:
             warnings.warn(f"ImplicitHeat: CG did not reach rtol={self.rtol:g} in 1000 iterations",
                           RuntimeWarning, stacklevel=3)
-        self.iterations.append(it)
         return X
 
     def step(self, f: Any, steps: int = 1) -> np.ndarray:

@@ -23,11 +23,14 @@ for any number of right-hand sides and Dirichlet values: a sparse LU (scipy's Su
 symmetric mode; no SuiteSparse) when S has at most 40 entries per row (linear FEM, cotangent,
 curves), a block conjugate gradient otherwise (the heat-kernel operator's hundreds of
 entries per row fill an LU in), preconditioned as LOBPCG is in :mod:`meshlap.spectral`: the
-P1 stiffness of the same geometry plus half the inverse diagonal. A sparse volume of more than
-8,000 free vertices, whose factor fills as n^(4/3), is solved by conjugate gradient
-preconditioned by one multigrid V-cycle of the matrix itself (:mod:`meshlap._multigrid`): 0.41 s
-instead of 110 s on a 68,921-vertex tetrahedral cube. On such a volume the heat-kernel operator's
-preconditioner inverts its P1 stiffness by the same V-cycle instead of factoring it.
+P1 stiffness of the same geometry plus half the inverse diagonal. A sparse volume whose
+factorization counts more than 10⁹ multiply-adds (a bulky one's fills as n^(4/3)) is solved by
+conjugate gradient preconditioned by one multigrid V-cycle of the matrix itself
+(:mod:`meshlap._multigrid`): 0.41 s instead of 110 s on a 68,921-vertex tetrahedral cube. Where
+the V-cycle stalls (a graded volume: 283 iterations, 8.2 s on notch_stress refined to 110,266
+vertices) the solver factors after all, for that solve and the next ones. On such a volume the
+heat-kernel operator's preconditioner inverts its P1 stiffness by the same V-cycle instead of
+factoring it.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from . import _ldl, _lobpcg, _parts
 from ._cg import block_pcg
 from ._jit import one_blas_thread as _one_blas_thread
 from ._ldl import factor as _factor
-from ._multigrid import Multigrid, replaces_factor
+from ._multigrid import Multigrid, Stall, replaces_factor
 from .errors import MeshError, MeshWarning, user_stacklevel
 from .geometry import Geometry, simplex_volumes
 from .geometry.validation import check_function
@@ -195,8 +198,9 @@ class PoissonSolver:
         part, returned with zero mean there).
     solver : {"auto", "direct", "cg"}
         ``"direct"``: sparse LU; ``"cg"``: block preconditioned conjugate gradient;
-        ``"auto"``: direct up to 40 entries per row of S, except on a volume of more than 8,000
-        free vertices (CG with multigrid: module notes).
+        ``"auto"``: direct up to 40 entries per row of S, except on a volume whose factorization
+        counts more than 10⁹ multiply-adds: CG with multigrid, which factors after all where the
+        V-cycle stalls (:class:`meshlap._multigrid.Stall`).
     rtol : float, default 1e-10
         Relative residual at which CG stops.
 
@@ -233,7 +237,8 @@ class PoissonSolver:
         S = sp.csr_matrix(op.S, dtype=np.float64)
         sparse = S.nnz <= _SPARSE_ROW_MAX * n
         multigrid = sparse and replaces_factor(op)  # a large volume's: not factored
-        if solver == "auto":
+        chosen = solver == "auto"
+        if chosen:
             solver = "direct" if sparse and not multigrid else "cg"
         if sparse or solver == "direct":
             S = 0.5 * (S + S.T)  # a factorization reads one triangle; multigrid needs the matrix
@@ -255,15 +260,20 @@ class PoissonSolver:
             A = sp.csr_matrix(-S if len(self.free) == n else -S[self.free][:, self.free])
         self.solver = solver
         self.iterations: list[int] = []
+        self._stall = Stall(_ldl.least_work(A)) if multigrid and chosen else None
         with _one_blas_thread():
             if solver == "direct":
-                # one vertex of each floating part pinned at 0: A restricted to the others is SPD
-                first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
-                self._keep = np.setdiff1d(np.arange(len(self.free)), first)
-                self._lu = _factor(A[self._keep][:, self._keep], _ldl.supernodal(op))
+                self._factor(A)
             else:
                 self._A = A
                 self._precond = Multigrid(A).solve if multigrid else self._preconditioner(op, A)
+
+    def _factor(self, A: sp.csr_matrix) -> None:
+        # one vertex of each floating part pinned at 0: A restricted to the others is SPD
+        first = np.array([np.arange(len(self.free))[part][0] for part in self._parts], dtype=np.int64)
+        self._keep = np.setdiff1d(np.arange(len(self.free)), first)
+        self._lu = _factor(A[self._keep][:, self._keep], _ldl.supernodal(self.op))
+        self.solver = "direct"
 
     def _preconditioner(self, op: Any, A: sp.csr_matrix) -> _lobpcg.CotPreconditioner:
         m = self.mass[self.free]
@@ -308,16 +318,19 @@ class PoissonSolver:
             rhs = B[self.free]
         if not compatible:
             self._compatible(rhs)
+        if self.solver == "cg":
+            with _one_blas_thread():
+                x, it, converged = block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000,
+                                             give_up=self._stall)
+                self.iterations.append(it)
+                if self._stall is not None and self._stall.fired:
+                    self._factor(self._A)  # this solve and the next ones
+                elif not converged:
+                    warnings.warn(f"conjugate gradient did not reach rtol={self.rtol:g} in 2000 iterations",
+                                  RuntimeWarning, stacklevel=user_stacklevel())
         if self.solver == "direct":
             x = np.zeros_like(rhs)
             x[self._keep] = self._lu.solve(np.asfortranarray(rhs[self._keep]))
-        else:
-            with _one_blas_thread():
-                x, it, converged = block_pcg(lambda X: self._A @ X, self._precond, rhs, self.rtol, 2000)
-                if not converged:
-                    warnings.warn(f"conjugate gradient did not reach rtol={self.rtol:g} in 2000 iterations",
-                                  RuntimeWarning, stacklevel=user_stacklevel())
-            self.iterations.append(it)
         m = self.mass[self.free]
         for sel in self._parts:  # zero mean on each part without Dirichlet data
             x[sel] -= (m[sel] @ x[sel]) / m[sel].sum()

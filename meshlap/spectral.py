@@ -7,7 +7,9 @@ and ``op @ f``: a :class:`~meshlap.MeshLaplacian` (Belkin–Sun–Wang, SoCG 200
 
 On a sparse pencil :func:`eigs` factors it (shift-invert); on a volume whose factorization
 counts more than ``_multigrid.MAX_FACTOR_WORK`` multiply-adds (a bulky one's fills as n^(4/3)),
-it runs LOBPCG (Knyazev 2001) preconditioned by multigrid (:mod:`meshlap._multigrid`). The
+it runs LOBPCG (Knyazev 2001) preconditioned by multigrid (:mod:`meshlap._multigrid`), and
+factors after all where the V-cycle stalls (a graded or anisotropic volume) and what its
+iterations still need would cost more than the counted factorization (``_multigrid.Stall``). The
 heat-kernel operator keeps hundreds to thousands of entries per row, whose LU fills in badly
 (94 s for 36 pairs of a 16,000-vertex sphere at h = 0.0025); there LOBPCG is preconditioned by
 the same mesh's cotangent Laplacian, equal to the kernel at low frequencies. At high
@@ -383,6 +385,7 @@ def eigs(
         return lam, _normalize_signs(_extend(op, P, X))
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
     multigrid = sparse and _multigrid.replaces_factor(op) and method in ("auto", "lobpcg")
+    stall = _multigrid.Stall(_ldl.least_work(op.S)) if multigrid and not matrix_free else None
     adapt = extra is None
     extra = max(4, k // 10) if extra is None else int(extra)
     if method == "auto":
@@ -410,7 +413,7 @@ def eigs(
             ceiling = (lambda lam: _eigcheck.count_ceiling(lam, k, tol, floor)) if counted else None
             return _eigs_lobpcg(op, P, m, goal, tol, 2 * maxiter if wide else maxiter, more, mesh, seed,
                                 adapt and not wide, spatial(), report, S_P if sparse else None, ceiling,
-                                multigrid)
+                                multigrid, None if wide else stall)
         return run
 
     exact = _eigcheck.Attempt("dense", dense, exact=True)
@@ -433,8 +436,12 @@ def eigs(
               "lobpcg": [_eigcheck.Attempt("lobpcg (multigrid)" if multigrid else "lobpcg", lobpcg(False)),
                          wider]}[method]
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
-        # where a factorization fits, it comes before twice the iterations that did not converge
+        # where a factorization fits, it comes before twice the iterations that did not converge;
+        # after multigrid's, only where the V-cycle stalled (Stall): else its cost is why it ran
         ladder.insert(1 if method == "lobpcg" and not multigrid else len(ladder), shift)
+        if stall is not None:
+            ladder.insert(1, shift._replace(when=lambda: stall.fired))
+            ladder[-1] = shift._replace(when=lambda: not stall.fired)
     if method != "dense" and n_p <= _DENSE_FALLBACK:  # matrix-free: n columns cost less than LOBPCG wider
         ladder.insert(1 if matrix_free else len(ladder), exact)
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:
@@ -478,7 +485,7 @@ def _scale_shift(m: np.ndarray) -> float:  # 4π/area: 1 on the unit sphere (λ�
 
 
 def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, report=None, own=None,
-                 ceiling=None, multigrid=False):
+                 ceiling=None, multigrid=False, give_up=None):
     n, n_p = op.n_vertices, len(P)
     nb, full = k + extra, n_p == n
     if report is not None:
@@ -529,7 +536,7 @@ def _eigs_lobpcg(op, P, m, k, tol, maxiter, extra, mesh, seed, adapt, ordered, r
                                             report=_lobpcg.lobpcg_progress(report, "cotangent start", 0.05,
                                                                            0.2))
         out = _lobpcg.lobpcg(apply_A, m, T, X0, k, tol, maxiter, least=0.01 * sigma, ceiling=ceiling,
-                             report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0))
+                             report=_lobpcg.lobpcg_progress(report, "LOBPCG", 0.2, 1.0), give_up=give_up)
     X = out.X  # the whole block: the values past k give the check the gap above λ_k
     if ordered is not None:
         X = X[np.argsort(order)]  # back to the order of P

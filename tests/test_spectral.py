@@ -369,6 +369,56 @@ def test_a_volume_is_factored_where_its_counted_work_is_small_whatever_its_size(
     assert not _ldl.factors_within(-cube.S, _multigrid.MAX_FACTOR_WORK)
 
 
+def test_a_stalled_v_cycle_gives_way_to_the_counted_factorization(monkeypatch):
+    """LOBPCG with a V-cycle stalls on a graded or anisotropic volume (pyvista's notch_stress
+    refined once, 110,266 vertices: 382 iterations, 278 s, against shift-invert's 6.7 s). Where
+    the iterations still to go, at the rate they go, would take longer than the counted
+    factorization, eigs factors after all; where they converge, it keeps them. Both volumes here
+    have one pattern, so one factorization cost, set to 0.05 s: the cube's V-cycle converges in
+    13 iterations of 3 ms, the slab's would need seconds."""
+    from meshlap import _ldl, _multigrid, samples
+
+    V, T = samples.cube_tetrahedra(12)
+    slab, cube = meshlap.laplacian(V * [1.0, 1.0, 0.01], T), meshlap.laplacian(V, T)
+    monkeypatch.setattr(_multigrid, "MAX_FACTOR_WORK", -1.0)  # both by multigrid first
+    monkeypatch.setattr(_multigrid, "FACTOR_RATE", _ldl.least_work(slab.S) / 0.05)
+    info = {}
+    lam = spectral.eigs(slab, 4, info=info)[0]
+    assert info["tried"] == ["lobpcg (multigrid)", "shift-invert"]
+    # the unit square's Neumann values π²(a² + b²), far below the slab's first vertical one
+    assert np.allclose(lam[1:], np.pi**2 * np.array([1, 1, 2]), rtol=0.015)
+    info = {}
+    spectral.eigs(cube, 4, info=info)
+    assert info["tried"] == ["lobpcg (multigrid)"] and info["iterations"] < 40
+
+
+def test_a_stalled_v_cycle_in_a_solve_or_a_heat_step_factors_after_all(monkeypatch):
+    """Conjugate gradient with the V-cycle stalls where LOBPCG's does (the refined notch_stress
+    volume: 283 iterations, 8.2 s for one Poisson solve against 3.5 s factored). The solver and
+    the heat step factor after all, for that solve and the next ones, with the same answer."""
+    from meshlap import _ldl, samples
+    from meshlap.heat import ImplicitHeat
+    from meshlap.solve import PoissonSolver
+
+    V, T = samples.cube_tetrahedra(12)
+    slab = meshlap.laplacian(V * [1.0, 1.0, 0.01], T)
+    b = slab.M @ np.cos(np.pi * V[:, 0])
+    exact = PoissonSolver(slab, solver="direct").solve(b)
+    heat = ImplicitHeat(slab, 0.01, solver="direct").step(V[:, 0])
+    monkeypatch.setattr(_multigrid, "MAX_FACTOR_WORK", -1.0)
+    monkeypatch.setattr(_multigrid, "FACTOR_RATE", _ldl.least_work(slab.S) / 0.05)
+    solver = PoissonSolver(slab)
+    assert solver.solver == "cg"
+    assert np.allclose(solver.solve(b), exact, atol=1e-8 * np.abs(exact).max())
+    assert solver.solver == "direct" and solver.iterations[0] < 40
+    step = ImplicitHeat(slab, 0.01)
+    assert step.solver == "cg"
+    assert np.allclose(step.step(V[:, 0]), heat, atol=1e-8)
+    assert step.solver == "direct"
+    # asked for by name, CG stays CG
+    assert PoissonSolver(slab, solver="cg")._stall is None
+
+
 def test_eigs_progress_reports_stages_in_order():
     V, F = shapes.sphere(800, seed=9)
     op = meshlap.laplacian(V, F, h=0.02, correction="none")
