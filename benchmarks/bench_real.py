@@ -67,7 +67,7 @@ HELD_OUT = ("Kind `holdout`: the {} meshes build_corpus.py added on 2026-12-06, 
             "(stop 73), two of them readable only since that stop (igea's PLY triangle strips, an MNI "
             "surface), chosen by kind and size from a sweep that only read them, measured once.")
 HOLDOUTS = ("holdout", "holdout2", "holdout3", "holdout4", "holdout5")
-REF_VERSION = 1  # bumped when the reference's computation changes: cached ones are then recomputed
+REF_VERSION = 2  # bumped when the reference's computation changes: cached ones are then recomputed
 #: a reference whose finer level is within this of the extrapolation is settled: CAD parts and
 #: multi-part models (surfaces touching at single vertices, slivers) converge slowly under refinement
 SETTLED = 0.01
@@ -589,7 +589,8 @@ def header(first: str) -> list[str]:
             "Error = largest relative error of eigenvalues 1–9 after the zero ones (one per connected part), "
             "against linear FEM on the 4× and 16× midpoint refinement (tetrahedra: 8× and 64×; where the "
             "finer would exceed 400,000 vertices, 120,000 for tetrahedra, the mesh itself and its 4× "
-            "(8×): the `ref` column), Richardson-extrapolated; `ref Δ` is the finer raw level's distance "
+            "(8×): the `ref` column; a tetrahedral mesh's coincident midpoints merged, "
+            "`real_corpus.refine`), Richardson-extrapolated; `ref Δ` is the finer raw level's distance "
             "from the extrapolation (about that level's own error; the extrapolation's is smaller). "
             "Ratio = default / best peer. The default gets the mesh as published (polygons, seams); the "
             "peers the welded, triangulated mesh. CPU = process time of build + eigenpairs (meshlap's "

@@ -36,8 +36,8 @@ _COARSE = 500
 MAX_FACTOR_WORK = 1e9
 #: multiply-adds per second of the factorization's way to 10 eigenpairs (factor, then
 #: shift-invert's solves), counted work over seconds here: a 102,578-vertex FEA jaw 14.4 G in 18 s,
-#: the notch_stress volume refined to 110,266 vertices 8.4 G in 7.6 s, the 68,921-vertex cube 46 G
-#: in 25 s; the same equivalence MAX_FACTOR_WORK states
+#: the notch_stress volume refined to 96,029 vertices 3.0 G in 5.7 s, the 68,921-vertex cube 46 G
+#: in 25-31 s; the same equivalence MAX_FACTOR_WORK states
 FACTOR_RATE = 1e9
 # LOBPCG's error measure first rises before it falls (the jaw's: 1.2e8 at iteration 0, 1.3e10 at
 # 3, 3e8 at 9): its rate is read from the 5th iteration on, and first judged at the 10th
@@ -103,7 +103,7 @@ class Stall:
     factorization's way (``work`` / :data:`FACTOR_RATE`). A V-cycle converges at a rate
     independent of the size on a quasi-uniform volume (20-33 LOBPCG iterations for 10 pairs) and
     stalls on a graded or anisotropic one, whose counted factorization is cheap for its size
-    (notch_stress refined once: 264 s for 10 pairs against shift-invert's 7.6 s,
+    (notch_stress refined once: 211 s for 10 pairs against shift-invert's 5.7 s,
     ``benchmarks/bench_volume_eigs.py``). ``fired`` stays True once it has said so.
 
     Examples

@@ -27,10 +27,10 @@ P1 stiffness of the same geometry plus half the inverse diagonal. A sparse volum
 factorization counts more than 10⁹ multiply-adds (a bulky one's fills as n^(4/3)) is solved by
 conjugate gradient preconditioned by one multigrid V-cycle of the matrix itself
 (:mod:`meshlap._multigrid`): 0.41 s instead of 110 s on a 68,921-vertex tetrahedral cube. Where
-the V-cycle stalls (a graded volume: 283 iterations, 8.2 s on notch_stress refined to 110,266
-vertices) the solver factors after all, for that solve and the next ones. On such a volume the
-heat-kernel operator's preconditioner inverts its P1 stiffness by the same V-cycle instead of
-factoring it.
+the V-cycle stalls (a graded volume: 254 iterations, 6.7 s on notch_stress refined to 96,029
+vertices, against 1.3 s factored) the solver factors after all, for that solve and the next
+ones. On such a volume the heat-kernel operator's preconditioner inverts its P1 stiffness by the
+same V-cycle instead of factoring it.
 """
 
 from __future__ import annotations

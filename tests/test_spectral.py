@@ -371,9 +371,9 @@ def test_a_volume_is_factored_where_its_counted_work_is_small_whatever_its_size(
 
 def test_a_stalled_v_cycle_gives_way_to_the_counted_factorization(monkeypatch):
     """LOBPCG with a V-cycle stalls on a graded or anisotropic volume (pyvista's notch_stress
-    refined once, 110,266 vertices: 382 iterations, 278 s, against shift-invert's 6.7 s). Where
-    the iterations still to go, at the rate they go, would take longer than the counted
-    factorization, eigs factors after all; where they converge, it keeps them. Both volumes here
+    refined once, 96,029 vertices: 211 s, 200 iterations and a wider run's, against shift-invert's
+    5.7 s). Where the iterations still to go, at the rate they go, would take longer than the
+    counted factorization, eigs factors after all; where they converge, it keeps them. Both volumes here
     have one pattern, so one factorization cost, set to 0.05 s: the cube's V-cycle converges in
     13 iterations of 3 ms, the slab's would need seconds."""
     from meshlap import _ldl, _multigrid, samples
@@ -394,7 +394,7 @@ def test_a_stalled_v_cycle_gives_way_to_the_counted_factorization(monkeypatch):
 
 def test_a_stalled_v_cycle_in_a_solve_or_a_heat_step_factors_after_all(monkeypatch):
     """Conjugate gradient with the V-cycle stalls where LOBPCG's does (the refined notch_stress
-    volume: 283 iterations, 8.2 s for one Poisson solve against 3.5 s factored). The solver and
+    volume: 254 iterations, 6.7 s for one Poisson solve against 1.3 s factored). The solver and
     the heat step factor after all, for that solve and the next ones, with the same answer."""
     from meshlap import _ldl, samples
     from meshlap.heat import ImplicitHeat
