@@ -7,7 +7,9 @@ smoothed aggregation (Vaněk, Mandel and Brezina 1996; pyamg) costs O(n) and pre
 Laplacian's LOBPCG almost as well as the exact inverse does, in memory proportional to the
 matrix (``benchmarks/bench_volume_eigs.py``). Conjugate gradient preconditioned by it solves
 a volume's Poisson problems and implicit heat steps (:mod:`meshlap.solve`, :mod:`meshlap.heat`)
-without factoring either.
+without factoring either. On a quasi-uniform volume, that is; on a graded or anisotropic one the
+V-cycle stalls, and :class:`Stall` hands the problem back to the factorization whose cost was
+counted before (:func:`replaces_factor`).
 """
 
 from __future__ import annotations
