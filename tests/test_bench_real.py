@@ -40,6 +40,21 @@ def test_refine_triangles_and_tetrahedra():
     np.testing.assert_allclose(vol, 1 / 6 / 64, rtol=1e-12)
 
 
+def test_refine_merges_a_tetrahedral_meshs_coincident_midpoints_and_keeps_a_surfaces():
+    """Two unit cubes share the face x = 1, each cut along a different diagonal of it (as the
+    cells beside a flat quadrilateral whose zero-volume tetrahedra weld drops): refinement puts
+    both diagonals' midpoints at (1, ½, ½), one vertex, not a crack. A surface's coincident
+    midpoints (here a sheet given twice) are its own and stay apart."""
+    second = np.column_stack([1 + CUBE_V[:, 0], 1 - CUBE_V[:, 1], CUBE_V[:, 2]])  # diagonal (1,1,0)-(2,0,1)
+    V, T = rc.weld(np.vstack([CUBE_V, second]), np.vstack([CUBE_TETS, CUBE_TETS + 8]))
+    assert len(V) == 12 and len(T) == 12
+    Vr, Tr = rc.refine(V, T, 1)
+    assert len(Vr) == len(np.unique(Vr.round(12), axis=0)) == 5 * 3 * 3  # the lattice of spacing ½
+    assert volumes(Vr, Tr).sum() == pytest.approx(2.0, rel=1e-12)
+    Vs, _ = rc.refine(np.vstack([OCTA_V, OCTA_V]), np.vstack([OCTA_F, OCTA_F + 6]), 1)
+    assert len(Vs) == 2 * len(rc.refine(OCTA_V, OCTA_F, 1)[0])
+
+
 def test_p1_fem_exact_on_linear_functions():
     V, F = rc.refine(OCTA_V, OCTA_F, 1)
     K, M = rc.p1_fem(V, F)
