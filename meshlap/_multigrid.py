@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -98,27 +99,32 @@ class Multigrid:
 
 class Stall:
     """Whether an iteration preconditioned by a V-cycle (LOBPCG, conjugate gradient) should stop
-    and give way to the factorization whose work ``work`` (multiply-adds,
-    :func:`meshlap._ldl.least_work`) was counted before it ran: ``stall(iteration, worst error
-    ratio)`` is True once the iterations still to go, at the rate the ratio fell since the 5th
-    iteration and at the run's measured seconds per iteration, would take longer than the
-    factorization's way (``work`` / :data:`FACTOR_RATE`). A V-cycle converges at a rate
-    independent of the size on a quasi-uniform volume (20-33 LOBPCG iterations for 10 pairs) and
-    stalls on a graded or anisotropic one, whose counted factorization is cheap for its size
-    (notch_stress refined once: 211 s for 10 pairs against shift-invert's 5.7 s,
-    ``benchmarks/bench_volume_eigs.py``). ``fired`` stays True once it has said so.
+    and give way to the factorization whose work ``work()`` counts (multiply-adds,
+    :func:`meshlap._ldl.least_work`): ``stall(iteration, worst error ratio)`` is True once the
+    iterations still to go, at the rate the ratio fell since the 5th iteration and at the run's
+    measured seconds per iteration, would take longer than the factorization's way (``work()`` /
+    :data:`FACTOR_RATE`). The count is asked for only where they would take longer than
+    :data:`MAX_FACTOR_WORK` / :data:`FACTOR_RATE`, what multigrid was chosen for exceeding: a
+    converging run (a cube's Poisson solve, 0.4 s) does not pay for it (0.24 s more). A V-cycle
+    converges at a rate independent of the size on a quasi-uniform volume (20-33 LOBPCG
+    iterations for 10 pairs) and stalls on a graded or anisotropic one, whose counted
+    factorization is cheap for its size (notch_stress refined once: 211 s for 10 pairs against
+    shift-invert's 5.7 s, ``benchmarks/bench_volume_eigs.py``). ``fired`` stays True once it has
+    said so.
 
     Examples
     --------
-    >>> stall = Stall(work=1e9)   # about a second of factoring
+    >>> stall = Stall(lambda: 1e9)   # about a second of factoring
     >>> [stall(it, 1e10) for it in range(12)][-1]   # no progress in 11 iterations
     True
     >>> stall.fired
     True
     """
 
-    def __init__(self, work: float) -> None:
-        self.budget = work / FACTOR_RATE
+    def __init__(self, work: Callable[[], float]) -> None:
+        self._work = work
+        self._floor = MAX_FACTOR_WORK / FACTOR_RATE  # seconds the factorization takes at least
+        self._budget: float | None = None
         self.fired = False
         self._log: list[float] = []
         self._start = 0.0
@@ -130,7 +136,11 @@ class Stall:
         if self.fired or it < 2 * _SETTLED:
             return self.fired
         rate = (self._log[_SETTLED] - self._log[it]) / (it - _SETTLED)  # log ratio fallen per iteration
-        per = (time.perf_counter() - self._start) / it
         to_go = math.inf if rate <= 0 else self._log[it] / rate
-        self.fired = to_go * per > self.budget
+        seconds = to_go * (time.perf_counter() - self._start) / it
+        if seconds <= self._floor:
+            return False
+        if self._budget is None:
+            self._budget = self._work() / FACTOR_RATE
+        self.fired = seconds > self._budget
         return self.fired

@@ -308,7 +308,7 @@ class ImplicitHeat:
             else:  # CG preconditioned by the V-cycle of the system itself; factored if it stalls
                 self._A = sp.csr_matrix(A)
                 self._precondition = Multigrid(self._A).solve
-                self._stall = Stall(_ldl.least_work(self._A)) if chosen else None
+                self._stall = Stall(lambda: _ldl.least_work(self._A)) if chosen else None
         else:
             diag = self.m / op.h if matrix_free else -self.m * np.asarray(symmetric_L(op).diagonal())[self.P]
             geo = _mesh_of(op, mesh)

@@ -301,7 +301,6 @@ def _quiet_stderr() -> Any:
         os.close(null)
 
 
-#: suffixes meshio does not read: VTK's XML formats (pyvista) and scene formats (trimesh)
 def _by_nibabel(path: Path) -> GeometryInput:
     # GIfTI (.surf.gii): the array of intent NIFTI_INTENT_POINTSET (1008), its triangles the one of
     # NIFTI_INTENT_TRIANGLE (1009); a .gii of other intents holds data on a surface, not the surface
@@ -317,6 +316,7 @@ def _by_nibabel(path: Path) -> GeometryInput:
     return P, check_faces(np.asarray(arrays[1009], dtype=np.int64), len(P), name=f"faces of {path.name}"), 2
 
 
+#: suffixes meshio does not read: VTK's XML formats (pyvista), scene formats (trimesh), GIfTI (nibabel)
 _OTHER_READERS = {suffix: ("pyvista", _by_pyvista) for suffix in (".vtp", ".vts", ".vtr", ".vti", ".vtm")} | \
     {suffix: ("trimesh", _by_trimesh) for suffix in (".glb", ".gltf", ".3mf", ".dae")} | \
     {".gii": ("nibabel", _by_nibabel)}

@@ -260,7 +260,7 @@ class PoissonSolver:
             A = sp.csr_matrix(-S if len(self.free) == n else -S[self.free][:, self.free])
         self.solver = solver
         self.iterations: list[int] = []
-        self._stall = Stall(_ldl.least_work(A)) if multigrid and chosen else None
+        self._stall = Stall(lambda: _ldl.least_work(A)) if multigrid and chosen else None
         with _one_blas_thread():
             if solver == "direct":
                 self._factor(A)

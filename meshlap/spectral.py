@@ -385,7 +385,7 @@ def eigs(
         return lam, _normalize_signs(_extend(op, P, X))
     volume = _ldl.supernodal(op)  # a large one's factor fills as n^(4/3): LOBPCG with multigrid
     multigrid = sparse and _multigrid.replaces_factor(op) and method in ("auto", "lobpcg")
-    stall = _multigrid.Stall(_ldl.least_work(op.S)) if multigrid and not matrix_free else None
+    stall = _multigrid.Stall(lambda: _ldl.least_work(op.S)) if multigrid and not matrix_free else None
     adapt = extra is None
     extra = max(4, k // 10) if extra is None else int(extra)
     if method == "auto":

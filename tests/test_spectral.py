@@ -373,9 +373,10 @@ def test_a_stalled_v_cycle_gives_way_to_the_counted_factorization(monkeypatch):
     """LOBPCG with a V-cycle stalls on a graded or anisotropic volume (pyvista's notch_stress
     refined once, 96,029 vertices: 211 s, 200 iterations and a wider run's, against shift-invert's
     5.7 s). Where the iterations still to go, at the rate they go, would take longer than the
-    counted factorization, eigs factors after all; where they converge, it keeps them. Both volumes here
+    counted factorization, eigs factors after all; where they converge, it keeps them. Both volumes
     have one pattern, so one factorization cost, set to 0.05 s: the cube's V-cycle converges in
-    13 iterations of 3 ms, the slab's would need seconds."""
+    13 iterations of 3 ms, the slab's would need seconds. Where the iterations left take less than
+    the bound multigrid was chosen above, the factorization is not even counted."""
     from meshlap import _ldl, _multigrid, samples
 
     V, T = samples.cube_tetrahedra(12)
@@ -387,9 +388,15 @@ def test_a_stalled_v_cycle_gives_way_to_the_counted_factorization(monkeypatch):
     assert info["tried"] == ["lobpcg (multigrid)", "shift-invert"]
     # the unit square's Neumann values π²(a² + b²), far below the slab's first vertical one
     assert np.allclose(lam[1:], np.pi**2 * np.array([1, 1, 2]), rtol=0.015)
-    info = {}
+    info, counted = {}, []
     spectral.eigs(cube, 4, info=info)
     assert info["tried"] == ["lobpcg (multigrid)"] and info["iterations"] < 40
+    # the bound just below the cube's work: multigrid, and a run too short to ask for the count
+    monkeypatch.setattr(_multigrid, "MAX_FACTOR_WORK", 0.999 * _ldl.least_work(cube.S))
+    monkeypatch.setattr(_ldl, "least_work", lambda A: counted.append(A) or 0.0)
+    info = {}
+    spectral.eigs(cube, 4, info=info)
+    assert info["tried"] == ["lobpcg (multigrid)"] and not counted
 
 
 def test_a_stalled_v_cycle_in_a_solve_or_a_heat_step_factors_after_all(monkeypatch):
