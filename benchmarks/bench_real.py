@@ -38,6 +38,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import igl  # noqa: E402
@@ -154,8 +155,16 @@ def robust_cloud(P: np.ndarray, k: int) -> np.ndarray:
 
 def meshlap_cloud(P: np.ndarray, k: int, info: dict) -> np.ndarray:
     op = meshlap.point_cloud_laplacian(P)
-    info["pieces"] = op.decision.measured.get("parts", 0)  # the pieces its stars join
+    info["op"] = op
     return spectral.eigs(op, k, info=info)[0]
+
+
+def pencil_pieces(op: meshlap.MeshLaplacian) -> int:
+    """The connected pieces of the pencil, one zero eigenvalue each: those its stars join, as its
+    decision measured them, or those of S's pattern (the kernel's)."""
+    if "parts" in op.decision.measured:
+        return int(op.decision.measured["parts"])
+    return int(sp.csgraph.connected_components(op.S, directed=False)[0])
 
 
 def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | None, float, str]]:
@@ -227,7 +236,7 @@ def surface_rows(entry: dict, mesh: rc.Mesh, ref: dict, n_parts: int, k: int) ->
     cloud = {"name": entry["name"], "kind": entry["kind"], "n": len(V), "parts": n_parts,
              "err_default": err(clam, R, n_parts), "cpu_default": ccpu, "warnings": cwarn,
              "err_robust": err(rlam, R, n_parts), "cpu_robust": rcpu, "touching": rc.touching(V, F),
-             "pieces": cinfo.get("pieces", 0),
+             "pieces": pencil_pieces(cinfo["op"]),
              "uncertified": float(cinfo.get("uncertified", float("nan")))}
     finish(cloud, [cloud["err_robust"]], rcpu)
     return row, cloud
@@ -372,8 +381,9 @@ def tables(surf: list[dict], cloud: list[dict], tets: list[dict], noisy: list[di
             + summary(resolved, "robust-laplacian") + ".", "",
             "Held out: " + "; ".join(f"kind `{h}`: " + summary(held_out(cloud, h), "robust-laplacian")
                                      for h in HOLDOUTS) + ".", "",
-            roundoff(cloud), "", "The pieces the cloud's stars join (`op.decision.measured['parts']`, one "
-            f"zero eigenvalue each) equal the mesh's parts on {sum(x['pieces'] == x['parts'] for x in cloud)}"
+            roundoff(cloud), "", "The pieces the cloud's pencil joins (its stars' as "
+            "`op.decision.measured['parts']` records them, else S's pattern's; one zero eigenvalue each) "
+            f"equal the mesh's parts on {sum(x['pieces'] == x['parts'] for x in cloud)}"
             f" of {len(cloud)}.", "", "| mesh | n | parts | pieces | touching | default | robust | ratio | "
             "CPU default s | CPU robust s | warnings |", "|" + "---|" * 11]
     for x in cloud:
