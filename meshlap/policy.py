@@ -14,7 +14,8 @@ The builders are mechanisms, each deterministic and named (``operator=``):
 and ``op @ f`` of all but the paper's applies the fitted point-wise rows
 (:mod:`meshlap.corrections.rowchoice`), which read the points alone.
 
-The policy for ``operator="auto"`` has no tuned threshold:
+The policy for ``operator="auto"`` reads its few thresholds from :mod:`meshlap.tuned`, each with
+where it came from:
 
 - an input with cells gets the "fem" pencil: linear FEM on the intrinsic Delaunay triangulation of
   its cells (:mod:`meshlap.fem`), so its worst case is linear FEM there, and parts stay apart

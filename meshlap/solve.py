@@ -66,7 +66,8 @@ def _indices(idx: Any, n: int, what: str) -> np.ndarray:
         raise MeshError(f"{what} vertices must be integer indices; got {idx!r}")
     a = a.astype(np.int64).ravel()
     if len(a) and (a.min() < -n or a.max() >= n):
-        raise MeshError(f"{what} vertex indices must lie in [0, {n - 1}]; got {a.min()}..{a.max()}")
+        raise MeshError(f"{what} vertex indices must lie in [0, {n - 1}] (or [-{n}, -1], counted from the "
+                        f"end as numpy's); got {a.min()}..{a.max()}")
     a = np.where(a < 0, a + n, a)
     if len(np.unique(a)) != len(a):
         raise MeshError(f"{what} vertices repeat an index")

@@ -182,6 +182,10 @@ def test_distance_bad_input(sphere_mesh_op):
     hd = HeatDistance(op)
     with pytest.raises(meshlap.MeshError, match="indices must lie"):
         hd.compute(op.n_vertices)
+    # a negative index counts from the end, as numpy's, and the message says so
+    np.testing.assert_array_equal(hd.compute(-1), hd.compute(op.n_vertices - 1))
+    with pytest.raises(meshlap.MeshError, match=rf"or \[-{op.n_vertices}, -1\], counted from the end"):
+        hd.compute(-op.n_vertices - 1)
     with pytest.raises(meshlap.MeshError, match="no source"):
         hd.compute([])
     with pytest.raises(meshlap.MeshError, match="batch"):
