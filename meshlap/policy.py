@@ -38,10 +38,6 @@ where it came from:
   robust-laplacian's point-cloud Laplacian starts from, without its tufted cover; on 16,000
   random sphere points 0.20% off on eigenvalues 1-9 against the kernel's 0.29% and
   robust-laplacian's 7.8%;
-- a cloud whose stars end at most of its points (``STAR_OUTLINE``, recorded: a CAD part's
-  vertices outline its faces and leave them empty, so the stars fall apart or span nothing)
-  gets the "kernel" pencil, which needs no cells: within 1.5× of robust-laplacian on the 9
-  such clouds of ``benchmarks/bench_real.py``, where the stars reach 2.22×;
 - a cloud whose normal noise the geometry measured and projected away
   (:func:`meshlap.geometry.pointcloud.noise_reading`, recorded: noise above about 14% of the
   spacing that cubic fits do not explain, where a coarse sampling's missed shape would be
@@ -79,7 +75,7 @@ from .errors import MeshError, MeshWarning, user_stacklevel
 from .fem import lumped_pencil, part_labels
 from .geometry.pointcloud import noise_reading
 from .quadratic import unknowns as n_quadratic
-from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS, STAR_OUTLINE
+from .tuned import NOISE_AREA, NOISE_FLOOR, QUADRATIC_MAX_UNKNOWNS
 
 __all__ = ["OPERATORS", "Decision", "as_built", "decide"]
 
@@ -99,9 +95,6 @@ _REASONS = {
                      "that takes it out, masses less the area the noise it left adds",
     "stars": "a surface's or a curve's point cloud: linear FEM on every point's local Delaunay star "
              "(a third or a half each), point-wise rows fitted by the kernel",
-    "outline": "a point cloud whose local Delaunay stars end at most of its points (they outline its "
-               "surface rather than tile it): the corrected heat kernel on the points, which needs no "
-               "cells",
     "noisy": "a point cloud with normal noise (projected onto its tangent planes): the corrected "
              "heat kernel, whose width averages what the projection leaves",
     "cloud": "a point cloud without local stars to integrate over (a volume): the corrected heat kernel "
@@ -214,10 +207,6 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
         measured["spread over noise's"] = round(reading.spread, 3)
     if "noise_extent" in geo._cache:
         measured["edges where noise dominates ≥"] = round(geo._cache["noise_extent"], 3)
-    outline = False
-    if stars and geo.boundary is not None:
-        measured["share where the stars end"] = share = round(float(np.mean(geo.boundary)), 3)
-        outline = share >= STAR_OUTLINE
     if has_cells:
         measured["parts"] = part_labels(geo)[0]
         noise = surface_noise(geo) if denoise else 0.0
@@ -236,12 +225,12 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
             operator, reason = "kernel", _REASONS["h"]
         elif has_cells and geo.dim == 1:
             operator, reason = "galerkin", _REASONS["segments"]
-        elif has_cells or stars and not projected and not outline:
+        elif has_cells or stars and not projected:
             cells = "tetrahedra" if geo.dim == 3 else "cells"
             operator, reason = "fem", _REASONS["noisy surface" if read and denoise else cells if has_cells
                                                else "stars"]
         else:
-            operator, reason = "kernel", _REASONS[("noisy" if projected else "outline") if stars else "cloud"]
+            operator, reason = "kernel", _REASONS["noisy" if stars else "cloud"]
     else:
         reason = _REASONS["asked"].format(operator)
     if operator == "fem" and not (has_cells or stars) or operator == "galerkin" and not has_cells:

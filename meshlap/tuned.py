@@ -18,7 +18,7 @@ __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "C
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
            "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW",
-           "STAR_NEIGHBORS", "STAR_OUTLINE", "STAR_SCATTER"]
+           "STAR_NEIGHBORS", "STAR_SCATTER"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
@@ -90,11 +90,6 @@ ROW_MARGIN = 10.0
 STAR_NEIGHBORS = {1: 8, 2: 16, 3: 32}
 #: Median heights above which a steep first neighbour is on another sheet: 49 of 50 for any of 1.5-6
 STAR_SCATTER = 3.0
-#: Share of a cloud's points where its stars end (its soup's rim) from which the stars outline the
-#: surface rather than tile it and the kernel is built instead: "most points", not swept; the 9 of
-#: bench_real.py's 126 clouds at or above it (CAD parts' vertices) are within 1.5× of
-#: robust-laplacian with the kernel (0.10-1.29×), 7 of 9 with the stars (up to 2.22×)
-STAR_OUTLINE = 0.5
 
 # -- noise (meshlap.geometry.pointcloud, meshlap.denoise) and welding (meshlap.fem) --------------
 #: A cloud's σ̂²/a² above which it is projected by default: clean < 1e-3, 1% noise 0.025-0.095 (pointclouds.md)
