@@ -245,7 +245,8 @@ def decide(geo: Any, operator: str = "auto", h: Any = None, kernel_options: dict
             warnings.warn(f"the point cloud falls into {pieces} pieces that no local Delaunay star joins "
                           f"({shown} points), so its pencil has {pieces} zero eigenvalues: separate "
                           "objects, or parts of one whose surface between them has no points (a CAD "
-                          "part's vertices leave its flat faces empty; pass its faces then)",
+                          "part's vertices leave its flat faces empty; pass its faces then, or "
+                          "operator='kernel', whose support reaches across a gap of a few spacings)",
                           MeshWarning, stacklevel=user_stacklevel())
     pencil_rows = operator == "paper" or opts.get("pointwise") in (True, False) or \
         opts.get("pointwise_degree") is not None

@@ -637,6 +637,24 @@ def test_pieces_no_star_joins_are_counted_and_named():
     assert count == 2 and label[-1] == label[0] != label[800]
 
 
+def test_pieces_a_bare_band_leaves_are_joined_by_the_kernel_the_warning_names():
+    # a 41 × 41 grid of the unit square without the three columns at x = 0.5: its stars stop at
+    # the band (two pieces), the kernel's support reaches across it (one), as on a CAD part's
+    # vertices, whose faces carry none inside
+    g = np.linspace(0, 1, 41)
+    X, Y = np.meshgrid(g, g)
+    keep = np.abs(X - 0.5) > 3 / 80
+    P = np.column_stack([X[keep], Y[keep], np.zeros(keep.sum())])
+    with pytest.warns(meshlap.MeshWarning, match="falls into 2 pieces.*or operator='kernel'"):
+        stars_only = meshlap.point_cloud_laplacian(P)
+    assert stars_only.decision.measured["parts"] == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", meshlap.MeshWarning)
+        kernel = meshlap.point_cloud_laplacian(P, operator="kernel")
+    lam = spectral.eigs(kernel, 2)[0]
+    assert abs(lam[0]) < 1e-8 < 0.1 < lam[1]  # one piece; λ1 measured 7.6 (the whole square: π²)
+
+
 def test_a_ribbon_cloud_keeps_the_stars_which_a_cad_parts_outlines_would_trade_for_the_kernel():
     # three rows of 100 points, a 10 × 0.2 strip: the stars end at 67% of the points, as they do
     # along a CAD part's bare faces (trimesh's fixed_top, where the kernel bridges the faces: 4.6%
