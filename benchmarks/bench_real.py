@@ -38,7 +38,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import igl  # noqa: E402
@@ -50,6 +49,7 @@ from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
 from meshlap import spectral  # noqa: E402
+from meshlap._parts import part_labels  # noqa: E402
 
 CSV = Path(__file__).resolve().parent / "results" / "bench_real.csv"
 NOISY, NOISE = ["spot", "cow", "bunny-igl", "fertility", "homer"], (0.1, 0.3)  # normal noise, in mean edges
@@ -164,7 +164,7 @@ def pencil_pieces(op: meshlap.MeshLaplacian) -> int:
     decision measured them, or those of S's pattern (the kernel's)."""
     if "parts" in op.decision.measured:
         return int(op.decision.measured["parts"])
-    return int(sp.csgraph.connected_components(op.S, directed=False)[0])
+    return int(part_labels(op.S)[0])
 
 
 def peers(V: np.ndarray, F: np.ndarray, k: int) -> dict[str, tuple[np.ndarray | None, float, str]]:

@@ -438,10 +438,11 @@ def eigs(
     if method != "shift-invert" and not matrix_free and (sparse or nnz <= _FALLBACK_NNZ):
         # where a factorization fits, it comes before twice the iterations that did not converge;
         # after multigrid's, only where the V-cycle stalled (Stall): else its cost is why it ran
-        ladder.insert(1 if method == "lobpcg" and not multigrid else len(ladder), shift)
         if stall is not None:
             ladder.insert(1, shift._replace(when=lambda: stall.fired))
-            ladder[-1] = shift._replace(when=lambda: not stall.fired)
+            ladder.append(shift._replace(when=lambda: not stall.fired))
+        else:
+            ladder.insert(1 if method == "lobpcg" and not multigrid else len(ladder), shift)
     if method != "dense" and n_p <= _DENSE_FALLBACK:  # matrix-free: n columns cost less than LOBPCG wider
         ladder.insert(1 if matrix_free else len(ladder), exact)
     if method == "shift-invert" and n_p > _DENSE_FALLBACK:

@@ -17,7 +17,7 @@ from meshlap.geometry.validation import MeshWarning
 
 DATA = Path(__file__).parent / "data"
 BUNNY = DATA / "stanford-bunny.obj"  # checked by test_bunny
-# the clean closed surfaces (tests/data also holds CAD parts for the point-cloud tests)
+# the clean closed surfaces, named: tests/data holds other files with other tests
 MESHES = [DATA / name for name in ("fandisk.obj", "spot-quads.obj", "spot.obj")]
 
 
