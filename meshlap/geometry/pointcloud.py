@@ -70,6 +70,7 @@ from .stars import (
     _OK,
     _STAR_SLOTS,
     _circumradii,
+    _consistent,
     _global_stars3,
     _masses1,
     _masses2,
@@ -310,7 +311,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
     stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
-    stars = stars[~outlier[stars].any(axis=1)]
+    stars = _consistent(stars[~outlier[stars].any(axis=1)], X)
     share = np.zeros(nu)
     if k == 2 and len(stars):
         hole = _holes(stars, Q, reach8, first_open, k)

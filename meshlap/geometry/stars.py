@@ -30,6 +30,9 @@ _FLAT = 1e-10
 _STEEP = 3.0**0.5
 # Triangles kept per star (a star in a Delaunay triangulation has 6 on average).
 _STAR_SLOTS = 24
+# cotangent sums this close are a tie: four points cocircular in 3-D up to the 6-7 significant
+# digits files store (a CAD torus's grid: up to 8e-6; a scan's disagreements are 1e-4 and more)
+_TIE = 1e-5
 # status codes of one point's star
 _OK, _INSECURE, _DEGENERATE = 0, 1, 2
 
@@ -448,3 +451,81 @@ def star_pieces(stars: np.ndarray, rep: np.ndarray) -> tuple[int, np.ndarray]:
     """
     cells = Polygons(stars.ravel().astype(np.int64), np.arange(0, stars.size + 1, stars.shape[1]))
     return _components(cells, len(rep), rep)
+
+
+def _cot(P: np.ndarray, at: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    # cotangent of the angle at ``at`` of the triangles (at, b, c), from the 3-D positions
+    u, v = P[b] - P[at], P[c] - P[at]
+    return (u * v).sum(axis=1) / np.maximum(np.linalg.norm(np.cross(u, v), axis=1), 1e-300)
+
+
+def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """The stars with one split for every cocircular quadrilateral that two of them split differently.
+
+    Each star is Delaunay in its own point's tangent plane, so where four points are cocircular
+    in space (a grid sampled on a curved surface: its quads are isosceles trapezoids) the stars
+    of its corners split the quad as their planes' projections tip it, and the soup holds both
+    splits, overlapping (a torus's 80 × 40 grid: 10% too much area, 14% off on λ1..λ9). Where
+    two triangles on one side of an edge are the halves of the two splits of a convex quad whose
+    cotangent sums (opposite either diagonal, from the 3-D lengths) tie, every star takes the
+    diagonal at the quad's smallest index. Quads that are not cocircular keep both splits: a
+    scan's stars disagree there too, and choosing one by the 3-D criterion was worse
+    (docs/pointclouds.md).
+    """
+    if len(stars) < 2 or P.shape[1] != 3:
+        return stars
+    tri = np.unique(np.sort(stars, axis=1), axis=0)
+    e = np.concatenate([tri[:, [0, 1, 2]], tri[:, [0, 2, 1]], tri[:, [1, 2, 0]]])
+    e = e[np.lexsort((e[:, 2], e[:, 1], e[:, 0]))]
+    first, second = [], []
+    for gap in range(1, 4):  # the triangles on one edge, pairwise
+        same = (e[gap:, 0] == e[:-gap, 0]) & (e[gap:, 1] == e[:-gap, 1])
+        first.append(np.flatnonzero(same))
+        second.append(np.flatnonzero(same) + gap)
+    a, b = np.concatenate(first), np.concatenate(second)
+    i, j, r, s = e[a, 0], e[a, 1], e[a, 2], e[b, 2]
+    u = P[j] - P[i]
+    u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
+    wr = P[r] - P[i] - ((P[r] - P[i]) * u).sum(axis=1)[:, None] * u
+    ws = P[s] - P[i] - ((P[s] - P[i]) * u).sum(axis=1)[:, None] * u
+    # one side: the two half-planes within 60° (_STEEP: steeper is another sheet, or a fold)
+    cos = (wr * ws).sum(axis=1) / np.maximum(np.linalg.norm(wr, axis=1) * np.linalg.norm(ws, axis=1), 1e-300)
+    keep = cos > 1.0 / math.sqrt(1.0 + _STEEP * _STEEP)
+    i, j, r, s, u, wr = i[keep], j[keep], r[keep], s[keep], u[keep], wr[keep]
+    if not len(i):
+        return stars
+    # the four points in the plane of (i, j, r)
+    v = wr / np.maximum(np.linalg.norm(wr, axis=1), 1e-300)[:, None]
+    x = np.stack([((P[q] - P[i]) * u).sum(axis=1) for q in (j, r, s)], axis=1)
+    y = np.stack([((P[q] - P[i]) * v).sum(axis=1) for q in (j, r, s)], axis=1)
+    # segment i–r crosses j–s: quad (i, j, r, s); i–s crosses j–r: quad (i, j, s, r); else nested
+    ir_js = _crosses(0.0, 0.0, x[:, 1], y[:, 1], x[:, 0], y[:, 0], x[:, 2], y[:, 2])
+    is_jr = _crosses(0.0, 0.0, x[:, 2], y[:, 2], x[:, 0], y[:, 0], x[:, 1], y[:, 1])
+    quad = np.where(ir_js[:, None], np.column_stack([i, j, r, s]), np.column_stack([i, j, s, r]))
+    quad = quad[ir_js | is_jr]
+    if not len(quad):
+        return stars
+    q0, q1, q2, q3 = quad.T
+    ac = _cot(P, q1, q0, q2) + _cot(P, q3, q2, q0)  # diagonal q0–q2
+    bd = _cot(P, q0, q1, q3) + _cot(P, q2, q3, q1)  # diagonal q1–q3
+    tie = np.abs(ac - bd) <= _TIE * (1.0 + np.abs(ac) + np.abs(bd))
+    quad, keep_ac = quad[tie], (quad[tie].argmin(axis=1) % 2) == 0
+    split_ac = np.stack([quad[:, [0, 1, 2]], quad[:, [0, 2, 3]]], axis=1)
+    split_bd = np.stack([quad[:, [0, 1, 3]], quad[:, [1, 2, 3]]], axis=1)
+    win = np.where(keep_ac[:, None, None], split_ac, split_bd).reshape(-1, 3)
+    lose = np.where(keep_ac[:, None, None], split_bd, split_ac).reshape(-1, 3)
+    win, lose = np.unique(np.sort(win, axis=1), axis=0), np.unique(np.sort(lose, axis=1), axis=0)
+    win = win[~_rows_in(win, lose)]  # a triangle one quad keeps and another drops: dropped
+    rows = stars[~_rows_in(np.sort(stars, axis=1), lose)]
+    add = np.concatenate([win[:, [0, 1, 2]], win[:, [1, 2, 0]], win[:, [2, 0, 1]]])
+    have = np.column_stack([rows[:, 0], np.sort(rows[:, 1:], axis=1)])
+    key = np.column_stack([add[:, 0], np.sort(add[:, 1:], axis=1)])
+    return np.concatenate([rows, add[~_rows_in(key, have)]])
+
+
+def _crosses(ax, ay, bx, by, cx, cy, dx, dy):
+    # whether the open segments a–b and c–d cross (arrays)
+    def side(px, py, qx, qy, rx, ry):
+        return (qx - px) * (ry - py) - (qy - py) * (rx - px)
+    return (side(ax, ay, bx, by, cx, cy) * side(ax, ay, bx, by, dx, dy) < 0) & \
+        (side(cx, cy, dx, dy, ax, ay) * side(cx, cy, dx, dy, bx, by) < 0)
