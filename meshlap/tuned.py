@@ -18,7 +18,7 @@ __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "C
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
            "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW",
-           "STAR_NEIGHBORS", "STAR_SCATTER"]
+           "STAR_NEIGHBORS", "STAR_SCATTER", "STAR_THIN"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
@@ -88,6 +88,11 @@ ROW_MARGIN = 10.0
 #: Their first neighbourhood by dimension (doubled where a star stays open): surfaces' 16 the best of
 #: 8-45 on bench_real.py's 50 clouds (49 within 1.5× of robust-laplacian, median 0.82×); 1 and 3 not swept
 STAR_NEIGHBORS = {1: 8, 2: 16, 3: 32}
+#: Width of a first neighbourhood (median distance across its plane's first axis over along it)
+#: below which it lies along a line (a scan line's), which fixes no tangent plane: a surface's
+#: measured 0.14 or more (a random sphere's, a disc's rim, a two-row ribbon), a line's is about its
+#: bending κρ/4 (0.028 on a helix sampled 100 points per radian)
+STAR_THIN = 0.1
 #: Median heights above which a steep first neighbour is on another sheet: 49 of 50 for any of 1.5-6
 STAR_SCATTER = 3.0
 

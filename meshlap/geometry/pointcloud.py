@@ -61,7 +61,7 @@ from ..errors import MeshError, MeshWarning
 from ..tuned import CLOUD_NOISY as NOISY
 from ..tuned import NOISE_SPREAD as SPREAD
 from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
-from ..tuned import STAR_NEIGHBORS
+from ..tuned import STAR_NEIGHBORS, STAR_THIN
 from . import frames
 from .core import Geometry, check_points
 from .stars import (
@@ -76,6 +76,7 @@ from .stars import (
     _masses2,
     _masses3,
     _masses_k,
+    _off_surface,
     _soup,
     star_pieces,
 )
@@ -138,7 +139,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     neighbors : int, optional
         First neighbourhood size K (8, 16, 32 for k = 1, 2, 3), also the one that gives the
         tangent space; it grows (up to 256) where the local Delaunay star
-        needs more neighbours.
+        needs more neighbours, and for k = 2 the tangent space with it where the first
+        neighbourhood lies along a line (a scan line's: :data:`meshlap.tuned.STAR_THIN`).
     merge_tol : float, default 1e-6
         Points closer than ``merge_tol`` times the median nearest-neighbour distance are one.
     outlier_ratio : float, default 10
@@ -199,8 +201,14 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     nu = len(Q)
     tree = KDTree(Q)
     K = min(neighbors or STAR_NEIGHBORS.get(k, 20 * k), nu - 1)
-    # the tangent space comes from the first neighbourhood, however far the star search grows
+    # the tangent space comes from the first neighbourhood, however far the star search grows,
+    # unless that lies along a line (STAR_THIN; a scan line's): then from the first wider one
+    # that does not, and that round is the point's first (base)
     kt = K
+    kts = np.full(nu, K, dtype=np.int64)
+    base = np.full(nu, -1, dtype=np.int64)
+    axes = np.zeros((nu, 2, d))  # each point's plane, from its base round
+    line = np.zeros((nu, d))  # the first axis of each point's first neighbourhood
     if K < k + 1:
         raise MeshError(f"neighbors must be at least k + 1 = {k + 1}; got {K}")
     mass = np.zeros(nu)
@@ -235,13 +243,23 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                 first_open[:] = open_cell
             ends1[todo] = np.where(side >= 0, np.take_along_axis(nbr, np.maximum(side, 0), axis=1), -1)
         elif k == 2:
-            m, vor, st, flat = (np.zeros(len(todo)), np.zeros(len(todo)),
-                                np.zeros(len(todo), np.int64), np.zeros(len(todo)))
+            m, vor, st, width = (np.zeros(len(todo)), np.zeros(len(todo)),
+                                 np.zeros(len(todo), np.int64), np.zeros(len(todo)))
+            T = np.zeros((len(todo), 2, d))
             tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
-            in_blocks(_masses2, len(todo), X, nbr, counts, kt, todo, m, vor, st, flat, tri)
+            in_blocks(_masses2, len(todo), X, nbr, counts, kts[todo], todo, m, vor, st, width, T, tri)
+            thin = width < STAR_THIN
+            fresh = ~thin & (base[todo] < 0)
+            base[todo[fresh]] = it
+            axes[todo[fresh]] = T[fresh]
             open_cell[todo] = ~np.isfinite(vor)
             if it == 0:
                 first_open[:] = open_cell
+                line[:] = T[:, 0]
+            first_open[todo[fresh]] = open_cell[todo[fresh]]
+            if K < min(_MAX_NEIGHBORS, nu - 1):
+                st[thin] = _INSECURE
+                kts[todo[thin]] = min(2 * K, _MAX_NEIGHBORS, nu - 1)
             # every point's local Delaunay star, its centre first
             r, slot = np.nonzero(tri[:, :, 0] >= 0)
             last[todo] = it
@@ -278,6 +296,14 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     _, idx = _neighbours(tree, Q, min(8, nu - 1))
     local = np.median(reach8[idx[:, 1:]], axis=1)
     outlier = nn1 > outlier_ratio * np.maximum(local, 1e-300)
+    lined = base != 0  # took its plane from a wider neighbourhood, or from none that is not thin
+    base = np.maximum(base, 0)  # a line's at every K: its first
+    stars = _soup(star_parts, np.where(status == _INSECURE, base, last), first_open, base)
+    stars = _consistent(stars[~outlier[stars].any(axis=1)], X)
+    if k == 2 and d == 3 and lined.any():
+        off = _off_surface(stars, lined, axes, line)
+        status[off] = _DEGENERATE
+        stars = stars[~off[stars].any(axis=1)]
     degenerate = (status == _DEGENERATE) & ~outlier
     if degenerate.all():
         raise MeshError(f"no point has a {k}-dimensional neighbourhood (all are "
@@ -310,8 +336,6 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                         f"{_MAX_NEIGHBORS} neighbours")
     if problems:
         warnings.warn("messy point cloud: " + "; ".join(problems), MeshWarning, stacklevel=2)
-    stars = _soup(star_parts, np.where(status == _INSECURE, 0, last), first_open)
-    stars = _consistent(stars[~outlier[stars].any(axis=1)], X)
     share = np.zeros(nu)
     if k == 2 and len(stars):
         hole = _holes(stars, Q, reach8, first_open, k)

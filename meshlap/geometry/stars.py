@@ -193,19 +193,22 @@ def _star2(U, K, tri):
 
 
 @jit()
-def _masses2(start, stop, P, nbr, counts, kt, rows, out_star, out_vor, status, flat, tri):
-    d = P.shape[1]
+def _masses2(start, stop, P, nbr, counts, kts, rows, out_star, out_vor, status, width, axes, tri):
+    # width: the first kts neighbours' median distance across the plane's first axis over along
+    # it; axes: the plane's two axes
     z = np.empty(nbr.shape[1])
     for r in range(start, stop):
         p = rows[r]
         K = counts[r]
-        T = np.empty((2, d))
+        kt = kts[r]
+        T = axes[r]
         U = np.empty((K, 2))
-        flat[r] = _tangent(P, p, nbr[r, :kt], 2, T)
-        if flat[r] < _FLAT:
+        if _tangent(P, p, nbr[r, :kt], 2, T) < _FLAT:
             status[r] = _DEGENERATE
             continue
         _project(P, p, nbr[r, :K], T, U)
+        along = np.median(np.abs(U[:kt, 0]))
+        width[r] = np.median(np.abs(U[:kt, 1])) / along if along > 0.0 else 0.0
         _drop_steep(P, p, nbr[r, :K], U, kt, z)
         out_star[r], out_vor[r], status[r] = _star2(U, K, tri[r])
 
@@ -407,8 +410,9 @@ def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.isin(inv[len(b):], inv[:len(b)])
 
 
-def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray) -> np.ndarray:
-    """Every point's star, its centre first: the one of search round ``use``.
+def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray, base: np.ndarray
+          ) -> np.ndarray:
+    """Every point's star, its centre first: the one of search round ``use`` (``base``: its first).
 
     A star the wider search secured replaces the first; one that stayed insecure keeps the first,
     local star (the wider one reaches other sheets: a petal's rim takes triangles across to the
@@ -420,7 +424,7 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     if not parts:  # k != 2
         return np.zeros((0, 3), np.int64)
     stars = np.concatenate([t[use[t[:, 0]] == it] for it, t in parts])
-    widened = rim & (use > 0)
+    widened = rim & (use > base)
     if not widened.any():
         return stars
     wide = widened[stars[:, 0]]
@@ -428,7 +432,7 @@ def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray)
     held = np.sort(held[widened[held].any(axis=1)], axis=1)  # only these can hold a rim triangle
     extra = stars[wide]
     extra = extra[_rows_in(np.sort(extra, axis=1), held)]
-    first = parts[0][1]
+    first = np.concatenate([t[base[t[:, 0]] == it] for it, t in parts])
     rim_stars = np.concatenate([first[widened[first[:, 0]]], extra])
     # a triangle in both of a rim point's stars, once
     _, once = np.unique(np.column_stack([rim_stars[:, 0], np.sort(rim_stars[:, 1:], axis=1)]), axis=0,
@@ -474,14 +478,17 @@ def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
     """
     if len(stars) < 2 or P.shape[1] != 3:
         return stars
-    tri = np.unique(np.sort(stars, axis=1), axis=0)
+    n = len(P)
+    key = _triangle_keys(np.sort(stars, axis=1), n)
+    tri = _triangles_of(np.unique(key), n)
     e = np.concatenate([tri[:, [0, 1, 2]], tri[:, [0, 2, 1]], tri[:, [1, 2, 0]]])
-    e = e[np.lexsort((e[:, 2], e[:, 1], e[:, 0]))]
+    e = e[np.argsort(e[:, 0] * n + e[:, 1], kind="stable")]
+    edge = e[:, 0] * n + e[:, 1]
     first, second = [], []
     for gap in range(1, 4):  # the triangles on one edge, pairwise
-        same = (e[gap:, 0] == e[:-gap, 0]) & (e[gap:, 1] == e[:-gap, 1])
-        first.append(np.flatnonzero(same))
-        second.append(np.flatnonzero(same) + gap)
+        same = np.flatnonzero(edge[gap:] == edge[:-gap])
+        first.append(same)
+        second.append(same + gap)
     a, b = np.concatenate(first), np.concatenate(second)
     i, j, r, s = e[a, 0], e[a, 1], e[a, 2], e[b, 2]
     u = P[j] - P[i]
@@ -492,8 +499,6 @@ def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
     cos = (wr * ws).sum(axis=1) / np.maximum(np.linalg.norm(wr, axis=1) * np.linalg.norm(ws, axis=1), 1e-300)
     keep = cos > 1.0 / math.sqrt(1.0 + _STEEP * _STEEP)
     i, j, r, s, u, wr = i[keep], j[keep], r[keep], s[keep], u[keep], wr[keep]
-    if not len(i):
-        return stars
     # the four points in the plane of (i, j, r)
     v = wr / np.maximum(np.linalg.norm(wr, axis=1), 1e-300)[:, None]
     x = np.stack([((P[q] - P[i]) * u).sum(axis=1) for q in (j, r, s)], axis=1)
@@ -503,24 +508,53 @@ def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
     is_jr = _crosses(0.0, 0.0, x[:, 2], y[:, 2], x[:, 0], y[:, 0], x[:, 1], y[:, 1])
     quad = np.where(ir_js[:, None], np.column_stack([i, j, r, s]), np.column_stack([i, j, s, r]))
     quad = quad[ir_js | is_jr]
-    if not len(quad):
-        return stars
     q0, q1, q2, q3 = quad.T
     ac = _cot(P, q1, q0, q2) + _cot(P, q3, q2, q0)  # diagonal q0–q2
     bd = _cot(P, q0, q1, q3) + _cot(P, q2, q3, q1)  # diagonal q1–q3
-    tie = np.abs(ac - bd) <= _TIE * (1.0 + np.abs(ac) + np.abs(bd))
-    quad, keep_ac = quad[tie], (quad[tie].argmin(axis=1) % 2) == 0
+    quad = quad[np.abs(ac - bd) <= _TIE * (1.0 + np.abs(ac) + np.abs(bd))]
+    if not len(quad):
+        return stars
+    keep_ac = (quad.argmin(axis=1) % 2) == 0
     split_ac = np.stack([quad[:, [0, 1, 2]], quad[:, [0, 2, 3]]], axis=1)
     split_bd = np.stack([quad[:, [0, 1, 3]], quad[:, [1, 2, 3]]], axis=1)
     win = np.where(keep_ac[:, None, None], split_ac, split_bd).reshape(-1, 3)
     lose = np.where(keep_ac[:, None, None], split_bd, split_ac).reshape(-1, 3)
-    win, lose = np.unique(np.sort(win, axis=1), axis=0), np.unique(np.sort(lose, axis=1), axis=0)
-    win = win[~_rows_in(win, lose)]  # a triangle one quad keeps and another drops: dropped
-    rows = stars[~_rows_in(np.sort(stars, axis=1), lose)]
+    win, lose = _triangle_keys(np.sort(win, axis=1), n), _triangle_keys(np.sort(lose, axis=1), n)
+    win = np.setdiff1d(win, lose)  # a triangle one quad keeps and another drops: dropped
+    rows = stars[~np.isin(key, lose)]
+    win = _triangles_of(win, n)
     add = np.concatenate([win[:, [0, 1, 2]], win[:, [1, 2, 0]], win[:, [2, 0, 1]]])
-    have = np.column_stack([rows[:, 0], np.sort(rows[:, 1:], axis=1)])
-    key = np.column_stack([add[:, 0], np.sort(add[:, 1:], axis=1)])
-    return np.concatenate([rows, add[~_rows_in(key, have)]])
+    have = _triangle_keys(np.column_stack([rows[:, 0], np.sort(rows[:, 1:], axis=1)]), n)
+    new = _triangle_keys(np.column_stack([add[:, 0], np.sort(add[:, 1:], axis=1)]), n)
+    return np.concatenate([rows, add[~np.isin(new, have)]])
+
+
+def _off_surface(stars: np.ndarray, lined: np.ndarray, axes: np.ndarray, line: np.ndarray) -> np.ndarray:
+    """The points on a line (``lined``: whose first neighbours lie along ``line``, so that their
+    plane ``axes`` came from a wider neighbourhood) whose star reaches only points of a surface
+    of their own that the line leaves steeply (more than 60°, _STEEP; a whisker off a plane): the
+    line is not on that surface and has no 2-D neighbourhood."""
+    normal = np.cross(axes[:, 0], axes[:, 1])
+    centre, other = np.repeat(stars[:, 0], 2), stars[:, 1:].ravel()
+    ask = lined[centre] & ~lined[other]
+    steep = np.abs((normal[other[ask]] * line[centre[ask]]).sum(axis=1)) > math.sin(math.atan(_STEEP))
+    asked = np.bincount(centre[ask], minlength=len(lined))
+    return (asked > 0) & (np.bincount(centre[ask], steep, minlength=len(lined)) == asked)
+
+
+def _triangle_keys(t: np.ndarray, n: int) -> np.ndarray:
+    # one integer per row (a, b, c) of indices below n; rows of three 21-bit fields beyond 2^21
+    # points would overflow, so larger clouds key by the rows' bytes
+    t = np.ascontiguousarray(t, dtype=np.int64)
+    if n < 2**21:
+        return (t[:, 0] * n + t[:, 1]) * n + t[:, 2]
+    return t.view(np.dtype((np.void, 24))).ravel()
+
+
+def _triangles_of(keys: np.ndarray, n: int) -> np.ndarray:
+    if keys.dtype.kind == "V":
+        return np.frombuffer(keys.tobytes(), dtype=np.int64).reshape(-1, 3)
+    return np.column_stack([keys // (n * n), keys // n % n, keys % n])
 
 
 def _crosses(ax, ay, bx, by, cx, cy, dx, dy):
