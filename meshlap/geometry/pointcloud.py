@@ -8,7 +8,8 @@ keeps S = M L symmetric and -S positive semidefinite, exactly as for a mesh.
 
 For each point p, with its K nearest neighbours:
 
-1. the tangent space is the span of the k leading principal axes of the neighbourhood;
+1. the tangent space is the span of the k leading principal axes of the neighbourhood (for
+   k = 2 of the first wider one where the first lies along a line, as on a scanner's lines);
 2. the neighbours are projected onto it, relative to p;
 3. the local Delaunay star of p in that k-plane gives the mass: the measure of the
    simplices around p divided by k + 1 — the lumped mass of a mesh, without a mesh.
@@ -22,7 +23,8 @@ from scipy's Delaunay of each projected neighbourhood. A star is only trusted wh
 outside the K neighbours can reach it: every Delaunay circumcircle must lie within half the
 distance of the farthest neighbour; otherwise K grows. A trusted star is the one in the whole
 cloud's Delaunay triangulation, so a volume in R³ takes the stars the first neighbourhood does
-not secure from one tetrahedralization of all its points, and searches only the rest.
+not secure from one tetrahedralization of all its points, and searches only the rest. Where
+four points are cocircular in space (a grid on a curved surface) every star takes one split.
 
 What the points leave empty is a hole, not a face: a star's triangle (a curve's segment) whose
 empty circumdisc i.i.d. sampling at its corners' density would leave with odds below

@@ -4,7 +4,9 @@
 tangent space and asks these kernels for the star of the point: k = 1 half the gaps to the
 neighbours on each side, k = 2 the Voronoi cell by half-plane clipping, k = 3 the Delaunay
 tetrahedra from the Voronoi cell's vertices, k ≥ 4 Qhull; :func:`_soup` gathers the stars of
-all the search rounds into one soup of triangles, :func:`star_pieces` its connected pieces.
+all the search rounds into one soup of triangles, :func:`_consistent` gives its cocircular quads
+one split, :func:`_off_surface` finds the lines off a surface, and :func:`star_pieces` gives the
+soup's connected pieces.
 """
 
 from __future__ import annotations
