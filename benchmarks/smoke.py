@@ -33,6 +33,7 @@ RUNS: dict[str, list[str]] = {
     "bench_accuracy.py": ["--no-write"],
     "bench_assembly.py": ["--quick", "--no-write"],
     "bench_cloud_cap.py": [],
+    "bench_cloud_grids.py": ["--no-write"],
     "bench_clusters.py": ["--n", "3000", "--mesh-n", "800", "--no-write"],
     "bench_conventions.py": ["--n", "2000", "--repeat", "1", "--no-write"],
     "bench_curves.py": ["--quick", "--no-write"],
