@@ -270,7 +270,7 @@ def point_cloud_laplacian(P: Any, h: float | None = None, k: int = 2, tol: float
         Project the points onto their local tangent planes first (for noisy scans; ``op.V``
         then holds the moved points). Default: when the cloud's normal noise exceeds about
         14% of its spacing and cubic fits do not explain it
-        (:func:`~meshlap.geometry.pointcloud.noise_reading`), noted in the repr. On 16,000
+        (:func:`~meshlap.geometry.noise.noise_reading`), noted in the repr. On 16,000
         unit-sphere points with 1% radial noise the default's first 9 eigenvalues are 0.29%
         off with it, the kernel's 5.6% without (the paper's operator: 2.0%).
     neighbors, merge_tol, outlier_ratio

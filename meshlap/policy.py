@@ -39,7 +39,7 @@ where it came from:
   random sphere points 0.20% off on eigenvalues 1-9 against the kernel's 0.29% and
   robust-laplacian's 7.8%;
 - a cloud whose normal noise the geometry measured and projected away
-  (:func:`meshlap.geometry.pointcloud.noise_reading`, recorded: noise above about 14% of the
+  (:func:`meshlap.geometry.noise.noise_reading`, recorded: noise above about 14% of the
   spacing that cubic fits do not explain, where a coarse sampling's missed shape would be
   explained) gets the "kernel" pencil: the
   projected points keep a tangential jitter that makes the local triangles' shapes random,
@@ -128,7 +128,7 @@ class Decision:
         The quantities read from the input (vertices, cells, parts, welded copies, noise).
     denoise : bool
         Whether the FEM pencil is built on the positions after a bi-Laplacian step that takes the
-        normal noise out (asked for, or read: :func:`meshlap.geometry.pointcloud.noise_reading`).
+        normal noise out (asked for, or read: :func:`meshlap.geometry.noise.noise_reading`).
     elements : str
         What :func:`meshlap.spectral.eigs` solves: "quadratic" (the seven-node elements on the
         same triangles, :mod:`meshlap.quadratic`) for the FEM pencil of a triangle or polygon

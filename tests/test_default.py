@@ -226,7 +226,7 @@ def test_the_noise_readings_do_not_depend_on_the_units():
     # 0.5% radial noise read 0.034 mean edges, the same in millimetres 0.124 (and the bunny,
     # 0.15 units across, 0.00052 for 0.00035); now both readings are the same in any units
     from meshlap.denoise import normal_noise
-    from meshlap.geometry.pointcloud import noise_reading
+    from meshlap.geometry.noise import noise_reading
 
     V, F = meshlap.shapes.sphere(1000, seed=0)
     X = V * (1 + 0.005 * np.random.default_rng(0).standard_normal((len(V), 1)))
@@ -312,7 +312,7 @@ def test_denoise_reads_noise_below_the_shape_it_rides_on():
     # and 2.4% for LaPy's consistent FEM. The clean spot, a coarse sphere and spot decimated to
     # 500 vertices read no edge where noise dominates (0)
     igl = pytest.importorskip("igl")
-    from meshlap.geometry.pointcloud import noise_reading
+    from meshlap.geometry.noise import noise_reading
 
     V, F = igl.read_triangle_mesh(str(DATA / "spot.obj"))
     V, F = np.asarray(V, float), np.asarray(F, np.int64)

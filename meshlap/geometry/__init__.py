@@ -23,7 +23,8 @@ from .core import (
     surface,
     tetrahedra,
 )
-from .pointcloud import point_cloud_geometry, point_masses, project_to_tangent
+from .noise import project_to_tangent
+from .pointcloud import point_cloud_geometry, point_masses
 from .polygons import Polygons
 
 __all__ = [

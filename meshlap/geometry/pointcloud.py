@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,12 +60,10 @@ from scipy.special import gammaln
 
 from .._jit import in_blocks
 from ..errors import MeshError, MeshWarning
-from ..tuned import CLOUD_NOISY as NOISY
-from ..tuned import NOISE_SPREAD as SPREAD
-from ..tuned import NOISE_UNEXPLAINED as UNEXPLAINED
 from ..tuned import STAR_NEIGHBORS, STAR_THIN
 from . import frames
 from .core import Geometry, check_points
+from .noise import noise_reading, project_to_tangent
 from .stars import (
     _DEGENERATE,
     _INSECURE,
@@ -80,18 +78,13 @@ from .stars import (
     _masses_k,
     _off_surface,
     _soup,
+    _tie_cut,
     star_pieces,
 )
 from .validation import _real_scalar, check_int
 
-__all__ = ["NOISY", "UNEXPLAINED", "NoiseReading", "noise_reading", "point_cloud_geometry", "point_masses",
-           "project_to_tangent"]
+__all__ = ["point_cloud_geometry", "point_masses"]
 
-
-# the standard normal's upper quartile
-_Z75 = 0.6744897501960817
-# noise_reading fits this many points' neighbourhoods
-_NOISE_SAMPLE = 2048
 
 # the first neighbourhood (STAR_NEIGHBORS) doubles for the points whose star it does not secure,
 # up to this
@@ -142,7 +135,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         First neighbourhood size K (8, 16, 32 for k = 1, 2, 3), also the one that gives the
         tangent space; it grows (up to 256) where the local Delaunay star
         needs more neighbours, and for k = 2 the tangent space with it where the first
-        neighbourhood lies along a line (a scan line's: :data:`meshlap.tuned.STAR_THIN`).
+        neighbourhood lies along a line (a scan line's: :data:`meshlap.tuned.STAR_THIN`) or
+        ends among equidistant points (a pole's ring) too early to stop before them.
     merge_tol : float, default 1e-6
         Points closer than ``merge_tol`` times the median nearest-neighbour distance are one.
     outlier_ratio : float, default 10
@@ -211,6 +205,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     base = np.full(nu, -1, dtype=np.int64)
     axes = np.zeros((nu, 2, d))  # each point's plane, from its base round
     line = np.zeros((nu, d))  # the first axis of each point's first neighbourhood
+    lined = np.zeros(nu, dtype=bool)
     if K < k + 1:
         raise MeshError(f"neighbors must be at least k + 1 = {k + 1}; got {K}")
     mass = np.zeros(nu)
@@ -225,7 +220,7 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     for it in range(64):
         if not len(todo):
             break
-        dist, idx = _neighbours(tree, Q[todo], K)
+        dist, idx = _neighbours(tree, Q[todo], min(K + 1, nu - 1))  # one more: is the K-th tied?
         if it == 0:
             nn1[:] = dist[:, 1]
             reach8 = dist[:, 1:9].mean(axis=1)
@@ -249,8 +244,18 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
                                  np.zeros(len(todo), np.int64), np.zeros(len(todo)))
             T = np.zeros((len(todo), 2, d))
             tri = np.full((len(todo), _STAR_SLOTS, 2), -1, dtype=np.int64)
-            in_blocks(_masses2, len(todo), X, nbr, counts, kts[todo], todo, m, vor, st, width, T, tri)
-            thin = width < STAR_THIN
+            ntri = np.zeros(len(todo), dtype=np.int64)
+            trim, tied = _tie_cut(dist, kts[todo], base[todo] < 0)
+            kts[todo] = trim
+            in_blocks(_masses2, len(todo), X, nbr, counts, kts[todo], todo, m, vor, st, width, T, tri, ntri)
+            # stars of more triangles than tri holds (a pole's fan, a cone's apex): again, with room
+            fan = np.flatnonzero(ntri > _STAR_SLOTS)
+            if len(fan):
+                wide = np.full((len(fan), int(ntri[fan].max()), 2), -1, dtype=np.int64)
+                in_blocks(_masses2, len(fan), X, nbr[fan], counts[fan], kts[todo[fan]], todo[fan], m[fan],
+                          vor[fan], st[fan], width[fan], T[fan], wide, ntri[fan])
+                tri[fan] = -1
+            thin = (width < STAR_THIN) | tied
             fresh = ~thin & (base[todo] < 0)
             base[todo[fresh]] = it
             axes[todo[fresh]] = T[fresh]
@@ -258,14 +263,16 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
             if it == 0:
                 first_open[:] = open_cell
                 line[:] = T[:, 0]
+                lined[:] = width < STAR_THIN  # its plane from a wider neighbourhood, or none
             first_open[todo[fresh]] = open_cell[todo[fresh]]
             if K < min(_MAX_NEIGHBORS, nu - 1):
                 st[thin] = _INSECURE
                 kts[todo[thin]] = min(2 * K, _MAX_NEIGHBORS, nu - 1)
             # every point's local Delaunay star, its centre first
-            r, slot = np.nonzero(tri[:, :, 0] >= 0)
             last[todo] = it
-            star = np.column_stack([todo[r], nbr[r, tri[r, slot, 0]], nbr[r, tri[r, slot, 1]]])
+            star = _star_rows(todo, nbr, tri)
+            if len(fan):
+                star = np.vstack([star, _star_rows(todo[fan], nbr[fan], wide)])
             star_parts.append((it, star))
         elif k == 3 and it == 0:
             m, st, hull = np.zeros(len(todo)), np.zeros(len(todo), np.int64), np.zeros(len(todo), bool)
@@ -298,7 +305,6 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
     _, idx = _neighbours(tree, Q, min(8, nu - 1))
     local = np.median(reach8[idx[:, 1:]], axis=1)
     outlier = nn1 > outlier_ratio * np.maximum(local, 1e-300)
-    lined = base != 0  # took its plane from a wider neighbourhood, or from none that is not thin
     base = np.maximum(base, 0)  # a line's at every K: its first
     stars = _soup(star_parts, np.where(status == _INSECURE, base, last), first_open, base)
     stars = _consistent(stars[~outlier[stars].any(axis=1)], X)
@@ -420,6 +426,12 @@ def _holes(cells: np.ndarray, Q: np.ndarray, reach8: np.ndarray, one_sided: np.n
     return ~(expected <= math.log(n / HOLE_ODDS))
 
 
+def _star_rows(centre: np.ndarray, nbr: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    # (centre, a, b) for every neighbour pair of tri (-1: no more)
+    r, slot = np.nonzero(tri[:, :, 0] >= 0)
+    return np.column_stack([centre[r], nbr[r, tri[r, slot, 0]], nbr[r, tri[r, slot, 1]]])
+
+
 def _lattice_spacing(mass: float, k: int) -> float:
     # neighbour distance of the densest lattice whose cells have this measure: points a apart
     # on a line; a triangular lattice ((√3/2) a² per point); the FCC lattice (a³/√2)
@@ -432,129 +444,17 @@ def _lattice_spacing(mass: float, k: int) -> float:
     return mass ** (1.0 / k)
 
 
-def project_to_tangent(P: Any, k: int = 2, neighbors: int | None = None) -> np.ndarray:
-    """Move every point onto the k-plane fitted (PCA) to it and its nearest neighbours.
-
-    One step of local plane projection: noise normal to the manifold drops from σ to about
-    σ/sqrt(K), at the price of a shrink of about the neighbourhood's sagitta on curved
-    parts (0.1% of the radius for 16,000 points on the unit sphere).
-
-    Examples
-    --------
-    >>> import meshlap, numpy as np
-    >>> P = meshlap.samples.sphere_points(4000, "noisy", seed=0)
-    >>> r = np.linalg.norm(project_to_tangent(P), axis=1)
-    >>> bool(r.std() < 0.5 * np.linalg.norm(P, axis=1).std())
-    True
-    """
-    P = check_points(P)
-    K = min(neighbors or STAR_NEIGHBORS.get(k, 20 * k), len(P) - 1)
-    _, idx = KDTree(P).query(P, k=K + 1)
-    out = np.empty_like(P)
-    for a in range(0, len(P), 65536):  # blocks bound the (block, K+1, d) temporaries
-        nb = P[np.asarray(idx[a:a + 65536], np.int64)]
-        c = nb.mean(axis=1)
-        X = nb - c[:, None]
-        _, v = np.linalg.eigh(np.einsum("nki,nkj->nij", X, X))
-        T = v[:, :, -k:]  # (block, d, k) tangent basis
-        rel = P[a:a + 65536] - c
-        out[a:a + 65536] = c + np.einsum("ndk,nk->nd", T, np.einsum("ndk,nd->nk", T, rel))
-    return out
-
-
-class NoiseReading(NamedTuple):
-    """What :func:`noise_reading` measured (its docstring): ``ratio`` σ̂²/a², ``unexplained`` the
-    share of it that cubic fits leave, ``spread`` the cubic residuals' quartile ratio over
-    independent noise's."""
-
-    ratio: float
-    unexplained: float
-    spread: float
-
-    @property
-    def independent(self) -> bool:
-        """Whether the residual looks like independent noise: fits of either order leave the
-        same (``unexplained`` within UNEXPLAINED of 1) and it is spread as χ² is (``spread``
-        within NOISE_SPREAD of 1). Shape the fits missed leaves less to the cubic and is
-        spread unevenly; a residual at rounding level is spread too evenly."""
-        return (UNEXPLAINED <= self.unexplained <= 1 / UNEXPLAINED) and (1 / SPREAD <= self.spread <= SPREAD)
-
-    @property
-    def noisy(self) -> bool:
-        """Independent noise that matters to the kernel (``ratio > NOISY``)."""
-        return self.ratio > NOISY and self.independent
-
-
-def _chi2_quantile(nu: int, z: float = 0.0) -> float:
-    # Wilson-Hilferty: the χ² quantile at the standard normal's z (the median at 0), within 1%
-    # for ν ≥ 5
-    c = 2.0 / (9.0 * nu)
-    return nu * (1.0 - c + z * math.sqrt(c)) ** 3
-
-
-def noise_reading(P: Any, k: int = 2, pca: tuple[np.ndarray, np.ndarray] | None = None) -> NoiseReading:
-    """The points' normal noise, and whether it is noise rather than shape the fits missed.
-
-    Height fits over each point's tangent k-plane (its PCA frame, 16 neighbours) leave, under
-    independent normal noise of variance σ², residual sums distributed as σ²χ²_ν (ν the
-    degrees of freedom left). Three readings test that model:
-
-    - ``ratio``: σ̂²/a², σ̂² the quadratic fits' median residual over the median of χ²_ν, a the
-      mean distance to the 6 nearest neighbours. The quadratic absorbs the surface's bending,
-      which a plane's residual would read as noise (0.033 on 1,000 random points of a torus of
-      tube radius 0.4, quadratic 1.5e-4).
-    - ``unexplained``: the same reading of cubic fits over σ̂². Noise leaves it at 1 whatever
-      the fit (0.96-1.03 on noisy spheres, 0.97-1.07 on five real scans with 0.3 mean edges of
-      normal noise); a coarse sampling's missed shape drops it (0.33-0.87 on 7 of the 9 real
-      meshes of benchmarks/corpus.toml whose vertices read above :data:`NOISY`), a residual at
-      rounding level (a clean sphere) leaves it at 1.4-1.6.
-    - ``spread``: the cubic residuals' upper over lower quartile, over χ²_ν's (2.1 for ν = 7).
-      Noise is everywhere alike: 0.9-1.05 on the noisy spheres, 0.96-1.13 on the five noisy
-      scans; shape is not: 1.45 and 2.7 on the other two of the 9 (a decimated knight and a
-      multi-part ant), 1.7 to 10⁷ on the other clean meshes; rounding is too even (0.5).
-
-    :attr:`NoiseReading.independent` asks both to be near 1; :attr:`NoiseReading.noisy` also
-    asks the noise to matter to the kernel (``ratio > NOISY``).
-
-    ``pca`` takes the frames of :func:`meshlap.geometry.frames.pca_frames` when they exist.
-
-    Examples
-    --------
-    >>> import meshlap
-    >>> noise_reading(meshlap.shapes.fibonacci_sphere(2000)).noisy
-    False
-    >>> r = noise_reading(meshlap.samples.sphere_points(16000, "noisy", seed=0))
-    >>> r.noisy, bool(r.ratio > NOISY), bool(r.unexplained > 0.95), bool(r.spread < 1.1)
-    (True, True, True, True)
-    """
-    P = check_points(P)
-    # quartiles need no more than 2,048 evenly spread points (standard error about 4%): the
-    # fits' cost stays bounded (0.1 s of CPU) whatever the size
-    rows = np.unique(np.linspace(0, len(P) - 1, min(len(P), _NOISE_SAMPLE)).astype(np.int64))
-    T, idx = frames.pca_frames(P, k, rows=rows) if pca is None else (pca[0][rows], pca[1][rows])
-    res, nu = frames.height_residuals(P, T, idx, k, (2, 3))
-    spacing = float(np.linalg.norm(P[idx[:, 1:7]] - P[idx[:, :1]], axis=2).mean())
-    # fewer than 5 degrees of freedom left: no noise is seen
-    quad, cubic = (float(np.median(res[i])) / _chi2_quantile(nu[i]) if nu[i] >= 5 else 0.0 for i in range(2))
-    unexplained = spread = 1.0  # where cubic fits cannot be made, nothing tells noise from shape
-    if nu[1] >= 5:
-        q1, q3 = np.percentile(res[1], [25, 75])
-        unexplained = cubic / quad if quad > 0 else 0.0  # fits that leave nothing: no noise
-        chi2 = _chi2_quantile(nu[1], _Z75) / _chi2_quantile(nu[1], -_Z75)
-        spread = float(q3 / q1) / chi2 if q1 > 1e-12 * q3 else math.inf
-    return NoiseReading(float(quad / max(spacing * spacing, 1e-300)), float(unexplained), float(spread))
-
-
 def point_cloud_geometry(P: Any, k: int = 2, *, denoise: bool | None = None, **kwargs: Any) -> Geometry:
     """The :class:`~meshlap.geometry.Geometry` of a point cloud: points, masses from
     :func:`point_masses`, intrinsic dimension k, open cells as boundary.
 
     ``denoise=True`` first moves the points onto their local tangent planes
-    (:func:`project_to_tangent`); the kernel then sees distances without most of the normal
-    noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}, and the Richardson
-    kernel's narrow half by (1 + 2σ²/h)^{-1/2}: a bias of about 1.5σ²/h that outgrows the O(h)
-    bias it removes. ``denoise=None`` (the default) projects when :func:`noise_reading` finds
-    noise (above about 14% of the spacing, :data:`NOISY`, and not explained by cubic fits) and
+    (:func:`~meshlap.geometry.noise.project_to_tangent`); the kernel then sees distances without
+    most of the normal noise, which otherwise scales its weights by about (1 + σ²/h)^{-1/2}, and
+    the Richardson kernel's narrow half by (1 + 2σ²/h)^{-1/2}: a bias of about 1.5σ²/h that
+    outgrows the O(h) bias it removes. ``denoise=None`` (the default) projects when
+    :func:`~meshlap.geometry.noise.noise_reading` finds noise (above about 14% of the spacing,
+    :data:`meshlap.tuned.CLOUD_NOISY`, and not explained by cubic fits) and
     notes it in ``notes``; on 16,000 sphere points with 1% radial noise the default's first 9
     eigenvalues are 0.29% off, the kernel's on the points as given 5.6% (the paper's operator:
     2.0%).
