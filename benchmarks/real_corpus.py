@@ -295,7 +295,11 @@ def pencil_eigs(K: sp.spmatrix, M: sp.spmatrix, k: int) -> np.ndarray:
     if len(keep) < M.shape[0]:
         K, M = sp.csr_matrix(K)[keep][:, keep], sp.csr_matrix(M)[keep][:, keep]
     scale = K.diagonal().sum() / M.diagonal().sum()
-    lam = eigsh(sp.csc_matrix(K), k, sp.csc_matrix(M), sigma=-1e-6 * scale, which="LM",
+    # a fixed start: ARPACK's own depends on what ran before in the process, and 1 start in 100
+    # missed a copy of the 6-fold λ = 2 of two 66-vertex spheres (tests/test_bench_real.py failed
+    # one CI run so)
+    v0 = np.random.default_rng(0).standard_normal(K.shape[0])
+    lam = eigsh(sp.csc_matrix(K), k, sp.csc_matrix(M), sigma=-1e-6 * scale, which="LM", v0=v0,
                 return_eigenvectors=False)
     return np.sort(np.maximum(lam, 0.0))
 
