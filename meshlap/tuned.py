@@ -17,8 +17,8 @@ __all__ = ["CLOUD_CAP_FLOOR", "CLOUD_NOISY", "CORRECTED_TOL", "CREASE_ANGLE", "C
            "QUADRATIC_MAX_UNKNOWNS",
            "PSD_STOP_TOL", "ROW_BETA", "ROW_C_COMPACT", "ROW_C_WIDE", "ROW_EXCESS", "ROW_FLOORS",
            "ROW_GAMMA", "ROW_K_NOISE", "ROW_K_PER_MONOMIAL", "ROW_LADDER", "ROW_MARGIN", "ROW_NOISY",
-           "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHORTCUT_RATIO", "SPLIT_BELOW",
-           "STAR_NEIGHBORS", "STAR_SCATTER", "STAR_THIN"]
+           "ROW_ROBUST", "ROW_ROUNDING", "ROW_SAMPLE", "SEGMENT_STEP", "SHEET_DETOUR", "SHORTCUT_RATIO",
+           "SPLIT_BELOW", "STAR_NEIGHBORS", "STAR_SCATTER", "STAR_THIN"]
 
 # -- the kernel's width, truncation and check (meshlap.widths, .options, .corrections.psd) -----
 #: c of h = c·ē² by dimension (tetrahedra: face diagonals are edges); docs/accuracy.md's width sweeps
@@ -93,6 +93,10 @@ STAR_NEIGHBORS = {1: 8, 2: 16, 3: 32}
 #: measured 0.14 or more (a random sphere's, a disc's rim, a two-row ribbon), a line's is about its
 #: bending κρ/4 (0.028 on a helix sampled 100 points per radian)
 STAR_THIN = 0.1
+#: Detour over the agreed star edges beyond which an edge joins two sheets: a flipped quad's
+#: diagonal is joined by two sides (at most about 2x its length on a sampling whose triangles keep
+#: angles above 30°); the corpus's touching vertices (benchmarks/real_corpus.touching) use 4 too
+SHEET_DETOUR = 4.0
 #: Median heights above which a steep first neighbour is on another sheet: 49 of 50 for any of 1.5-6
 STAR_SCATTER = 3.0
 

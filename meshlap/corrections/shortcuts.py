@@ -17,13 +17,13 @@ few kernel widths (spot's teats, ears and horns), the width narrows for
 
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
 import scipy.sparse as sp
 
 from .._jit import in_blocks, jit
+from .._paths import bounded_paths
 from ..assembly._intrinsics import zero_row_sum
 from ..tuned import SHORTCUT_RATIO
 
@@ -39,24 +39,7 @@ def _drop_rows(start, stop, vptr, vpts, adj_ptr, adj, adj_len, indptr, indices, 
         if vptr[a] == vptr[a + 1]:
             continue
         # the shortest paths from a along the edges, up to limit
-        count = 0
-        dist[a] = 0.0
-        seen[count] = a
-        count += 1
-        heap = [(0.0, a)]
-        while len(heap) > 0:
-            d, v = heapq.heappop(heap)
-            if d > dist[v]:
-                continue
-            for e in range(adj_ptr[v], adj_ptr[v + 1]):
-                w = adj[e]
-                nd = d + adj_len[e]
-                if nd < dist[w] and nd <= limit:
-                    if dist[w] == np.inf:
-                        seen[count] = w
-                        count += 1
-                    dist[w] = nd
-                    heapq.heappush(heap, (nd, w))
+        count = bounded_paths(a, limit, adj_ptr, adj, adj_len, dist, seen)
         for i in range(vptr[a], vptr[a + 1]):
             q = vpts[i]
             for e in range(indptr[q], indptr[q + 1]):

@@ -64,6 +64,7 @@ from ..tuned import STAR_NEIGHBORS, STAR_THIN
 from . import frames
 from .core import Geometry, check_points
 from .noise import noise_reading, project_to_tangent
+from .sheets import bridges
 from .stars import (
     _DEGENERATE,
     _INSECURE,
@@ -312,6 +313,8 @@ def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol:
         off = _off_surface(stars, lined, axes, line)
         status[off] = _DEGENERATE
         stars = stars[~off[stars].any(axis=1)]
+    if k == 2 and d >= 3:  # two sheets closer than the sampling
+        stars = stars[~bridges(stars, X)]
     degenerate = (status == _DEGENERATE) & ~outlier
     if degenerate.all():
         raise MeshError(f"no point has a {k}-dimensional neighbourhood (all are "
