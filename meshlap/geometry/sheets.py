@@ -118,8 +118,7 @@ def bridges(stars: np.ndarray, X: np.ndarray) -> np.ndarray:
     src, ptr = a[ask][first], np.append(first, len(ask)).astype(np.int64)
     hit = np.zeros(len(ask), dtype=bool)
     in_blocks(_far, len(src), src, ptr, b[ask], length[ask], graph.indptr.astype(np.int64),
-              graph.indices.astype(np.int64), graph.data,
-              SHEET_DETOUR, n, hit)
+              graph.indices.astype(np.int64), graph.data, SHEET_DETOUR, n, hit)
     far = np.zeros(len(edges), dtype=bool)
     far[ask] = hit
     if not far.any():
