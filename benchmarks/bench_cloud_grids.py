@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from results_file import write_section  # noqa: E402
 
 import meshlap  # noqa: E402
-from meshlap import spectral  # noqa: E402
+from meshlap import samples, spectral  # noqa: E402
 
 K = 10
 
@@ -54,19 +54,6 @@ def torus(nu: int, nv: int, jitter: float) -> tuple[np.ndarray, np.ndarray]:
     return P, _quads(nu, nv, True, True)
 
 
-def lat_long(rings: int, per: int) -> tuple[np.ndarray, np.ndarray]:
-    t, ph = np.meshgrid(np.arange(1, rings + 1) * np.pi / (rings + 1), np.arange(per) * 2 * np.pi / per,
-                        indexing="ij")
-    r = np.sin(t)
-    body = np.column_stack([(r * np.cos(ph)).ravel(), (r * np.sin(ph)).ravel(), np.cos(t).ravel()])
-    n = len(body)
-    P = np.vstack([body, [[0, 0, 1], [0, 0, -1]]])
-    c = np.arange(per)
-    caps = [np.column_stack([np.full(per, n), (c + 1) % per, c]),
-            np.column_stack([np.full(per, n + 1), n - per + c, n - per + (c + 1) % per])]
-    return P, np.vstack([_quads(rings, per, False, True)] + caps)
-
-
 def scan_lines(lines: int, per: int) -> tuple[np.ndarray, np.ndarray]:
     X, Y = np.meshgrid(np.linspace(0, 1, per), np.linspace(0, 1, lines))
     return np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)]), _quads(lines, per, False, False)
@@ -78,7 +65,8 @@ def cases():
     yield "torus, 80 x 40 (u, v) grid", *torus(80, 40, 0.0), None
     yield "torus, the same jittered by 0.1 cell", *torus(80, 40, 0.1), None
     for rings, per in ((19, 40), (29, 60), (39, 80)):
-        yield f"sphere, {rings} rings x {per} and the poles", *lat_long(rings, per), sphere
+        yield (f"sphere, {rings} rings x {per} and the poles", *samples.latitude_longitude_sphere(rings, per),
+               sphere)
     for lines, per in ((11, 101), (6, 41), (5, 81), (3, 100)):
         yield f"unit square, {lines} lines x {per}", *scan_lines(lines, per), square
 

@@ -32,6 +32,7 @@ __all__ = [
     "cube_eigenvalues",
     "cube_tetrahedra",
     "flat_torus_points",
+    "latitude_longitude_sphere",
     "sphere_eigenvalue",
     "sphere_eigenvalues",
     "sphere_points",
@@ -120,6 +121,34 @@ def sphere_points(n: int, kind: str = "random", seed: int = 0, noise: float = 0.
     if kind == "noisy":
         P *= 1.0 + noise * rng.normal(size=(n, 1))
     return P
+
+
+def latitude_longitude_sphere(rings: int, per: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unit sphere's latitude-longitude grid: ``rings`` rings of ``per`` points at polar
+    angles πi/(rings + 1), then the two poles, and its triangles (two per quad, a fan at each
+    pole). A cloud of its points has cocircular quads and poles equidistant from their rings.
+
+    Examples
+    --------
+    >>> V, F = latitude_longitude_sphere(19, 40)
+    >>> V.shape, F.shape
+    ((762, 3), (1520, 3))
+    """
+    rings = _check_count(rings, 2, "latitude_longitude_sphere rings")
+    per = _check_count(per, 3, "latitude_longitude_sphere per")
+    t, ph = np.meshgrid(np.arange(1, rings + 1) * np.pi / (rings + 1), np.arange(per) * 2 * np.pi / per,
+                        indexing="ij")
+    r = np.sin(t)
+    body = np.column_stack([(r * np.cos(ph)).ravel(), (r * np.sin(ph)).ravel(), np.cos(t).ravel()])
+    n = len(body)
+    i, j = np.meshgrid(np.arange(rings - 1), np.arange(per), indexing="ij")
+    a, b = (i * per + j).ravel(), ((i + 1) * per + j).ravel()
+    c, d = ((i + 1) * per + (j + 1) % per).ravel(), (i * per + (j + 1) % per).ravel()
+    k = np.arange(per)
+    F = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d]),
+                   np.column_stack([np.full(per, n), (k + 1) % per, k]),
+                   np.column_stack([np.full(per, n + 1), n - per + k, n - per + (k + 1) % per])])
+    return np.vstack([body, [[0.0, 0, 1], [0, 0, -1]]]), F
 
 
 def three_sphere_points(n: int, seed: int = 0) -> np.ndarray:
