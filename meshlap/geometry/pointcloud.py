@@ -59,6 +59,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.special import gammaln
 
 from .._jit import in_blocks
+from .._keys import in_set
 from ..errors import MeshError, MeshWarning
 from ..tuned import STAR_NEIGHBORS, STAR_THIN
 from . import frames
@@ -403,7 +404,7 @@ def _open_edges(stars: np.ndarray, Q: np.ndarray, at: np.ndarray) -> np.ndarray:
     key, once = np.unique(centre * n + other, return_counts=True)
     edge = key[once == 1]
     a, b = edge // n, edge % n
-    both = at[b] & np.isin(b * n + a, edge)
+    both = at[b] & in_set(b * n + a, edge, of_sorted=True)
     a, b = a[both], b[both]
     return 0.5 * np.bincount(a, np.linalg.norm(Q[a] - Q[b], axis=1), minlength=n)
 

@@ -16,6 +16,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .._jit import in_blocks, jit
+from .._keys import in_set, key_set
 from .._paths import bounded_paths
 from ..tuned import SHEET_DETOUR
 
@@ -42,17 +43,6 @@ def _far(start, stop, src, ptr, other, length, adj_ptr, adj, adj_len, ratio, n, 
 
 def _edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
     return a.astype(np.int64) * n + b
-
-
-def _sorted_set(keys: np.ndarray) -> np.ndarray:
-    # by sorting: numpy's hashing np.unique took 0.5 s on 1.8 million such keys
-    keys = np.sort(keys)
-    return keys[np.r_[True, keys[1:] != keys[:-1]]]
-
-
-def _member(keys: np.ndarray, of: np.ndarray) -> np.ndarray:
-    at = np.minimum(np.searchsorted(of, keys), len(of) - 1)
-    return of[at] == keys
 
 
 def _components(triangles: np.ndarray, n: int) -> np.ndarray:
@@ -101,13 +91,13 @@ def bridges(stars: np.ndarray, X: np.ndarray) -> np.ndarray:
     n = len(X)
     if not len(stars):
         return np.zeros(0, dtype=bool)
-    own = _sorted_set(_edge_keys(np.r_[stars[:, 0], stars[:, 0]], np.r_[stars[:, 1], stars[:, 2]], n))
+    own = key_set(_edge_keys(np.r_[stars[:, 0], stars[:, 0]], np.r_[stars[:, 1], stars[:, 2]], n))
     s = np.sort(stars, axis=1)
     sides = [(s[:, 0], s[:, 1]), (s[:, 1], s[:, 2]), (s[:, 0], s[:, 2])]
     keys = [_edge_keys(a, b, n) for a, b in sides]
-    edges = _sorted_set(np.concatenate(keys))
+    edges = key_set(np.concatenate(keys))
     a, b = edges // n, edges % n
-    agreed = _member(edges, own) & _member(_edge_keys(b, a, n), own)
+    agreed = in_set(edges, own, of_sorted=True) & in_set(_edge_keys(b, a, n), own, of_sorted=True)
     length = np.linalg.norm(X[a] - X[b], axis=1)
     graph = sp.coo_matrix((length[agreed], (a[agreed], b[agreed])), shape=(n, n))
     graph = (graph + graph.T).tocsr()

@@ -18,6 +18,7 @@ from scipy.spatial import Delaunay, QhullError
 
 from .._dense import sym_eigh
 from .._jit import jit
+from .._keys import in_set, key_set
 from ..tuned import STAR_SCATTER
 from .polygons import Polygons
 from .topology import _components
@@ -434,7 +435,7 @@ def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     if not len(a) or not len(b):
         return np.zeros(len(a), dtype=bool)
     inv = np.unique(np.vstack([b, a]), axis=0, return_inverse=True)[1].ravel()
-    return np.isin(inv[len(b):], inv[:len(b)])
+    return in_set(inv[len(b):], inv[:len(b)])
 
 
 def _soup(parts: list[tuple[int, np.ndarray]], use: np.ndarray, rim: np.ndarray, base: np.ndarray
@@ -507,7 +508,7 @@ def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
         return stars
     n = len(P)
     key = _triangle_keys(np.sort(stars, axis=1), n)
-    tri = _triangles_of(np.unique(key), n)
+    tri = _triangles_of(key_set(key), n)
     e = np.concatenate([tri[:, [0, 1, 2]], tri[:, [0, 2, 1]], tri[:, [1, 2, 0]]])
     e = e[np.argsort(e[:, 0] * n + e[:, 1], kind="stable")]
     edge = e[:, 0] * n + e[:, 1]
@@ -547,13 +548,15 @@ def _consistent(stars: np.ndarray, P: np.ndarray) -> np.ndarray:
     win = np.where(keep_ac[:, None, None], split_ac, split_bd).reshape(-1, 3)
     lose = np.where(keep_ac[:, None, None], split_bd, split_ac).reshape(-1, 3)
     win, lose = _triangle_keys(np.sort(win, axis=1), n), _triangle_keys(np.sort(lose, axis=1), n)
-    win = np.setdiff1d(win, lose)  # a triangle one quad keeps and another drops: dropped
-    rows = stars[~np.isin(key, lose)]
+    lose = key_set(lose)
+    win = key_set(win)
+    win = win[~in_set(win, lose, of_sorted=True)]  # a triangle one quad keeps and another drops: dropped
+    rows = stars[~in_set(key, lose, of_sorted=True)]
     win = _triangles_of(win, n)
     add = np.concatenate([win[:, [0, 1, 2]], win[:, [1, 2, 0]], win[:, [2, 0, 1]]])
     have = _triangle_keys(np.column_stack([rows[:, 0], np.sort(rows[:, 1:], axis=1)]), n)
     new = _triangle_keys(np.column_stack([add[:, 0], np.sort(add[:, 1:], axis=1)]), n)
-    return np.concatenate([rows, add[~np.isin(new, have)]])
+    return np.concatenate([rows, add[~in_set(new, have)]])
 
 
 def _off_surface(stars: np.ndarray, lined: np.ndarray, axes: np.ndarray, line: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ import scipy.sparse as sp
 from pykdtree.kdtree import KDTree
 from scipy.sparse.csgraph import connected_components as _cc
 
+from .._keys import in_set
 from ..errors import MeshWarning
 from .mass import _face_areas, _mean_edge_length
 from .polygons import Polygons
@@ -292,7 +293,7 @@ def _boundary_edges(faces: Polygons, n: int, rep: np.ndarray | None) -> np.ndarr
     keys_w = np.sort(rep[sides], axis=1)
     kw = keys_w[:, 0] * np.int64(n) + keys_w[:, 1]
     kb = on_boundary[:, 0] * np.int64(n) + on_boundary[:, 1]
-    sel = np.isin(kw, kb)
+    sel = in_set(kw, kb)
     _, first = np.unique(kw[sel], return_index=True)
     return sides[sel][first]
 
