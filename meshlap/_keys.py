@@ -20,7 +20,7 @@ def key_set(keys: np.ndarray) -> np.ndarray:
     array([1, 3, 5])
     """
     keys = np.sort(np.asarray(keys).ravel())
-    return keys[np.concatenate(([True], keys[1:] != keys[:-1]))]
+    return keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if len(keys) else keys
 
 
 def in_set(keys: np.ndarray, of: np.ndarray, *, of_sorted: bool = False) -> np.ndarray:

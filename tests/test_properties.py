@@ -86,3 +86,20 @@ def test_rigid_motion_and_scaling(mesh, log_s, shift):
     # pairs right at the cut-off may fall on either side, which changes entries of size ≤ tol
     atol = (1e-9 + 2 * tol) * scale_of(L)
     assert np.abs(L2 * s * s - L).max() <= atol
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.integers(-(2**62), 2**62), max_size=60),
+       st.lists(st.integers(-(2**62), 2**62), max_size=60),
+       st.booleans())
+def test_sorted_key_sets_are_numpys(keys, of, as_rows):
+    # meshlap._keys replaces np.unique and np.isin on int64 keys and on rows keyed by their bytes
+    from meshlap._keys import in_set, key_set
+
+    a, b = np.array(keys, dtype=np.int64), np.array(of, dtype=np.int64)
+    if as_rows:  # (m, 3) rows as one void key each, as stars._triangle_keys makes them beyond 2^21 points
+        a = np.ascontiguousarray(np.repeat(a[:, None], 3, axis=1) % 7).view(np.dtype((np.void, 24))).ravel()
+        b = np.ascontiguousarray(np.repeat(b[:, None], 3, axis=1) % 7).view(np.dtype((np.void, 24))).ravel()
+    assert np.array_equal(key_set(a), np.unique(a))
+    assert np.array_equal(in_set(a, b), np.isin(a, b))
+    assert np.array_equal(in_set(a, key_set(b), of_sorted=True), np.isin(a, b))
