@@ -98,8 +98,8 @@ def normal_angles(V: np.ndarray, C: np.ndarray, geo, touch: np.ndarray) -> str:
     cos = np.abs(np.einsum("ij,ij->i", geo.normals(), igl.per_vertex_normals(V, C)))
     angle = np.degrees(np.arccos(np.clip(cos, 0.0, 1.0)))
     rest = np.setdiff1d(np.arange(len(V)), touch)
-    return (f"the cloud's normals against the mesh's: median {np.median(angle[touch]):.0f}° at the "
-            f"touching points, {np.median(angle[rest]):.0f}° at the others")
+    at = f"{np.median(angle[touch]):.0f}° at the touching points" if len(touch) else "no touching points"
+    return f"the cloud's normals against the mesh's: median {at}, {np.median(angle[rest]):.0f}° at the others"
 
 
 def matched(K: sp.spmatrix, M: sp.spmatrix, ref: np.ndarray, U: np.ndarray, k: int) -> str:
@@ -177,7 +177,7 @@ def main() -> None:
     short = []
 
     def same_sheet(tree, Q, K):
-        dist, idx = plain(tree, Q, args.pool * K)
+        dist, idx = plain(tree, Q, min(args.pool * K, len(V) - 1))  # a small cloud has fewer
         other = D[idx[:, :1], idx] >= args.detour * np.maximum(dist, 1e-300)
         other[:, 0] = False
         short.append(int(((~other).sum(axis=1) <= K).sum()))
