@@ -2,8 +2,8 @@
 
 numpy 2.4's ``np.unique`` without counts hashes, and ``np.isin`` on keys spanning more than a
 small range compares in unsorted order: on 2.7 million edge keys of a 100,000-point cloud
-0.46-1.6 s and 1.3-1.8 s against 0.05 s and 0.1 s for a sort and a sorted search (by hand,
-`benchmarks/RESULTS.md` has the cloud column's CPU).
+0.46-1.6 s and 1.3-1.8 s against 0.05 s and 0.1 s for a sort and a sorted search (by hand;
+`benchmarks/bench_pointcloud.py --timing` times the whole build).
 """
 
 from __future__ import annotations
