@@ -121,7 +121,8 @@ def _merge_duplicates(P: np.ndarray, merge_tol: float, nearest: tuple[np.ndarray
 
 def _neighbours(tree: KDTree, Q: np.ndarray, K: int) -> tuple[np.ndarray, np.ndarray]:
     dist, idx = tree.query(Q, k=K + 1)
-    return np.asarray(dist, np.float64), np.asarray(idx, np.int64)
+    shape = (len(Q), K + 1)  # one column comes back flat
+    return np.asarray(dist, np.float64).reshape(shape), np.asarray(idx, np.int64).reshape(shape)
 
 
 def point_masses(P: Any, k: int = 2, *, neighbors: int | None = None, merge_tol: float = 1e-6,
