@@ -68,6 +68,12 @@ def mesh_distances(V: np.ndarray, C: np.ndarray, reach: float) -> np.ndarray:
     return dijkstra(graph, directed=False, limit=reach)
 
 
+def apart(D: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray, detour: float) -> np.ndarray:
+    """Which pairs (a, b) lie on two sheets: at least ``detour`` times farther along the mesh's
+    edges (``D``) than through space."""
+    return D[a, b] >= detour * np.linalg.norm(V[a] - V[b], axis=1)
+
+
 def pencil_error(geo, k: int, ref: np.ndarray, n_parts: int) -> tuple[float, np.ndarray]:
     S, m = fem.fem_pencil(geo)
     lam = rc.pencil_eigs(-S, sp.diags(m), k)
@@ -120,7 +126,7 @@ def without(K: sp.spmatrix, D: np.ndarray, V: np.ndarray, detour: float) -> tupl
     """The stiffness K (rows summing to zero) without its edges between sheets (mesh detour ≥
     ``detour`` × their length), its diagonal made up again; and how many edges that cut."""
     A = sp.triu(K, 1).tocoo()
-    cross = D[A.row, A.col] >= detour * np.linalg.norm(V[A.row] - V[A.col], axis=1)
+    cross = apart(D, V, A.row, A.col, detour)
     W = sp.coo_matrix((-A.data[~cross], (A.row[~cross], A.col[~cross])), shape=K.shape)
     W = (W + W.T).tocsr()
     return sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W, int(cross.sum())
@@ -194,8 +200,7 @@ def main() -> None:
     # 2. the triangles that cross between sheets cut
     cross = np.zeros(len(stars), dtype=bool)
     for i, j in ((0, 1), (1, 2), (0, 2)):
-        a, b = stars[:, i], stars[:, j]
-        cross |= D[a, b] >= args.detour * np.linalg.norm(V[a] - V[b], axis=1)
+        cross |= apart(D, V, stars[:, i], stars[:, j], args.detour)
     alone = np.bincount(stars[~cross].ravel(), minlength=len(V)) == 0
     geo._cache["fem_cells"] = (stars[~cross | alone[stars[:, 0]]], weight)
     show(f"cross triangles cut ({int(alone.sum())} kept)", pencil_error(geo, k, ref, n_parts))
@@ -228,7 +233,7 @@ def between_sheets(K: sp.spmatrix, m: np.ndarray, U: np.ndarray, cot: np.ndarray
     and its quotient without them."""
     A = sp.triu(K, 1).tocoo()
     w = -A.data
-    cross = D[A.row, A.col] >= detour * np.linalg.norm(V[A.row] - V[A.col], axis=1)
+    cross = apart(D, V, A.row, A.col, detour)
     out = [f"the mesh's modes in {name} ({int(cross.sum())} of its {len(w)} edges with a detour "
            f"≥ {detour:g}):"]
     for j in (1, 2, 3):
